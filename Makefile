@@ -1,0 +1,29 @@
+# Two entry points for a fresh machine: `make run` and `make test` (see README).
+PYTHON ?= python3
+VENV   ?= .venv
+PY      = $(VENV)/bin/python
+STAMP   = $(VENV)/.installed
+
+.PHONY: run test bench assets clean
+
+$(STAMP): pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install -q --upgrade pip
+	$(PY) -m pip install -q torch==2.13.0
+	$(PY) -m pip install -q -e ".[test]"
+	touch $(STAMP)
+
+run: $(STAMP)
+	$(VENV)/bin/s2h evaluate
+
+test: $(STAMP)
+	$(PY) -m pytest -q -m "not benchmark"
+
+bench: $(STAMP)
+	$(PY) benchmarks/bench_asm_fk.py
+
+assets: $(STAMP)
+	$(PY) scripts/generate_assets.py
+
+clean:
+	rm -rf $(VENV) .pytest_cache

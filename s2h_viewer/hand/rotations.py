@@ -1,0 +1,86 @@
+"""Rotation conversions on torch tensors, quaternions as (w, x, y, z) (DESIGN.md section 2).
+
+roma does the work (it uses (x, y, z, w)); these wrappers fix the project's scalar-first
+convention and ``w >= 0`` on output in one place.
+
+TBS Euler angles: intrinsic twist (x), then splay (z), then bend (y), i.e.
+``R = Rx(twist) @ Rz(splay) @ Ry(bend)``; a positive bend about the bend axis (y) flexes the
+finger toward its pad side (-z). Chosen so a pure bend or a pure splay decomposes exactly.
+"""
+
+from __future__ import annotations
+
+import roma
+import torch
+
+_WXYZ_TO_XYZW = [1, 2, 3, 0]
+_XYZW_TO_WXYZ = [3, 0, 1, 2]
+
+
+def canonical_quat(q: torch.Tensor) -> torch.Tensor:
+    """Unit quaternion (w, x, y, z) with ``w >= 0`` (the double cover resolved)."""
+    q = q / q.norm(dim=-1, keepdim=True).clamp_min(1e-12)
+    return torch.where(q[..., :1] < 0, -q, q)
+
+
+def quat_to_matrix(q: torch.Tensor) -> torch.Tensor:
+    """(..., 4) quaternions (w, x, y, z), normalised here -> (..., 3, 3) rotation matrices."""
+    q = q / q.norm(dim=-1, keepdim=True).clamp_min(1e-12)
+    return roma.unitquat_to_rotmat(q[..., _WXYZ_TO_XYZW])
+
+
+def matrix_to_quat(r: torch.Tensor) -> torch.Tensor:
+    """(..., 3, 3) rotation matrices -> (..., 4) unit quaternions (w, x, y, z), ``w >= 0``."""
+    return canonical_quat(roma.rotmat_to_unitquat(r)[..., _XYZW_TO_WXYZ])
+
+
+def quat_multiply(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
+    """Hamilton product ``a * b`` of (w, x, y, z) quaternions (rotation b first, then a)."""
+    return roma.quat_product(a[..., _WXYZ_TO_XYZW], b[..., _WXYZ_TO_XYZW])[..., _XYZW_TO_WXYZ]
+
+
+def quat_conjugate(q: torch.Tensor) -> torch.Tensor:
+    """Inverse of a unit quaternion (w, x, y, z)."""
+    return q * q.new_tensor([1.0, -1.0, -1.0, -1.0])
+
+
+def quat_angle(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
+    """Angle in radians of the rotation taking ``b`` to ``a`` (geodesic distance)."""
+    dot = (a * b).sum(-1).abs() / (a.norm(dim=-1) * b.norm(dim=-1)).clamp_min(1e-12)
+    return 2.0 * torch.acos(dot.clamp(max=1.0))
+
+
+def random_quats(shape: tuple[int, ...], generator: torch.Generator | None = None,
+                 dtype: torch.dtype = torch.float64) -> torch.Tensor:
+    """Uniformly random unit quaternions (w, x, y, z), ``w >= 0``."""
+    return canonical_quat(torch.randn(*shape, 4, generator=generator, dtype=dtype))
+
+
+def tbs_euler_to_matrix(twist: torch.Tensor, splay: torch.Tensor, bend: torch.Tensor) -> torch.Tensor:
+    """Rotation ``Rx(twist) @ Rz(splay) @ Ry(bend)`` (radians) as (..., 3, 3)."""
+    x = torch.stack([twist, torch.zeros_like(twist), torch.zeros_like(twist)], -1)
+    z = torch.stack([torch.zeros_like(splay), torch.zeros_like(splay), splay], -1)
+    y = torch.stack([torch.zeros_like(bend), bend, torch.zeros_like(bend)], -1)
+    return roma.rotvec_to_rotmat(x) @ roma.rotvec_to_rotmat(z) @ roma.rotvec_to_rotmat(y)
+
+
+def matrix_to_tbs_euler(r: torch.Tensor) -> torch.Tensor:
+    """(..., 3, 3) -> (..., 3) angles (twist, splay, bend) in radians; differentiable.
+
+    From ``R = Rx(a) Rz(b) Ry(c)``: ``R01 = -sin b``, ``(R21, R11) ~ (sin a, cos a)``,
+    ``(R02, R00) ~ (sin c, cos c)``. ``atan2`` keeps gradients finite away from splay = 90 deg.
+    """
+    splay = torch.atan2(-r[..., 0, 1], torch.sqrt(r[..., 0, 0] ** 2 + r[..., 0, 2] ** 2 + 1e-12))
+    twist = torch.atan2(r[..., 2, 1], r[..., 1, 1])
+    bend = torch.atan2(r[..., 0, 2], r[..., 0, 0])
+    return torch.stack([twist, splay, bend], -1)
+
+
+def tbs_euler_to_quat(angles: torch.Tensor) -> torch.Tensor:
+    """(..., 3) angles (twist, splay, bend) in radians -> (..., 4) quaternions (w, x, y, z)."""
+    return matrix_to_quat(tbs_euler_to_matrix(angles[..., 0], angles[..., 1], angles[..., 2]))
+
+
+def quat_to_tbs_euler(q: torch.Tensor) -> torch.Tensor:
+    """(..., 4) quaternions (w, x, y, z) -> (..., 3) angles (twist, splay, bend) in radians."""
+    return matrix_to_tbs_euler(quat_to_matrix(q))

@@ -1,0 +1,65 @@
+"""Turn a list of gestures into a smooth motion: eased transitions, holds, small smooth noise, seeded."""
+
+from __future__ import annotations
+
+import numpy as np
+import torch
+from scipy.ndimage import gaussian_filter1d
+
+from s2h_viewer.hand.model import HandModel
+from s2h_viewer.hand.motion import Motion
+from s2h_viewer.hand.rotations import tbs_euler_to_quat
+from s2h_viewer.motions.fitting import clamp_to_limits, fit_gesture_angles
+from s2h_viewer.motions.gestures import GESTURES, gesture
+
+
+def _smootherstep(t: np.ndarray) -> np.ndarray:
+    return t * t * t * (t * (6 * t - 15) + 10)
+
+
+def synthesize(names: list[str], hand: HandModel | None = None, fps: float = 30.0, seed: int = 0,
+               hold: tuple[float, float] = (0.5, 0.9), transition: tuple[float, float] = (0.35, 0.6),
+               noise_deg: float = 1.5, name: str = "") -> Motion:
+    """A motion through the named gestures (starting from "relaxed"), fitted to ``hand`` if given.
+
+    Angles are interpolated per joint with a smootherstep ease (zero velocity and acceleration at
+    key poses); noise is Gaussian-filtered so it reads as tremor, not jitter, and everything is
+    clamped back into the anatomical limits. Hold frames are labelled with the gesture's name.
+    """
+    rng = np.random.default_rng(seed)
+    sequence = [gesture(n) for n in ["relaxed", *names]]
+    if hand is not None:
+        keys = fit_gesture_angles(hand, sequence)
+    else:
+        keys = np.stack([np.radians(g.angles_deg) for g in sequence])
+
+    frames, labels = [], []
+    for i, key in enumerate(keys):
+        if i > 0:
+            n = max(2, round(rng.uniform(*transition) * fps))
+            t = _smootherstep(np.arange(1, n + 1) / n)[:, None, None]
+            frames.append(keys[i - 1] + t * (key - keys[i - 1]))
+            labels += [""] * n
+        n = max(1, round(rng.uniform(*hold) * fps))
+        frames.append(np.repeat(key[None], n, 0))
+        labels += [sequence[i].name] * n
+    angles = np.concatenate(frames)
+
+    if noise_deg > 0:
+        noise = gaussian_filter1d(rng.normal(size=angles.shape), sigma=0.15 * fps, axis=0)
+        noise *= np.radians(noise_deg) / max(noise.std(), 1e-12)
+        noise[..., 0] = 0.0  # no twist: it has no anatomical range
+        angles = angles + noise
+    angles = clamp_to_limits(torch.as_tensor(angles)).numpy()
+    q = tbs_euler_to_quat(torch.as_tensor(angles)).numpy().astype(np.float32)
+    return Motion(q_tbs=q, fps=fps, name=name or "+".join(names), hand_name=hand.name if hand else "",
+                  labels=np.array(labels, dtype=object))
+
+
+def gesture_contacts(labels: np.ndarray) -> np.ndarray:
+    """(T, 15) bool ground-truth contacts from per-frame gesture labels ("" frames: none)."""
+    out = np.zeros((len(labels), 15), dtype=bool)
+    for i, label in enumerate(labels):
+        if label:
+            out[i] = GESTURES[label].contact_vector()
+    return out

@@ -1,0 +1,70 @@
+"""Off-screen rendering to PNG (VTK falls back to EGL without a display): `s2h render` uses this."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pyvista as pv
+
+from s2h_viewer.hand.model import HandModel
+from s2h_viewer.io.atomic import atomic_path
+from s2h_viewer.render.scene import BONE_COLOUR, SKIN_COLOUR, pose_frame, posed_mesh, skeleton
+
+#: camera directions in view space (x = fingers, y = thumb side, z = back of the hand).
+VIEWS = {
+    "back": ((0.0, 0.0, 1.0), (1.0, 0.0, 0.0)),
+    "palm": ((0.0, 0.0, -1.0), (1.0, 0.0, 0.0)),
+    "three_quarter": ((0.15, 0.45, -0.85), (1.0, 0.0, 0.0)),
+}
+
+
+def _set_camera(plotter: pv.Plotter, bounds: tuple, view: str) -> None:
+    direction, up = VIEWS[view]
+    centre = np.array([(bounds[0] + bounds[1]) / 2, (bounds[2] + bounds[3]) / 2, (bounds[4] + bounds[5]) / 2])
+    radius = 0.5 * np.linalg.norm([bounds[1] - bounds[0], bounds[3] - bounds[2], bounds[5] - bounds[4]])
+    d = np.asarray(direction) / np.linalg.norm(direction)
+    plotter.camera.focal_point = centre
+    plotter.camera.position = centre + d * radius * 3.9
+    plotter.camera.up = up
+    plotter.camera.view_angle = 30.0
+    plotter.reset_camera_clipping_range()
+
+
+def render_hands(hands: list[HandModel], poses: list[np.ndarray], path: str | Path, labels: list[str] | None = None,
+                 columns: int | None = None, view: str = "three_quarter", cell_size: tuple[int, int] = (400, 460),
+                 show_skeleton: bool = False) -> Path:
+    """Render each hand in its pose ((15, 4) TBS quaternions) in its own cell of a grid; write a PNG.
+
+    Hands keep their true sizes relative to each other: every cell uses the same camera distance.
+    """
+    if len(hands) != len(poses):
+        raise ValueError(f"{len(hands)} hands but {len(poses)} poses")
+    columns = columns or min(len(hands), 6)
+    rows = math.ceil(len(hands) / columns)
+    plotter = pv.Plotter(off_screen=True, shape=(rows, columns), border=False,
+                         window_size=(cell_size[0] * columns, cell_size[1] * rows))
+    meshes = []
+    for i, (hand, q) in enumerate(zip(hands, poses)):
+        pose = pose_frame(hand, q)
+        meshes.append(posed_mesh(hand, pose) if hand.mesh is not None else skeleton(hand, pose))
+    largest = max(meshes, key=lambda m: np.ptp(np.asarray(m.bounds).reshape(3, 2), axis=1).max())
+    for i, (hand, mesh) in enumerate(zip(hands, meshes)):
+        plotter.subplot(i // columns, i % columns)
+        plotter.set_background("white")
+        if hand.mesh is not None:
+            plotter.add_mesh(mesh, color=SKIN_COLOUR, smooth_shading=True, specular=0.25,
+                             opacity=0.45 if show_skeleton else 1.0)
+        if show_skeleton or hand.mesh is None:
+            bones = skeleton(hand, pose_frame(hand, poses[i]))
+            plotter.add_mesh(bones.tube(radius=0.012 * hand.hand_length), color=BONE_COLOUR)
+        plotter.add_text(labels[i] if labels else hand.name, font_size=11, color="black", position="upper_edge")
+        c = np.asarray(mesh.center)
+        half = np.ptp(np.asarray(largest.bounds).reshape(3, 2), axis=1) / 2
+        _set_camera(plotter, tuple(np.ravel(np.column_stack([c - half, c + half]))), view)
+    path = Path(path)
+    with atomic_path(path) as tmp:
+        plotter.screenshot(str(tmp))
+    plotter.close()
+    return path

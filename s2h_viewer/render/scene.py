@@ -1,0 +1,60 @@
+"""Scene pieces shared by the CLI and the app: posed meshes, skeletons, frame arrows, all as pyvista data.
+
+Geometry is turned into the hand's canonical palm frame (fingers up the screen's y after the
+camera below), so every hand, whatever its rig's wrist orientation, is shown the same way.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pyvista as pv
+import torch
+
+from s2h_viewer.hand import topology as topo
+from s2h_viewer.hand.kinematics import HandPose, forward_kinematics
+from s2h_viewer.hand.model import HandModel
+from s2h_viewer.hand.skinning import skin_vertices
+
+SKIN_COLOUR = "#e0ac8c"
+BONE_COLOUR = "#30343f"
+#: twist, bend, splay arrow colours (x, y, z as in most 3D tools).
+AXIS_COLOURS = ("#d62728", "#2ca02c", "#1f77b4")
+
+
+def pose_frame(hand: HandModel, q_tbs: np.ndarray) -> HandPose:
+    """FK of a single pose (15, 4) as a one-frame `HandPose`."""
+    return forward_kinematics(hand, torch.as_tensor(np.asarray(q_tbs, dtype=np.float64)[None]))
+
+
+def to_view(hand: HandModel, points: np.ndarray) -> np.ndarray:
+    """Hand-space points -> view space (canonical palm frame)."""
+    return points @ hand.palm_frame
+
+
+def posed_mesh(hand: HandModel, pose: HandPose, frame: int = 0) -> pv.PolyData:
+    """The skinned mesh at one frame, in view space, with normals for smooth shading."""
+    faces = np.hstack([np.full((len(hand.mesh.faces), 1), 3), hand.mesh.faces]).astype(np.int64)
+    mesh = pv.PolyData(to_view(hand, skin_vertices(hand, pose, frame)), faces)
+    return mesh.compute_normals(auto_orient_normals=False, split_vertices=False)
+
+
+def skeleton(hand: HandModel, pose: HandPose, frame: int = 0) -> pv.PolyData:
+    """Bones as line segments and joints as points, in view space."""
+    points = to_view(hand, pose.positions[frame].detach().cpu().numpy().astype(np.float64))
+    children = np.arange(1, topo.N_JOINTS)
+    lines = np.column_stack([np.full(len(children), 2), topo.PARENTS[children], children]).ravel()
+    return pv.PolyData(points, lines=lines)
+
+
+def frame_arrows(hand: HandModel, pose: HandPose, frame: int = 0, scale: float | None = None) -> list[pv.PolyData]:
+    """Three glyph sets (twist, bend, splay) of arrows at the 15 articulated joints."""
+    scale = scale or 0.06 * hand.hand_length
+    origins = to_view(hand, pose.positions[frame, topo.ARTICULATED_JOINTS].detach().cpu().numpy().astype(np.float64))
+    frames = pose.frames[frame, topo.ARTICULATED_JOINTS].detach().cpu().numpy().astype(np.float64)
+    out = []
+    for axis in range(3):
+        cloud = pv.PolyData(origins)
+        cloud["vectors"] = to_view(hand, frames[:, :, axis])
+        out.append(cloud.glyph(orient="vectors", scale=False, factor=scale, geom=pv.Arrow(shaft_radius=0.04,
+                                                                                            tip_radius=0.1)))
+    return out

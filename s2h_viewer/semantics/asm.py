@@ -1,0 +1,44 @@
+"""The Anatomy-based Semantic Matrix and the distance matrix of the DM baseline (DESIGN.md section 4).
+
+Palm anchor rule (fixed here): 3 evenly spaced interior points (1/4, 1/2, 3/4) on each of the
+segments wrist -> index MCP, wrist -> middle MCP, wrist -> pinky MCP, in that order (9 anchors).
+"""
+
+from __future__ import annotations
+
+import torch
+
+from s2h_viewer.hand import topology as topo
+from s2h_viewer.hand.kinematics import HandPose
+
+ANCHOR_FRACTIONS = (0.25, 0.5, 0.75)
+ANCHOR_KNUCKLES = tuple(topo.joint_index(n) for n in ("index_mcp", "middle_mcp", "pinky_mcp"))
+
+
+def palm_anchors(positions: torch.Tensor) -> torch.Tensor:
+    """(T, 21, 3) joint positions -> (T, 9, 3) palm anchors (the wrist is the origin)."""
+    knuckles = positions[:, list(ANCHOR_KNUCKLES)]  # (T, 3, 3)
+    wrist = positions[:, :1]
+    fractions = positions.new_tensor(ANCHOR_FRACTIONS)[None, None, :, None]
+    return (wrist[:, :, None] + fractions * (knuckles - wrist)[:, :, None]).reshape(-1, topo.N_ANCHORS, 3)
+
+
+def asm_columns(pose: HandPose) -> torch.Tensor:
+    """(T, 29, 3) the ASM's column points: 20 finger joints then 9 palm anchors."""
+    return torch.cat([pose.finger_positions, palm_anchors(pose.positions)], 1)
+
+
+def semantic_matrix(pose: HandPose) -> torch.Tensor:
+    """ASM ``D[t, k, m] = M_k^T (x_m - x_k)``: (T, 20, 29, 3), each column point seen from joint k's frame.
+
+    Invariant to moving or rotating the whole hand; ``D[:, k, k]`` is zero (callers mask it).
+    """
+    x = pose.finger_positions
+    diff = asm_columns(pose)[:, None, :, :] - x[:, :, None, :]
+    return torch.einsum("tkba,tkmb->tkma", pose.finger_frames, diff)
+
+
+def distance_matrix(pose: HandPose, hand_length: float) -> torch.Tensor:
+    """The DM baseline's feature (Zhang et al. 2023): (T, 20, 29) distances ``|x_m - x_k|`` / hand length."""
+    x = pose.finger_positions
+    return (asm_columns(pose)[:, None, :, :] - x[:, :, None, :]).norm(dim=-1) / hand_length

@@ -1,0 +1,82 @@
+"""Contacts between fingertip pads and the palm, measured on the skeleton as capsule gaps.
+
+Sites: the five fingertip pads (a point 60% along the last phalanx, with the interpolated finger
+radius) and the palm (the rectangle spanned by the wrist and the four finger knuckles in the
+canonical palm frame, thickened by the palm half-thickness). A pair is in contact when the gap
+between the surfaces is below ``CONTACT_TOLERANCE`` x hand length (1.5%, DESIGN.md section 5).
+Everything is torch and differentiable, so gesture fitting can pull pads together.
+"""
+
+from __future__ import annotations
+
+from itertools import combinations
+
+import numpy as np
+import torch
+
+from s2h_viewer.hand import topology as topo
+from s2h_viewer.hand.kinematics import HandPose
+from s2h_viewer.hand.model import HandModel
+
+CONTACT_TOLERANCE = 0.015
+PAD_FRACTION = 0.6
+SITES: tuple[str, ...] = topo.FINGERS + ("palm",)
+#: all tip-tip pairs then each tip with the palm: 15 pairs of site names.
+CONTACT_PAIRS: tuple[tuple[str, str], ...] = tuple(combinations(topo.FINGERS, 2)) + tuple((f, "palm") for f in topo.FINGERS)
+
+
+def pair_index(a: str, b: str) -> int:
+    """Index into ``CONTACT_PAIRS`` of an unordered pair of site names."""
+    for i, pair in enumerate(CONTACT_PAIRS):
+        if {a, b} == set(pair):
+            return i
+    raise KeyError(f"no contact pair {a!r}-{b!r}; sites are {', '.join(SITES)}")
+
+
+def pad_centres(positions: torch.Tensor) -> torch.Tensor:
+    """(T, 21, 3) -> (T, 5, 3) fingertip pad centres on the bone axis."""
+    last = positions[:, topo.TIP_JOINTS - 1]
+    tip = positions[:, topo.TIP_JOINTS]
+    return last + PAD_FRACTION * (tip - last)
+
+
+def _palm_box(hand: HandModel) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Palm frame (3, 3) and the rectangle's lower/upper corners in palm coordinates."""
+    frame = hand.palm_frame
+    knuckles = hand.rest_positions[topo.KNUCKLE_JOINTS[1:]] @ frame  # index..pinky, palm coords
+    lower = np.array([0.15 * knuckles[:, 0].mean(), knuckles[:, 1].min(), 0.0])
+    upper = np.array([knuckles[:, 0].mean(), knuckles[:, 1].max(), 0.0])
+    return frame, lower, upper
+
+
+def contact_gaps(hand: HandModel, pose: HandPose) -> torch.Tensor:
+    """(T, 15) surface gaps in metres for ``CONTACT_PAIRS`` (negative = interpenetrating)."""
+    dtype = pose.positions.dtype
+    pads = pad_centres(pose.positions)
+    radii = torch.as_tensor(hand.radii, dtype=dtype)
+    pad_r = radii[topo.TIP_JOINTS - 1] + PAD_FRACTION * (radii[topo.TIP_JOINTS] - radii[topo.TIP_JOINTS - 1])
+    ia, ib = zip(*combinations(range(5), 2))
+    tip_gap = (pads[:, list(ia)] - pads[:, list(ib)]).norm(dim=-1) - pad_r[list(ia)] - pad_r[list(ib)]
+
+    frame, lower, upper = (torch.as_tensor(a, dtype=dtype) for a in _palm_box(hand))
+    local = pads @ frame
+    nearest = torch.maximum(torch.minimum(local, upper), lower)
+    palm_gap = (local - nearest).norm(dim=-1) - pad_r - radii[0]
+    return torch.cat([tip_gap, palm_gap], -1)
+
+
+def detect_contacts(hand: HandModel, pose: HandPose, tolerance: float = CONTACT_TOLERANCE) -> np.ndarray:
+    """(T, 15) bool: pairs whose gap is under ``tolerance`` x hand length."""
+    gaps = contact_gaps(hand, pose).detach().cpu().numpy()
+    return gaps < tolerance * hand.hand_length
+
+
+def contact_precision_recall(source: np.ndarray, target: np.ndarray) -> tuple[float, float]:
+    """Precision and recall of the target's contacts against the source's ((T, 15) bools).
+
+    With no contact on one side the corresponding score is 1.0 (nothing to get wrong).
+    """
+    true_pos = np.logical_and(source, target).sum()
+    precision = true_pos / target.sum() if target.sum() else 1.0
+    recall = true_pos / source.sum() if source.sum() else 1.0
+    return float(precision), float(recall)

@@ -1,0 +1,82 @@
+"""Evaluation metrics between a source motion on hand A and its retarget on hand B (DESIGN.md section 5)."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+import torch
+
+from s2h_viewer.hand import topology as topo
+from s2h_viewer.hand.kinematics import HandPose, forward_kinematics
+from s2h_viewer.hand.model import HandModel
+from s2h_viewer.semantics.anatomy import violation_rate
+from s2h_viewer.semantics.asm import semantic_matrix
+from s2h_viewer.semantics.contacts import contact_precision_recall, detect_contacts
+from s2h_viewer.semantics.similarity import masked_cosine
+
+
+def per_joint_cosine(d_source: torch.Tensor, d_target: torch.Tensor) -> torch.Tensor:
+    """(T, 20, 29) cosine per ASM cell, NaN where masked: the viewer's heatmap source."""
+    cos, valid = masked_cosine(d_source, d_target)
+    return torch.where(valid, cos, torch.full_like(cos, float("nan")))
+
+
+def palm_and_finger_scores(d_source: torch.Tensor, d_target: torch.Tensor) -> tuple[float, float]:
+    """S_palm (mean cosine over the 9 anchor columns) and S_finger (over the 20 finger columns)."""
+    cos, valid = masked_cosine(d_source, d_target)
+    finger = slice(0, topo.N_FINGER_JOINTS)
+    anchors = slice(topo.N_FINGER_JOINTS, None)
+    s_palm = cos[..., anchors].sum() / valid[..., anchors].sum()
+    s_finger = cos[..., finger].sum() / valid[..., finger].sum()
+    return float(s_palm), float(s_finger)
+
+
+def joint_position_mse(pose: HandPose, reference: HandPose, hand_length: float) -> float:
+    """Mean squared finger-joint position error, positions in units of the hand's length."""
+    diff = (pose.finger_positions - reference.finger_positions) / hand_length
+    return float(diff.square().sum(-1).mean())
+
+
+def jitter(pose: HandPose, hand_length: float) -> float:
+    """Mean norm of the second difference of finger-joint positions (hand lengths per frame^2)."""
+    x = pose.finger_positions / hand_length
+    if x.shape[0] < 3:
+        return 0.0
+    return float((x[2:] - 2 * x[1:-1] + x[:-2]).norm(dim=-1).mean())
+
+
+@dataclass
+class RetargetScores:
+    """One retargeted clip's scores; ``mse`` only where a paired ground truth exists."""
+
+    s_palm: float
+    s_finger: float
+    contact_precision: float
+    contact_recall: float
+    violation_rate: float
+    jitter: float
+    mse: float | None = None
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def score_retarget(source_hand: HandModel, source_q: np.ndarray | torch.Tensor, target_hand: HandModel,
+                   target_q: np.ndarray | torch.Tensor, reference_q: np.ndarray | torch.Tensor | None = None
+                   ) -> RetargetScores:
+    """All metrics of one retarget: semantics against the source, MSE against ``reference_q`` if given."""
+    with torch.no_grad():
+        src_pose = forward_kinematics(source_hand, torch.as_tensor(np.asarray(source_q), dtype=torch.float64))
+        tgt_q = torch.as_tensor(np.asarray(target_q), dtype=torch.float64)
+        tgt_pose = forward_kinematics(target_hand, tgt_q)
+        s_palm, s_finger = palm_and_finger_scores(semantic_matrix(src_pose), semantic_matrix(tgt_pose))
+        precision, recall = contact_precision_recall(detect_contacts(source_hand, src_pose),
+                                                     detect_contacts(target_hand, tgt_pose))
+        mse = None
+        if reference_q is not None:
+            ref = forward_kinematics(target_hand, torch.as_tensor(np.asarray(reference_q), dtype=torch.float64))
+            mse = joint_position_mse(tgt_pose, ref, target_hand.hand_length)
+        return RetargetScores(s_palm=s_palm, s_finger=s_finger, contact_precision=precision,
+                              contact_recall=recall, violation_rate=violation_rate(tgt_q),
+                              jitter=jitter(tgt_pose, target_hand.hand_length), mse=mse)

@@ -1,0 +1,55 @@
+"""Masked cosine similarity between two ASMs, the weight scheme, and the semantic loss L_sem.
+
+Zero-norm entries (the diagonal ``m == k``, or any coincident points) are masked out of every
+cosine and mean, never divided by. L_sem is the paper's weighted sum divided by the weight total
+(a constant 580 for a full mask: 20 x 28 finger cells + 20 x 9 anchors, each finger row's
+softmax adding 1), so it lies in [-1, 1] and loss weights do not depend on the matrix size.
+"""
+
+from __future__ import annotations
+
+import torch
+
+from s2h_viewer.hand import topology as topo
+
+_EPS = 1e-9
+
+
+def valid_mask(d: torch.Tensor) -> torch.Tensor:
+    """(..., 20, 29) True where the ASM vector has non-zero length."""
+    return d.norm(dim=-1) > _EPS
+
+
+def masked_cosine(d_a: torch.Tensor, d_b: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    """Cosine of corresponding ASM vectors, and the mask of cells where both are non-zero.
+
+    Masked cells get cosine 0 and no gradient through a zero norm.
+    """
+    valid = valid_mask(d_a) & valid_mask(d_b)
+    na = d_a.norm(dim=-1).clamp_min(_EPS)
+    nb = d_b.norm(dim=-1).clamp_min(_EPS)
+    cos = (d_a * d_b).sum(-1) / (na * nb)
+    return torch.where(valid, cos, torch.zeros_like(cos)), valid
+
+
+def semantic_weights(d_source: torch.Tensor, hand_length: float) -> torch.Tensor:
+    """``w[k, m] = 1 + softmax_m(-|D[k, m]| / hand_length)`` over the 20 finger columns, 1 for anchors.
+
+    Near joints count more (a touching pair dominates its row). Masked cells get weight 0 and are
+    left out of the softmax.
+    """
+    valid = valid_mask(d_source)
+    finger = slice(0, topo.N_FINGER_JOINTS)
+    logits = -(d_source[..., finger, :].norm(dim=-1) / hand_length)
+    logits = logits.masked_fill(~valid[..., finger], float("-inf"))
+    weights = torch.ones_like(valid, dtype=d_source.dtype)
+    weights[..., finger] += torch.softmax(logits, dim=-1)
+    return weights * valid
+
+
+def semantic_similarity(d_source: torch.Tensor, d_target: torch.Tensor, source_length: float) -> torch.Tensor:
+    """L_sem: the weighted mean cosine between source and target ASMs, averaged over frames (scalar)."""
+    cos, valid = masked_cosine(d_source, d_target)
+    w = semantic_weights(d_source, source_length) * valid
+    per_frame = (w * cos).sum(dim=(-1, -2)) / w.sum(dim=(-1, -2)).clamp_min(_EPS)
+    return per_frame.mean()
