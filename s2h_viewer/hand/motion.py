@@ -23,6 +23,7 @@ class Motion:
     name: str = ""
     hand_name: str = ""
     labels: np.ndarray = field(default=None)  # type: ignore[assignment]
+    meta: dict = field(default_factory=dict)  # provenance, e.g. the gesture script and seed it was made from
 
     def __post_init__(self) -> None:
         self.q_tbs = np.asarray(self.q_tbs, dtype=np.float32)

@@ -19,7 +19,7 @@ def _smootherstep(t: np.ndarray) -> np.ndarray:
 
 def synthesize(names: list[str], hand: HandModel | None = None, fps: float = 30.0, seed: int = 0,
                hold: tuple[float, float] = (0.5, 0.9), transition: tuple[float, float] = (0.35, 0.6),
-               noise_deg: float = 1.5, name: str = "") -> Motion:
+               noise_deg: float = 1.0, name: str = "") -> Motion:
     """A motion through the named gestures (starting from "relaxed"), fitted to ``hand`` if given.
 
     Angles are interpolated per joint with a smootherstep ease (zero velocity and acceleration at
@@ -52,8 +52,20 @@ def synthesize(names: list[str], hand: HandModel | None = None, fps: float = 30.
         angles = angles + noise
     angles = clamp_to_limits(torch.as_tensor(angles)).numpy()
     q = tbs_euler_to_quat(torch.as_tensor(angles)).numpy().astype(np.float32)
+    meta = {"script": list(names), "seed": seed, "hold": list(hold), "transition": list(transition),
+            "noise_deg": noise_deg}
     return Motion(q_tbs=q, fps=fps, name=name or "+".join(names), hand_name=hand.name if hand else "",
-                  labels=np.array(labels, dtype=object))
+                  labels=np.array(labels, dtype=object), meta=meta)
+
+
+def resynthesize(motion: Motion, hand: HandModel) -> Motion | None:
+    """The same gesture script, timing and noise performed by another hand (its contacts fitted to it):
+    the semantic ground truth a retarget of ``motion`` onto ``hand`` should match. None if unknown."""
+    meta = motion.meta
+    if "script" not in meta:
+        return None
+    return synthesize(meta["script"], hand, fps=motion.fps, seed=meta["seed"], hold=tuple(meta["hold"]),
+                      transition=tuple(meta["transition"]), noise_deg=meta["noise_deg"], name=motion.name)
 
 
 def gesture_contacts(labels: np.ndarray) -> np.ndarray:

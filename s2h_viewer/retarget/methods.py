@@ -1,0 +1,61 @@
+"""Retargeting methods behind one interface, and the registry the app and CLI list them from.
+
+``retarget(motion, source_hand, target_hand, method)`` returns the motion in the target's TBS space.
+This module holds the two copy baselines; learned and optimised methods register themselves the same way.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from s2h_viewer.hand.kinematics import rig_local_to_tbs, tbs_to_rig_local
+from s2h_viewer.hand.model import HandModel
+from s2h_viewer.hand.motion import Motion
+
+RetargetFn = Callable[[Motion, HandModel, HandModel], Motion]
+
+
+@dataclass(frozen=True)
+class RetargetMethod:
+    name: str
+    label: str  # how the UI and tables show it
+    description: str
+    run: RetargetFn
+
+
+METHODS: dict[str, RetargetMethod] = {}
+
+
+def register(name: str, label: str, description: str) -> Callable[[RetargetFn], RetargetFn]:
+    """Decorator adding a retargeting function to ``METHODS`` under ``name``."""
+    def wrap(fn: RetargetFn) -> RetargetFn:
+        METHODS[name] = RetargetMethod(name, label, description, fn)
+        return fn
+    return wrap
+
+
+def retarget(motion: Motion, source_hand: HandModel, target_hand: HandModel, method: str = "tbs_copy") -> Motion:
+    """Retarget ``motion`` (posed on ``source_hand``) onto ``target_hand`` with a registered method."""
+    try:
+        chosen = METHODS[method]
+    except KeyError:
+        raise KeyError(f"unknown retargeting method {method!r}; available: {', '.join(METHODS)}") from None
+    return chosen.run(motion, source_hand, target_hand)
+
+
+def _on_target(motion: Motion, target_hand: HandModel, q_tbs, method: str) -> Motion:
+    return dataclasses.replace(motion, q_tbs=q_tbs, hand_name=target_hand.name,
+                               meta={**motion.meta, "retargeted_by": method, "source_hand": motion.hand_name})
+
+
+@register("copy", "Copy", "copy the rig's local joint rotations (what most tools do)")
+def retarget_copy(motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
+    q_local = tbs_to_rig_local(source_hand, motion.q_tbs)
+    return _on_target(motion, target_hand, rig_local_to_tbs(target_hand, q_local).numpy(), "copy")
+
+
+@register("tbs_copy", "TBS Copy", "copy twist-bend-splay rotations, so a bend stays a bend on any rig")
+def retarget_tbs_copy(motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
+    return _on_target(motion, target_hand, motion.q_tbs.copy(), "tbs_copy")
