@@ -41,7 +41,7 @@ def render_hands(hands: list[HandModel], poses: list[np.ndarray], path: str | Pa
     """
     if len(hands) != len(poses):
         raise ValueError(f"{len(hands)} hands but {len(poses)} poses")
-    columns = columns or min(len(hands), 6)
+    columns = min(columns or 6, len(hands))
     rows = math.ceil(len(hands) / columns)
     plotter = pv.Plotter(off_screen=True, shape=(rows, columns), border=False,
                          window_size=(cell_size[0] * columns, cell_size[1] * rows))

@@ -1,0 +1,144 @@
+"""npz I/O (round trips, corrupt and malformed files), motion synthesis, retargeting baselines, the CLI."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import torch
+
+from conftest import random_tbs_motion
+from s2h_viewer.cli import main
+from s2h_viewer.errors import InputFileError
+from s2h_viewer.hand.kinematics import forward_kinematics
+from s2h_viewer.hand.motion import Motion
+from s2h_viewer.io.npz import load_hand, load_motion, save_hand, save_motion
+from s2h_viewer.motions.synthesis import gesture_contacts, resynthesize, synthesize
+from s2h_viewer.retarget import METHODS, retarget
+from s2h_viewer.semantics.contacts import detect_contacts
+from s2h_viewer.semantics.metrics import score_retarget
+
+
+def test_motion_npz_round_trip(tmp_path, rng):
+    motion = Motion(q_tbs=random_tbs_motion(12, rng).numpy(), fps=24.0, name="m", hand_name="iris",
+                    labels=np.array(["fist"] * 6 + [""] * 6, dtype=object), meta={"seed": 3})
+    back = load_motion(save_motion(motion, tmp_path / "m.npz"))
+    np.testing.assert_array_equal(back.q_tbs, motion.q_tbs)
+    assert (back.fps, back.name, back.hand_name, back.meta) == (24.0, "m", "iris", {"seed": 3})
+    assert list(back.labels) == list(motion.labels)
+
+
+def test_hand_npz_round_trip(tmp_path, sample_hands):
+    hand = sample_hands["laurel"]
+    back = load_hand(save_hand(hand, tmp_path / "h.npz"))
+    np.testing.assert_array_equal(back.offsets, hand.offsets)
+    np.testing.assert_array_equal(back.mesh.faces, hand.mesh.faces)
+    assert back.meta == hand.meta and back.name == "laurel"
+
+
+def test_corrupt_and_malformed_files_give_one_clear_error(tmp_path, rng):
+    corrupt = tmp_path / "corrupt.npz"
+    corrupt.write_bytes(b"PK\x03\x04 this is not a zip")
+    with pytest.raises(InputFileError, match="corrupt.npz: not a readable npz"):
+        load_motion(corrupt)
+    q = random_tbs_motion(5, rng).numpy()
+    q[2, 4] = np.nan
+    nan_file = tmp_path / "nan.npz"
+    np.savez(nan_file, schema="s2h-motion", schema_version=1, q_tbs=q, fps=30.0)
+    with pytest.raises(InputFileError, match=r"nan.npz: .*NaN or infinite rotations in 1 frames \(first at frame 2\)"):
+        load_motion(nan_file)
+    four_fingers = tmp_path / "four.npz"
+    np.savez(four_fingers, schema="s2h-motion", schema_version=1, q_tbs=q[:, :12], fps=30.0)
+    with pytest.raises(InputFileError, match=r"four.npz: .*shape \(5, 12, 4\), expected \(T, 15, 4\)"):
+        load_motion(four_fingers)
+    with pytest.raises(InputFileError, match="not an s2h-hand file"):
+        load_hand(nan_file)
+    with pytest.raises(InputFileError, match="file not found"):
+        load_hand(tmp_path / "missing.npz")
+
+
+def test_failed_write_leaves_the_old_file_intact(tmp_path, rng, monkeypatch):
+    path = tmp_path / "keep.npz"
+    motion = Motion(q_tbs=random_tbs_motion(4, rng).numpy(), name="original")
+    save_motion(motion, path)
+
+    def broken(*args, **kwargs):
+        raise OSError("disk full")
+    monkeypatch.setattr(np, "savez_compressed", broken)
+    with pytest.raises(OSError):
+        save_motion(Motion(q_tbs=random_tbs_motion(4, rng).numpy(), name="new"), path)
+    monkeypatch.undo()
+    assert load_motion(path).name == "original"
+    assert [p.name for p in tmp_path.iterdir()] == ["keep.npz"]  # no temporary left behind
+
+
+def test_synthesis_is_seeded_smooth_and_keeps_its_contacts(sample_hands):
+    hand = sample_hands["birch"]
+    a = synthesize(["fist", "ok"], hand, seed=4)
+    b = synthesize(["fist", "ok"], hand, seed=4)
+    c = synthesize(["fist", "ok"], hand, seed=5)
+    np.testing.assert_array_equal(a.q_tbs, b.q_tbs)
+    assert a.n_frames != c.n_frames or np.abs(a.q_tbs - c.q_tbs).max() > 1e-4
+    assert set(a.labels) == {"", "relaxed", "fist", "ok"}
+    pose = forward_kinematics(hand, torch.as_tensor(a.q_tbs, dtype=torch.float64))
+    x = pose.finger_positions
+    velocity = (x[1:] - x[:-1]).norm(dim=-1).max().item()
+    acceleration = (x[2:] - 2 * x[1:-1] + x[:-2]).norm(dim=-1).max().item()
+    assert acceleration < 0.6 * velocity  # eased: no frame-to-frame jumps (a step would give about 1.0)
+    held = a.labels != ""
+    got = detect_contacts(hand, forward_kinematics(hand, torch.as_tensor(a.q_tbs[held], dtype=torch.float64)))
+    want = gesture_contacts(a.labels[held])
+    assert (got & want).sum() / want.sum() > 0.95
+
+
+def test_retarget_registry_and_copy_baselines(sample_hands):
+    assert {"copy", "tbs_copy"} <= set(METHODS)
+    source, target = sample_hands["birch"], sample_hands["kale"]
+    motion = synthesize(["fist", "point", "ok"], source, seed=1)
+    for method in ("copy", "tbs_copy"):
+        onto_itself = retarget(motion, source, source, method)
+        np.testing.assert_allclose(np.abs((onto_itself.q_tbs * motion.q_tbs).sum(-1)), 1.0, atol=1e-5)
+    tbs = retarget(motion, source, target, "tbs_copy")
+    copy = retarget(motion, source, target, "copy")
+    assert tbs.hand_name == "kale" and tbs.meta["retargeted_by"] == "tbs_copy"
+    reference = resynthesize(motion, target)
+    s_tbs = score_retarget(source, motion.q_tbs, target, tbs.q_tbs, reference.q_tbs)
+    s_copy = score_retarget(source, motion.q_tbs, target, copy.q_tbs, reference.q_tbs)
+    assert s_tbs.s_finger > s_copy.s_finger + 0.1  # rigs with different bone axes: Copy breaks the pose
+    assert s_tbs.mse < s_copy.mse
+    with pytest.raises(KeyError, match="unknown retargeting method 'nope'"):
+        retarget(motion, source, target, "nope")
+
+
+def test_cli_evaluate_writes_a_table(tmp_path, capsys):
+    assert main(["evaluate", "--target", "iris", "--out", str(tmp_path), "--quiet"]) == 0
+    out = capsys.readouterr().out
+    assert "| TBS Copy |" in out and "| Copy |" in out
+    lines = (tmp_path / "evaluation.csv").read_text().splitlines()
+    assert len(lines) == 1 + 3 * 2  # header + 3 sample motions x 2 methods
+    assert (tmp_path / "evaluation.md").read_text().startswith("| Method |")
+
+
+def test_cli_reports_bad_input_in_one_line(tmp_path, capsys):
+    bad = tmp_path / "bad.npz"
+    bad.write_text("garbage")
+    assert main(["evaluate", "--motion", str(bad), "--quiet", "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("s2h: error:") and "bad.npz" in err and "\n" not in err
+    assert main(["evaluate", "--target", "nobody", "--quiet"]) == 2
+    assert "unknown target hand(s): nobody" in capsys.readouterr().err
+
+
+def test_cli_render_writes_a_picture_of_hands(tmp_path):
+    from PIL import Image
+
+    out = tmp_path / "hands.png"
+    assert main(["render", "--hands", "iris,kale", "--gesture", "ok", "--out", str(out)]) == 0
+    image = np.asarray(Image.open(out).convert("RGB")).astype(int)
+    assert image.shape[1] == 2 * 400  # one cell per hand
+    for cell in (image[:, :400], image[:, 400:]):
+        r, g, b = cell[..., 0], cell[..., 1], cell[..., 2]
+        drawn = cell.sum(-1) < 740
+        skin = drawn & (r > g) & (g > b) & (r - b > 25)  # shaded skin tones
+        assert 0.05 < drawn.mean() < 0.6  # a hand-sized shape on a white background
+        assert skin.sum() > 0.8 * drawn.sum()
+    assert len(np.unique(image.reshape(-1, 3), axis=0)) > 50  # shaded, not flat

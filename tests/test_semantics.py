@@ -1,0 +1,136 @@
+"""ASM, similarity weights, L_sem, L_ana, contacts and metrics."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+import torch
+from scipy.spatial.transform import Rotation
+
+from conftest import random_tbs_motion
+from s2h_viewer.hand.kinematics import HandPose, forward_kinematics, identity_motion
+from s2h_viewer.hand.rotations import tbs_euler_to_quat
+from s2h_viewer.motions.fitting import fit_gesture_angles
+from s2h_viewer.motions.gestures import GESTURES
+from s2h_viewer.semantics.anatomy import anatomical_loss, violation_rate
+from s2h_viewer.semantics.asm import distance_matrix, semantic_matrix
+from s2h_viewer.semantics.contacts import contact_precision_recall, detect_contacts, pair_index
+from s2h_viewer.semantics.metrics import palm_and_finger_scores, score_retarget
+from s2h_viewer.semantics.reference import asm_sequence
+from s2h_viewer.semantics.similarity import masked_cosine, semantic_similarity, semantic_weights
+
+
+def test_batched_asm_equals_the_per_frame_reference(skeleton_hands, rng):
+    q = random_tbs_motion(5, rng)
+    for hand in skeleton_hands:
+        np.testing.assert_allclose(semantic_matrix(forward_kinematics(hand, q)).numpy(), asm_sequence(hand, q.numpy()),
+                                   atol=1e-12)
+
+
+def test_asm_of_a_rigidly_moved_and_rotated_hand_is_unchanged(skeleton_hands, rng):
+    hand = skeleton_hands[1]
+    pose = forward_kinematics(hand, random_tbs_motion(8, rng))
+    rot = torch.as_tensor(Rotation.random(random_state=3).as_matrix())
+    moved = HandPose(positions=pose.positions @ rot.T + torch.tensor([0.3, -1.2, 0.7], dtype=torch.float64),
+                     frames=rot @ pose.frames)
+    np.testing.assert_allclose(semantic_matrix(moved).numpy(), semantic_matrix(pose).numpy(), atol=1e-12)
+    # the same hand described in a rotated hand space (another rig's wrist frame) gives the same ASM
+    r = Rotation.random(random_state=5).as_matrix()
+    rotated = dataclasses.replace(hand, offsets=hand.offsets @ r.T, rest_frames=r @ hand.rest_frames,
+                                  rig_frames=r @ hand.rig_frames)
+    q = random_tbs_motion(8, rng)
+    np.testing.assert_allclose(semantic_matrix(forward_kinematics(rotated, q)).numpy(),
+                               semantic_matrix(forward_kinematics(hand, q)).numpy(), atol=1e-12)
+
+
+def test_uniformly_scaled_hand_has_perfect_palm_and_finger_scores(skeleton_hands, rng):
+    hand = skeleton_hands[0]
+    big = dataclasses.replace(hand, offsets=hand.offsets * 1.37, radii=hand.radii * 1.37)
+    q = random_tbs_motion(10, rng)
+    d_a, d_b = semantic_matrix(forward_kinematics(hand, q)), semantic_matrix(forward_kinematics(big, q))
+    s_palm, s_finger = palm_and_finger_scores(d_a, d_b)
+    assert s_palm == pytest.approx(1.0, abs=1e-12) and s_finger == pytest.approx(1.0, abs=1e-12)
+    assert semantic_similarity(d_a, d_b, hand.hand_length).item() == pytest.approx(1.0, abs=1e-12)
+    # while a different pose on the same hand scores clearly lower
+    other = semantic_matrix(forward_kinematics(hand, random_tbs_motion(10, rng)))
+    assert palm_and_finger_scores(d_a, other)[1] < 0.95
+
+
+def test_zero_norm_cells_are_masked_not_divided_by(skeleton_hands, rng):
+    hand = skeleton_hands[2]
+    q = random_tbs_motion(3, rng).requires_grad_()
+    d = semantic_matrix(forward_kinematics(hand, q))
+    cos, valid = masked_cosine(d, d)
+    assert not valid[:, range(20), range(20)].any()  # the diagonal m == k is masked
+    assert valid.sum() == 3 * 20 * 28
+    loss = semantic_similarity(d.detach(), d, hand.hand_length)
+    loss.backward()
+    assert torch.isfinite(q.grad).all()
+    w = semantic_weights(d.detach(), hand.hand_length)
+    assert torch.allclose(w.sum((-1, -2)), torch.full((3,), 580.0, dtype=w.dtype))  # 20*28 + 20*9 + 20 * 1
+
+
+def test_weights_favour_the_nearest_joints(skeleton_hands):
+    hand = skeleton_hands[0]
+    d = semantic_matrix(forward_kinematics(hand, identity_motion(1, torch.float64)))
+    w = semantic_weights(d, hand.hand_length)[0]
+    # index MCP's row: its own PIP (nearest joint) outweighs the pinky tip (far away)
+    assert w[4, 5] > w[4, 19] > 1.0
+    assert torch.all(w[:, 20:] == 1.0)
+
+
+def test_anatomical_loss_is_zero_inside_limits_and_positive_outside():
+    inside = torch.zeros(2, 15, 3, dtype=torch.float64)
+    inside[..., 2] = math.radians(60)  # bends within [0, 90]
+    inside[:, 3, 1] = math.radians(8)  # index MCP (a knuckle) splays 8 deg: allowed
+    assert anatomical_loss(tbs_euler_to_quat(inside)).item() == pytest.approx(0.0, abs=1e-20)
+    for joint, axis, degrees in [(4, 0, 10.0), (4, 1, 5.0), (3, 1, 15.0), (4, 2, 100.0), (4, 2, -10.0)]:
+        outside = inside.clone()
+        outside[:, joint, axis] = math.radians(degrees)
+        assert anatomical_loss(tbs_euler_to_quat(outside)).item() > 1e-4, (joint, axis, degrees)
+    assert violation_rate(tbs_euler_to_quat(inside)) == 0.0
+
+
+def test_ok_sign_on_a_generated_hand_has_the_thumb_index_contact(sample_hands):
+    hand = sample_hands["juniper"]  # a held-out hand
+    angles = fit_gesture_angles(hand, [GESTURES["ok"], GESTURES["spread"]])
+    contacts = detect_contacts(hand, forward_kinematics(hand, tbs_euler_to_quat(torch.as_tensor(angles))))
+    thumb_index = pair_index("thumb", "index")
+    assert contacts[0, thumb_index]  # OK: thumb and index touch
+    assert contacts[0].sum() == 1  # and nothing else does
+    assert not contacts[1].any()  # spread: no contacts at all
+
+
+def test_gesture_library_is_anatomical_and_large_enough():
+    assert len(GESTURES) >= 30
+    angles = torch.as_tensor(np.radians(np.stack([g.angles_deg for g in GESTURES.values()])))
+    assert violation_rate(tbs_euler_to_quat(angles), tolerance_deg=0.01) == 0.0
+    assert {"fist", "point", "thumbs_up", "ok", "pinch", "v_sign", "spread", "relaxed"} <= set(GESTURES)
+    assert {f"count_{i}" for i in range(1, 6)} <= set(GESTURES)
+    assert sum(g.category == "letter" for g in GESTURES.values()) >= 12
+
+
+def test_contact_precision_and_recall():
+    source = np.array([[1, 0, 1], [0, 0, 1]], dtype=bool)
+    target = np.array([[1, 1, 0], [0, 0, 1]], dtype=bool)
+    assert contact_precision_recall(source, target) == (pytest.approx(2 / 3), pytest.approx(2 / 3))
+    assert contact_precision_recall(np.zeros((2, 3), bool), np.zeros((2, 3), bool)) == (1.0, 1.0)
+
+
+def test_distance_matrix_is_scale_free(skeleton_hands, rng):
+    hand = skeleton_hands[3]
+    big = dataclasses.replace(hand, offsets=hand.offsets * 2.0)
+    q = random_tbs_motion(4, rng)
+    np.testing.assert_allclose(distance_matrix(forward_kinematics(hand, q), hand.hand_length).numpy(),
+                               distance_matrix(forward_kinematics(big, q), big.hand_length).numpy(), atol=1e-12)
+
+
+def test_score_retarget_on_itself_is_perfect(sample_hands, rng):
+    hand = sample_hands["iris"]
+    q = random_tbs_motion(20, rng, max_deg=30).numpy()
+    scores = score_retarget(hand, q, hand, q, reference_q=q)
+    assert scores.s_palm == pytest.approx(1.0) and scores.s_finger == pytest.approx(1.0)
+    assert scores.mse == pytest.approx(0.0) and scores.contact_precision == 1.0 and scores.contact_recall == 1.0
