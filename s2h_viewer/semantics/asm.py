@@ -32,10 +32,18 @@ def semantic_matrix(pose: HandPose) -> torch.Tensor:
     """ASM ``D[t, k, m] = M_k^T (x_m - x_k)``: (T, 20, 29, 3), each column point seen from joint k's frame.
 
     Invariant to moving or rotating the whole hand; ``D[:, k, k]`` is zero (callers mask it).
+    Computed in homogeneous form, ``[x_m, 1] @ [[M_k], [-x_k^T M_k]]``, as one (29 x 4) @ (4 x 60)
+    product per frame: BLAS does that far faster than 580 tiny 3 x 3 products, and the output is
+    written once. The result is a transposed view (T, 20, 29, 3).
     """
-    x = pose.finger_positions
-    diff = asm_columns(pose)[:, None, :, :] - x[:, :, None, :]
-    return torch.einsum("tkba,tkmb->tkma", pose.finger_frames, diff)
+    x, frames = pose.finger_positions, pose.finger_frames
+    n_frames = x.shape[0]
+    width = 3 * topo.N_FINGER_JOINTS
+    rotate = frames.permute(0, 2, 1, 3).reshape(n_frames, 3, width)
+    shift = -torch.einsum("tkb,tkba->tka", x, frames).reshape(n_frames, 1, width)
+    columns = torch.cat([asm_columns(pose), x.new_ones(n_frames, topo.N_ASM_COLUMNS, 1)], -1)
+    seen = torch.bmm(columns, torch.cat([rotate, shift], 1))
+    return seen.reshape(n_frames, topo.N_ASM_COLUMNS, topo.N_FINGER_JOINTS, 3).transpose(1, 2)
 
 
 def distance_matrix(pose: HandPose, hand_length: float) -> torch.Tensor:
