@@ -55,7 +55,7 @@ def _cmd_render(args: argparse.Namespace) -> int:
     splits = {h["name"]: h["split"] for h in samples.read_index()["hands"]}
     labels = [f"{h.name} ({splits.get(h.name, '?')})" for h in hands]
     path = render_hands(hands, poses, args.out, labels=labels, columns=args.columns, view=args.view,
-                        show_skeleton=args.skeleton)
+                        show_skeleton=args.skeleton, show_frames=args.frames)
     print(f"wrote {path}")
     return 0
 
@@ -88,6 +88,8 @@ def build_parser() -> argparse.ArgumentParser:
     rd.add_argument("--view", default="three_quarter", choices=["three_quarter", "palm", "back"])
     rd.add_argument("--columns", type=int, default=6)
     rd.add_argument("--skeleton", action="store_true", help="draw bones through a see-through skin")
+    rd.add_argument("--frames", action="store_true", help="draw each joint's TBS frame (twist red, bend green, "
+                                                          "splay blue) through a see-through skin")
     rd.add_argument("--out", default="hands.png")
     rd.set_defaults(func=_cmd_render)
 

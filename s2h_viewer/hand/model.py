@@ -123,6 +123,6 @@ class HandModel:
             if parent == 0:
                 frame = self.palm_frame
             else:
-                frame = self.rest_frames[np.flatnonzero(topo.ARTICULATED_JOINTS == parent)[0]]
+                frame = self.rest_frames[topo.ARTICULATED_OF_JOINT[parent]]
             local[j - 1] = frame.T @ self.offsets[j]
         return (local / self.hand_length).reshape(-1)

@@ -36,6 +36,9 @@ PARENTS = np.array([-1] + [0 if j == 0 else 1 + 4 * f + j - 1 for f in range(5) 
 #: articulated index (15) -> joint index (21).
 ARTICULATED_JOINTS = np.array([1 + 4 * f + j for f in range(5) for j in range(3)])
 ARTICULATED_NAMES: tuple[str, ...] = tuple(JOINT_NAMES[j] for j in ARTICULATED_JOINTS)
+#: joint index (21) -> articulated index (15), -1 for the wrist and the tips.
+ARTICULATED_OF_JOINT = np.full(N_JOINTS, -1)
+ARTICULATED_OF_JOINT[ARTICULATED_JOINTS] = np.arange(N_ARTICULATED)
 #: rotating index (16) -> joint index (21): wrist first.
 ROTATING_JOINTS = np.concatenate([[0], ARTICULATED_JOINTS])
 #: tip joints (21-space) and knuckles (first joint of each finger).
@@ -54,9 +57,3 @@ def joint_index(name: str) -> int:
     except ValueError:
         raise KeyError(f"unknown joint {name!r}; expected one of {', '.join(JOINT_NAMES)}") from None
 
-
-def finger_of_joint(joint: int) -> int:
-    """Finger number (0 = thumb) of a finger joint given in 21-space."""
-    if not 1 <= joint < N_JOINTS:
-        raise ValueError(f"joint {joint} is not a finger joint")
-    return (joint - 1) // 4

@@ -1,0 +1,1 @@
+"""Reading and writing hands and motions; every writer is atomic."""

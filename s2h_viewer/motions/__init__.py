@@ -1,0 +1,1 @@
+"""Gesture library, per-hand contact fitting and motion synthesis."""

@@ -10,7 +10,7 @@ import pyvista as pv
 
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.io.atomic import atomic_path
-from s2h_viewer.render.scene import BONE_COLOUR, SKIN_COLOUR, pose_frame, posed_mesh, skeleton
+from s2h_viewer.render.scene import AXIS_COLOURS, BONE_COLOUR, SKIN_COLOUR, frame_arrows, pose_frame, posed_mesh, skeleton
 
 #: camera directions in view space (x = fingers, y = thumb side, z = back of the hand).
 VIEWS = {
@@ -34,10 +34,11 @@ def _set_camera(plotter: pv.Plotter, bounds: tuple, view: str) -> None:
 
 def render_hands(hands: list[HandModel], poses: list[np.ndarray], path: str | Path, labels: list[str] | None = None,
                  columns: int | None = None, view: str = "three_quarter", cell_size: tuple[int, int] = (400, 460),
-                 show_skeleton: bool = False) -> Path:
+                 show_skeleton: bool = False, show_frames: bool = False) -> Path:
     """Render each hand in its pose ((15, 4) TBS quaternions) in its own cell of a grid; write a PNG.
 
     Hands keep their true sizes relative to each other: every cell uses the same camera distance.
+    ``show_frames`` draws each joint's TBS frame as arrows: twist red, bend green, splay blue.
     """
     if len(hands) != len(poses):
         raise ValueError(f"{len(hands)} hands but {len(poses)} poses")
@@ -45,20 +46,21 @@ def render_hands(hands: list[HandModel], poses: list[np.ndarray], path: str | Pa
     rows = math.ceil(len(hands) / columns)
     plotter = pv.Plotter(off_screen=True, shape=(rows, columns), border=False,
                          window_size=(cell_size[0] * columns, cell_size[1] * rows))
-    meshes = []
-    for i, (hand, q) in enumerate(zip(hands, poses)):
-        pose = pose_frame(hand, q)
-        meshes.append(posed_mesh(hand, pose) if hand.mesh is not None else skeleton(hand, pose))
+    fk = [pose_frame(hand, q) for hand, q in zip(hands, poses)]
+    meshes = [posed_mesh(hand, pose) if hand.mesh is not None else skeleton(hand, pose) for hand, pose in zip(hands, fk)]
     largest = max(meshes, key=lambda m: np.ptp(np.asarray(m.bounds).reshape(3, 2), axis=1).max())
-    for i, (hand, mesh) in enumerate(zip(hands, meshes)):
+    see_through = show_skeleton or show_frames
+    for i, (hand, pose, mesh) in enumerate(zip(hands, fk, meshes)):
         plotter.subplot(i // columns, i % columns)
         plotter.set_background("white")
         if hand.mesh is not None:
             plotter.add_mesh(mesh, color=SKIN_COLOUR, smooth_shading=True, specular=0.25,
-                             opacity=0.45 if show_skeleton else 1.0)
+                             opacity=0.35 if see_through else 1.0)
         if show_skeleton or hand.mesh is None:
-            bones = skeleton(hand, pose_frame(hand, poses[i]))
-            plotter.add_mesh(bones.tube(radius=0.012 * hand.hand_length), color=BONE_COLOUR)
+            plotter.add_mesh(skeleton(hand, pose).tube(radius=0.012 * hand.hand_length), color=BONE_COLOUR)
+        if show_frames:
+            for arrows, colour in zip(frame_arrows(hand, pose), AXIS_COLOURS):
+                plotter.add_mesh(arrows, color=colour)
         plotter.add_text(labels[i] if labels else hand.name, font_size=11, color="black", position="upper_edge")
         c = np.asarray(mesh.center)
         half = np.ptp(np.asarray(largest.bounds).reshape(3, 2), axis=1) / 2

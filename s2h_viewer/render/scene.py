@@ -48,7 +48,7 @@ def skeleton(hand: HandModel, pose: HandPose, frame: int = 0) -> pv.PolyData:
 
 def frame_arrows(hand: HandModel, pose: HandPose, frame: int = 0, scale: float | None = None) -> list[pv.PolyData]:
     """Three glyph sets (twist, bend, splay) of arrows at the 15 articulated joints."""
-    scale = scale or 0.06 * hand.hand_length
+    scale = scale or 0.11 * hand.hand_length
     origins = to_view(hand, pose.positions[frame, topo.ARTICULATED_JOINTS].detach().cpu().numpy().astype(np.float64))
     frames = pose.frames[frame, topo.ARTICULATED_JOINTS].detach().cpu().numpy().astype(np.float64)
     out = []

@@ -26,8 +26,7 @@ def fk_frame(hand: HandModel, q_tbs: np.ndarray) -> tuple[np.ndarray, np.ndarray
         p = topo.PARENTS[j]
         positions[j] = positions[p] + frames[p] @ rest[p].T @ hand.offsets[j]
         if j in rest:
-            a = int(np.flatnonzero(topo.ARTICULATED_JOINTS == j)[0])
-            frames[j] = frames[p] @ rest[p].T @ rest[j] @ rot[a]
+            frames[j] = frames[p] @ rest[p].T @ rest[j] @ rot[topo.ARTICULATED_OF_JOINT[j]]
         else:
             frames[j] = frames[p]
     return positions, frames
