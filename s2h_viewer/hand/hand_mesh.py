@@ -16,10 +16,16 @@ from skimage.measure import marching_cubes
 
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel, SkinnedMesh
+from s2h_viewer.hand.procedural import REFERENCE_HAND_LENGTH
 
 FLATTEN = 0.84  # section depth / width of a phalanx
 PAD_SHIFT = 0.10  # section centre below the bone axis, as a fraction of the radius
 PALM_FLATTEN = 0.72
+
+
+def size_scale(hand: HandModel) -> float:
+    """Hand length over `REFERENCE_HAND_LENGTH`: the factor every absolute size is multiplied by."""
+    return hand.hand_length / REFERENCE_HAND_LENGTH
 
 
 def _smin(a: np.ndarray, b: np.ndarray, k: float) -> np.ndarray:
@@ -51,7 +57,7 @@ def _frame_along(direction: np.ndarray, up: np.ndarray = np.array([0.0, 0.0, 1.0
 
 def _stub_start(hand: HandModel) -> np.ndarray:
     """Where the short forearm stub behind the wrist begins (its far end is a round cap)."""
-    return hand.palm_frame @ np.array([-0.045 * hand.hand_length / 0.185, 0.0, 0.0])
+    return hand.palm_frame @ np.array([-0.045 * size_scale(hand), 0.0, 0.0])
 
 
 def _parts(hand: HandModel, points: np.ndarray) -> tuple[np.ndarray, list[np.ndarray]]:
@@ -59,7 +65,7 @@ def _parts(hand: HandModel, points: np.ndarray) -> tuple[np.ndarray, list[np.nda
     pos, r, frames = hand.rest_positions, hand.radii, hand.rest_frames
     palm_frame = hand.palm_frame
     up = palm_frame[:, 2]
-    scale = hand.hand_length / 0.185
+    scale = size_scale(hand)
 
     bones = []
     for a, joint in enumerate(topo.ARTICULATED_JOINTS):
@@ -79,8 +85,7 @@ def _parts(hand: HandModel, points: np.ndarray) -> tuple[np.ndarray, list[np.nda
         direction = pos[knuckle] - base
         palm_parts.append(_round_cone(points, base, _frame_along(direction, up), np.linalg.norm(direction),
                                       r[0] * 1.25, r[knuckle] * 1.05, PALM_FLATTEN))
-    stub_start = _stub_start(hand)
-    palm_parts.append(_round_cone(points, stub_start, palm_frame, 0.07 * scale, 0.024 * scale, 0.027 * scale,
+    palm_parts.append(_round_cone(points, _stub_start(hand), palm_frame, 0.07 * scale, 0.024 * scale, 0.027 * scale,
                                   0.62))
     thumb_mcp = pos[topo.joint_index("thumb_mcp")]
     web_start = palm_frame @ np.array([0.35 * pos[topo.joint_index("middle_mcp")] @ palm_frame[:, 0], 0.0,
@@ -96,7 +101,7 @@ def _parts(hand: HandModel, points: np.ndarray) -> tuple[np.ndarray, list[np.nda
 
 def _surface(hand: HandModel, palm: np.ndarray, bones: list[np.ndarray]) -> np.ndarray:
     """Each finger blended with the palm on its own, then united with a hard minimum."""
-    scale = hand.hand_length / 0.185
+    scale = size_scale(hand)
     out = None
     for f in range(topo.N_FINGERS):
         finger = _smin(_smin(bones[3 * f], bones[3 * f + 1], 0.004 * scale), bones[3 * f + 2], 0.004 * scale)
@@ -120,8 +125,7 @@ def skin_weights(hand: HandModel, vertices: np.ndarray) -> np.ndarray:
     """
     palm, bones = _parts(hand, vertices)
     dist = np.stack([palm] + bones, 1)  # (V, 16), column = rotating index
-    scale = hand.hand_length / 0.185
-    member = np.exp(-(dist - dist.min(1, keepdims=True)) / (0.0015 * scale))
+    member = np.exp(-(dist - dist.min(1, keepdims=True)) / (0.0015 * size_scale(hand)))
     member /= member.sum(1, keepdims=True)
 
     pos, radii, frames = hand.rest_positions, hand.radii, hand.rest_frames
@@ -155,7 +159,7 @@ def build_hand_mesh(hand: HandModel, target_faces: tuple[int, int] = (8_000, 30_
     Taubin-smoothed (keeps volume), checked watertight and within ``target_faces``, then skinned."""
     spacing = hand.hand_length / 82.0
     points = np.vstack([hand.rest_positions, _stub_start(hand)])
-    margin = 0.03 * hand.hand_length / 0.185 + 3 * spacing  # thicker than any part's radius
+    margin = 0.03 * size_scale(hand) + 3 * spacing  # thicker than any part's radius
     lo = points.min(0) - margin
     hi = points.max(0) + margin
     axes = [np.arange(lo[i], hi[i] + spacing, spacing) for i in range(3)]

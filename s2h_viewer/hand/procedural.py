@@ -18,6 +18,9 @@ from scipy.spatial.transform import Rotation
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
 
+#: metres, wrist crease to middle fingertip of an average adult hand: absolute sizes are tuned for it.
+REFERENCE_HAND_LENGTH = 0.185
+
 #: rig conventions: the rig's joint frame is ``M_rest @ AXES[c] @ roll``, roll about the rig's bone axis.
 RIG_CONVENTIONS: dict[str, tuple[np.ndarray, str]] = {
     "tbs": (np.eye(3), "x"),  # bone along x, like the TBS frame itself
@@ -91,7 +94,7 @@ def build_skeleton(p: HandParams) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     length = p.hand_length
     palm_length = length * (1.0 - p.middle_ratio)
     middle_length = length * p.middle_ratio
-    scale = length / 0.185 * p.thickness
+    scale = length / REFERENCE_HAND_LENGTH * p.thickness
     spacing = p.knuckle_spacing * length
     knuckle_y = np.array([spacing, 0.0, -spacing, -2.0 * spacing])
     knuckle_z = np.array([0.0, 0.002, 0.0, -0.004]) * scale
