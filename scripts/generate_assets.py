@@ -3,7 +3,7 @@
     python scripts/generate_assets.py        # or: make assets
 
 Hands: 12 procedural right hands, 8 for training and 4 held out for testing (disjoint seeds),
-rig conventions spread over both splits. Motions: gesture scripts performed by the first
+realistic and stylised proportions and the rig conventions spread over both splits. Motions: gesture scripts performed by the first
 training hand ``PERFORMER``, contacts fitted to it. assets/index.json lists everything.
 """
 
@@ -26,8 +26,11 @@ from s2h_viewer.motions.synthesis import gesture_contacts, synthesize
 from s2h_viewer.samples import ASSETS_DIR, INDEX_PATH
 from s2h_viewer.semantics.contacts import detect_contacts
 
-TRAIN = ["aster", "birch", "cedar", "dahlia", "elm", "fern", "gorse", "hazel"]
-TEST = ["iris", "juniper", "kale", "laurel"]
+#: name -> style; the first 8 train, the last 4 are held out
+HANDS = {"aster": "realistic", "birch": "realistic", "cedar": "stylised", "dahlia": "realistic", "elm": "stylised",
+         "fern": "realistic", "gorse": "stylised", "hazel": "realistic",
+         "iris": "realistic", "juniper": "stylised", "kale": "realistic", "laurel": "stylised"}
+TRAIN = list(HANDS)[:8]
 FIRST_SEED = 100
 PERFORMER = "birch"  # holds every labelled contact of the library (see the issue note for the others)
 SCRIPTS = {
@@ -41,16 +44,16 @@ SCRIPTS = {
 def main() -> int:
     conventions = sorted(RIG_CONVENTIONS)
     entries, hands = [], {}
-    for i, name in enumerate(TRAIN + TEST):
+    for i, (name, style) in enumerate(HANDS.items()):
         t0 = time.perf_counter()
         convention = conventions[i % len(conventions)]
-        hand = generate_hand(FIRST_SEED + i, name=name, rig_convention=convention)
+        hand = generate_hand(FIRST_SEED + i, name=name, rig_convention=convention, style=style)
         hands[name] = hand
         path = save_hand(hand, ASSETS_DIR / "hands" / f"{name}.npz")
         split = "train" if name in TRAIN else "test"
         entries.append({"name": name, "file": f"hands/{name}.npz", "split": split, "seed": FIRST_SEED + i,
-                        "rig_convention": convention, "faces": int(len(hand.mesh.faces))})
-        print(f"{name:8s} {split:5s} {convention:16s} length {hand.hand_length * 100:.1f} cm, "
+                        "style": style, "rig_convention": convention, "faces": int(len(hand.mesh.faces))})
+        print(f"{name:8s} {split:5s} {style:9s} {convention:16s} length {hand.hand_length * 100:.1f} cm, "
               f"{len(hand.mesh.faces)} faces, {time.perf_counter() - t0:.1f} s -> {path}")
 
     motions = []

@@ -18,10 +18,23 @@ def test_same_seed_same_hand_and_seeds_differ():
     np.testing.assert_array_equal(a.offsets, b.offsets)
     assert np.abs(a.offsets - c.offsets).max() > 1e-3
     assert sample_params(7) == sample_params(7)
+    with pytest.raises(ValueError, match="unknown hand style 'anime'"):
+        sample_params(7, style="anime")
 
 
-def test_generated_mesh_is_a_watertight_hand_with_sound_weights():
-    hand = generate_hand(21)
+def test_stylised_hands_vary_more_and_fingers_never_fuse():
+    realistic = [sample_params(s) for s in range(40)]
+    stylised = [sample_params(s, style="stylised") for s in range(40)]
+    spread = lambda ps, f: np.ptp([f(p) for p in ps])  # noqa: E731
+    assert spread(stylised, lambda p: p.middle_ratio) > 2 * spread(realistic, lambda p: p.middle_ratio)
+    assert max(p.thickness for p in stylised) > 1.2 > max(p.thickness for p in realistic)
+    for p in stylised:  # knuckle diameter stays under 85% of the knuckle spacing
+        assert 2 * 0.0097 * p.thickness / 0.185 <= 0.85 * p.knuckle_spacing + 1e-12
+
+
+@pytest.mark.parametrize("seed,style", [(21, "realistic"), (209, "stylised")])
+def test_generated_mesh_is_a_watertight_hand_with_sound_weights(seed, style):
+    hand = generate_hand(seed, style=style)
     mesh = trimesh.Trimesh(hand.mesh.vertices, hand.mesh.faces, process=False)
     assert mesh.is_watertight and mesh.volume > 0
     assert 5_000 <= len(mesh.faces) <= 30_000
@@ -71,6 +84,8 @@ def test_shipped_assets_have_twelve_disjoint_hands_and_sample_motions(sample_han
         seeds[h["split"]].add(h["seed"])
     assert not seeds["train"] & seeds["test"]
     assert len({h["rig_convention"] for h in index["hands"] if h["split"] == "test"}) >= 3
+    for split in ("train", "test"):
+        assert {h["style"] for h in index["hands"] if h["split"] == split} == {"realistic", "stylised"}
     for motion in samples.load_sample_motions():
         hand = sample_hands[motion.hand_name]
         assert motion.n_frames > 100 and (motion.labels != "").any()
@@ -80,11 +95,11 @@ def test_shipped_assets_have_twelve_disjoint_hands_and_sample_motions(sample_han
     assert max(lengths) / min(lengths) > 1.2  # the family really varies in size
 
 
-@pytest.mark.parametrize("seed", [100, 108])
+@pytest.mark.parametrize("seed", [100, 109])
 def test_shipped_hand_matches_its_generator(sample_hands, seed):
     """The assets are what scripts/generate_assets.py makes: a generator change needs `make assets`."""
     entry = next(h for h in samples.read_index()["hands"] if h["seed"] == seed)
-    fresh = generate_hand(seed, rig_convention=entry["rig_convention"])
+    fresh = generate_hand(seed, rig_convention=entry["rig_convention"], style=entry["style"])
     shipped = sample_hands[entry["name"]]
     np.testing.assert_allclose(shipped.offsets, fresh.offsets, atol=1e-12)
     np.testing.assert_allclose(shipped.rig_frames, fresh.rig_frames, atol=1e-12)

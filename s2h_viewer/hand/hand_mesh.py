@@ -154,10 +154,8 @@ def skin_weights(hand: HandModel, vertices: np.ndarray) -> np.ndarray:
     return (weights / weights.sum(1, keepdims=True)).astype(np.float32)
 
 
-def build_hand_mesh(hand: HandModel, target_faces: tuple[int, int] = (8_000, 30_000)) -> SkinnedMesh:
-    """Marching cubes on the hand's signed distance (grid step 1/82 of the hand length, ~25k faces),
-    Taubin-smoothed (keeps volume), checked watertight and within ``target_faces``, then skinned."""
-    spacing = hand.hand_length / 82.0
+def _marching_cubes(hand: HandModel, spacing: float) -> trimesh.Trimesh:
+    """The zero set of the hand's signed distance sampled every ``spacing`` metres, outward-facing."""
     points = np.vstack([hand.rest_positions, _stub_start(hand)])
     margin = 0.03 * size_scale(hand) + 3 * spacing  # thicker than any part's radius
     lo = points.min(0) - margin
@@ -170,6 +168,20 @@ def build_hand_mesh(hand: HandModel, target_faces: tuple[int, int] = (8_000, 30_
     mesh = trimesh.Trimesh(verts + lo, faces, process=False)  # merging close vertices would pinch edges
     if mesh.volume < 0:
         mesh.invert()
+    return mesh
+
+
+def build_hand_mesh(hand: HandModel, target_faces: tuple[int, int] = (8_000, 30_000)) -> SkinnedMesh:
+    """Marching cubes on the hand's signed distance, Taubin-smoothed (keeps volume), checked
+    watertight and within ``target_faces``, then skinned.
+
+    The grid step starts at 1/82 of the hand length (about 25k faces on a realistic hand); a broader
+    or thicker hand that comes out denser is sampled again, coarser, aiming at 25k faces.
+    """
+    spacing = hand.hand_length / 82.0
+    mesh = _marching_cubes(hand, spacing)
+    if len(mesh.faces) > target_faces[1]:
+        mesh = _marching_cubes(hand, spacing * float(np.sqrt(len(mesh.faces) / 25_000)))
     if not mesh.is_watertight or not target_faces[0] <= len(mesh.faces) <= target_faces[1]:
         raise RuntimeError(f"hand {hand.name!r}: generated mesh is not watertight or has {len(mesh.faces)} "
                            f"faces (want {target_faces[0]}-{target_faces[1]})")

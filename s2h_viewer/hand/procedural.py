@@ -39,6 +39,7 @@ class HandParams:
     """Everything that tells one generated hand from another (lengths in metres, angles in degrees)."""
 
     seed: int
+    style: str  # a key of STYLES
     hand_length: float
     middle_ratio: float  # middle finger length (MCP to tip) / hand length
     finger_scale: tuple[float, float, float, float]  # index, middle, ring, pinky length / middle
@@ -58,34 +59,67 @@ class HandParams:
     rig_roll_jitter: float  # per-joint extra roll, uniform in +-this
 
 
-def sample_params(seed: int, rig_convention: str | None = None) -> HandParams:
-    """Draw plausible, varied hand proportions from a seed (same seed -> same hand)."""
+#: sampling ranges (low, high) per style. "realistic": adult human hands. "stylised": the wider
+#: proportions of game and cartoon avatars: short or long, thick fingers, big thumbs, curled rests.
+STYLES: dict[str, dict[str, tuple[float, float]]] = {
+    "realistic": dict(
+        hand_length=(0.150, 0.215), middle_ratio=(0.43, 0.47), index_scale=(0.86, 0.95), ring_scale=(0.90, 0.98),
+        pinky_scale=(0.70, 0.81), phalanx_jitter=(-0.03, 0.03), knuckle_spacing=(0.100, 0.125),
+        index_arc=(0.94, 0.99), ring_arc=(0.94, 0.99), pinky_arc=(0.84, 0.91), index_fan=(3, 8),
+        ring_fan=(-6, -2), pinky_fan=(-13, -7), rest_curl=(5, 15), thumb_x=(0.12, 0.22), thumb_y=(0.10, 0.13),
+        thumb_z=(-0.06, -0.035), thumb_scale=(0.95, 1.05), thumb_abduction=(35, 50), thumb_drop=(25, 40),
+        thumb_pronation=(60, 80), thickness=(0.88, 1.15)),
+    "stylised": dict(
+        hand_length=(0.140, 0.240), middle_ratio=(0.37, 0.50), index_scale=(0.80, 1.0), ring_scale=(0.85, 1.0),
+        pinky_scale=(0.62, 0.88), phalanx_jitter=(-0.06, 0.06), knuckle_spacing=(0.12, 0.17),
+        index_arc=(0.90, 1.0), ring_arc=(0.90, 1.0), pinky_arc=(0.78, 0.95), index_fan=(0, 12),
+        ring_fan=(-8, 0), pinky_fan=(-18, -4), rest_curl=(0, 25), thumb_x=(0.08, 0.30), thumb_y=(0.09, 0.15),
+        thumb_z=(-0.08, -0.02), thumb_scale=(0.80, 1.25), thumb_abduction=(25, 60), thumb_drop=(15, 45),
+        thumb_pronation=(60, 85), thickness=(1.0, 1.6)),
+}
+#: finger diameter at the knuckle may fill at most this share of the knuckle spacing (fingers never fuse).
+MAX_FINGER_FILL = 0.85
+
+
+def sample_params(seed: int, rig_convention: str | None = None, style: str = "realistic") -> HandParams:
+    """Draw plausible, varied hand proportions from a seed (same seed and style -> same hand)."""
+    if style not in STYLES:
+        raise ValueError(f"unknown hand style {style!r}; choose from {', '.join(STYLES)}")
     rng = np.random.default_rng(seed)
-    u = rng.uniform
+    ranges = STYLES[style]
+
+    def u(name: str, size: int | None = None):
+        return rng.uniform(*ranges[name], size)
 
     def ratios(base):
-        r = np.asarray(base) + u(-0.03, 0.03, 3)
+        r = np.asarray(base) + u("phalanx_jitter", 3)
         return tuple(float(x) for x in r / r.sum())
 
+    hand_length = float(u("hand_length"))
+    spacing = float(u("knuckle_spacing"))
+    thumb_scale = float(u("thumb_scale"))
+    widest = 2 * 0.0097 * hand_length / REFERENCE_HAND_LENGTH  # middle finger's knuckle diameter at thickness 1
     return HandParams(
         seed=seed,
-        hand_length=float(u(0.150, 0.215)),
-        middle_ratio=float(u(0.43, 0.47)),
-        finger_scale=(float(u(0.86, 0.95)), 1.0, float(u(0.90, 0.98)), float(u(0.70, 0.81))),
+        style=style,
+        hand_length=hand_length,
+        middle_ratio=float(u("middle_ratio")),
+        finger_scale=(float(u("index_scale")), 1.0, float(u("ring_scale")), float(u("pinky_scale"))),
         phalanx_ratios=tuple(ratios(b) for b in [(0.42, 0.31, 0.27)] + [(0.47, 0.29, 0.24)] * 4),
-        knuckle_spacing=float(u(0.100, 0.125)),
-        knuckle_arc=(float(u(0.94, 0.99)), 1.0, float(u(0.94, 0.99)), float(u(0.84, 0.91))),
-        fan=(float(u(3, 8)), 0.0, float(u(-6, -2)), float(u(-13, -7))),
-        rest_curl=float(u(5, 15)),
-        thumb_base=(float(u(0.12, 0.22)), float(u(0.10, 0.13)), float(u(-0.06, -0.035))),
-        thumb_lengths=(float(u(0.22, 0.26)), float(u(0.15, 0.18)), float(u(0.135, 0.16))),
-        thumb_abduction=float(u(35, 50)),
-        thumb_drop=float(u(25, 40)),
-        thumb_pronation=float(u(60, 80)),
-        thickness=float(u(0.88, 1.15)),
+        knuckle_spacing=spacing,
+        knuckle_arc=(float(u("index_arc")), 1.0, float(u("ring_arc")), float(u("pinky_arc"))),
+        fan=(float(u("index_fan")), 0.0, float(u("ring_fan")), float(u("pinky_fan"))),
+        rest_curl=float(u("rest_curl")),
+        thumb_base=(float(u("thumb_x")), float(u("thumb_y")), float(u("thumb_z"))),
+        thumb_lengths=tuple(float(x * thumb_scale) for x in (rng.uniform(0.22, 0.26), rng.uniform(0.15, 0.18),
+                                                             rng.uniform(0.135, 0.16))),
+        thumb_abduction=float(u("thumb_abduction")),
+        thumb_drop=float(u("thumb_drop")),
+        thumb_pronation=float(u("thumb_pronation")),
+        thickness=float(min(u("thickness"), MAX_FINGER_FILL * spacing * hand_length / widest)),
         rig_convention=rig_convention or str(rng.choice(sorted(RIG_CONVENTIONS))),
-        rig_roll=float(u(-180, 180)),
-        rig_roll_jitter=float(u(0, 25)),
+        rig_roll=float(rng.uniform(-180, 180)),
+        rig_roll_jitter=float(rng.uniform(0, 25)),
     )
 
 
@@ -141,11 +175,11 @@ def rig_frames_for(p: HandParams, rest_frames: np.ndarray) -> np.ndarray:
 
 
 def generate_hand(seed: int, name: str | None = None, rig_convention: str | None = None,
-                  with_mesh: bool = True) -> HandModel:
+                  with_mesh: bool = True, style: str = "realistic") -> HandModel:
     """One procedural right hand: skeleton, ground-truth TBS frames, rig frames and a skinned mesh."""
     from s2h_viewer.hand.hand_mesh import build_hand_mesh  # heavy (marching cubes); only when asked
 
-    params = sample_params(seed, rig_convention)
+    params = sample_params(seed, rig_convention, style)
     offsets, rest_frames, radii = build_skeleton(params)
     hand = HandModel(
         name=name or f"procedural_{seed}",
@@ -153,7 +187,7 @@ def generate_hand(seed: int, name: str | None = None, rig_convention: str | None
         rest_frames=rest_frames,
         rig_frames=rig_frames_for(params, rest_frames),
         radii=radii,
-        source=f"procedural:{seed}",
+        source=f"procedural:{style}:{seed}",
         meta={"params": asdict(params)},
     )
     if with_mesh:
