@@ -73,6 +73,18 @@ def test_zero_norm_cells_are_masked_not_divided_by(skeleton_hands, rng):
     assert torch.allclose(w.sum((-1, -2)), torch.full((3,), 580.0, dtype=w.dtype))  # 20*28 + 20*9 + 20 * 1
 
 
+def test_float32_asm_has_an_exact_zero_diagonal_and_finite_gradients(sample_hands, rng):
+    """Training and ASM-Opt run in float32: rounding on the diagonal once made gradients explode."""
+    hand = sample_hands["laurel"]
+    q = random_tbs_motion(64, rng).float().requires_grad_()
+    d = semantic_matrix(forward_kinematics(hand, q))
+    assert torch.all(d[:, range(20), range(20)] == 0)
+    source = semantic_matrix(forward_kinematics(hand, random_tbs_motion(64, rng).float())) / hand.hand_length
+    loss = -semantic_similarity(source, d / hand.hand_length, 1.0)
+    loss.backward()
+    assert torch.isfinite(q.grad).all() and q.grad.abs().max() < 1e3
+
+
 def test_weights_favour_the_nearest_joints(skeleton_hands):
     hand = skeleton_hands[0]
     d = semantic_matrix(forward_kinematics(hand, identity_motion(1, torch.float64)))

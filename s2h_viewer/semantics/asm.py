@@ -13,6 +13,9 @@ from s2h_viewer.hand.kinematics import HandPose
 
 ANCHOR_FRACTIONS = (0.25, 0.5, 0.75)
 ANCHOR_KNUCKLES = tuple(topo.joint_index(n) for n in ("index_mcp", "middle_mcp", "pinky_mcp"))
+#: (20, 29) True at the cells m == k (a joint seen from itself): zero by definition, masked everywhere.
+SELF_CELLS = torch.cat([torch.eye(topo.N_FINGER_JOINTS, dtype=torch.bool),
+                        torch.zeros(topo.N_FINGER_JOINTS, topo.N_ANCHORS, dtype=torch.bool)], 1)
 
 
 def palm_anchors(positions: torch.Tensor) -> torch.Tensor:
@@ -34,7 +37,7 @@ def semantic_matrix(pose: HandPose) -> torch.Tensor:
     Invariant to moving or rotating the whole hand; ``D[:, k, k]`` is zero (callers mask it).
     Computed in homogeneous form, ``[x_m, 1] @ [[M_k], [-x_k^T M_k]]``, as one (29 x 4) @ (4 x 60)
     product per frame: BLAS does that far faster than 580 tiny 3 x 3 products, and the output is
-    written once. The result is a transposed view (T, 20, 29, 3).
+    written once. Rounding leaves about 1e-8 on the diagonal in float32, so it is set to exact zero.
     """
     x, frames = pose.finger_positions, pose.finger_frames
     n_frames = x.shape[0]
@@ -43,7 +46,8 @@ def semantic_matrix(pose: HandPose) -> torch.Tensor:
     shift = -torch.einsum("tkb,tkba->tka", x, frames).reshape(n_frames, 1, width)
     columns = torch.cat([asm_columns(pose), x.new_ones(n_frames, topo.N_ASM_COLUMNS, 1)], -1)
     seen = torch.bmm(columns, torch.cat([rotate, shift], 1))
-    return seen.reshape(n_frames, topo.N_ASM_COLUMNS, topo.N_FINGER_JOINTS, 3).transpose(1, 2)
+    d = seen.reshape(n_frames, topo.N_ASM_COLUMNS, topo.N_FINGER_JOINTS, 3).transpose(1, 2)
+    return d.masked_fill(SELF_CELLS[None, :, :, None], 0.0)
 
 
 def distance_matrix(pose: HandPose, hand_length: float) -> torch.Tensor:

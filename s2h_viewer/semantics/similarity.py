@@ -1,7 +1,7 @@
 """Masked cosine similarity between two ASMs, the weight scheme, and the semantic loss L_sem.
 
-Zero-norm entries (the diagonal ``m == k``, or any coincident points) are masked out of every
-cosine and mean, never divided by. L_sem is the paper's weighted sum divided by the weight total
+Zero-norm entries (the diagonal ``m == k``, masked by position, and any coincident points) are
+masked out of every cosine and mean, never divided by. L_sem is the paper's weighted sum divided by the weight total
 (a constant 580 for a full mask: 20 x 28 finger cells + 20 x 9 anchors, each finger row's
 softmax adding 1), so it lies in [-1, 1] and loss weights do not depend on the matrix size.
 """
@@ -11,13 +11,14 @@ from __future__ import annotations
 import torch
 
 from s2h_viewer.hand import topology as topo
+from s2h_viewer.semantics.asm import SELF_CELLS
 
 _EPS = 1e-9
 
 
 def valid_mask(d: torch.Tensor) -> torch.Tensor:
-    """(..., 20, 29) True where the ASM vector has non-zero length."""
-    return d.norm(dim=-1) > _EPS
+    """(..., 20, 29) True off the diagonal where the ASM vector has non-zero length."""
+    return (d.norm(dim=-1) > _EPS) & ~SELF_CELLS.to(d.device)
 
 
 def masked_cosine(d_a: torch.Tensor, d_b: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
