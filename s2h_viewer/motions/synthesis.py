@@ -19,16 +19,19 @@ def _smootherstep(t: np.ndarray) -> np.ndarray:
 
 def synthesize(names: list[str], hand: HandModel | None = None, fps: float = 30.0, seed: int = 0,
                hold: tuple[float, float] = (0.5, 0.9), transition: tuple[float, float] = (0.35, 0.6),
-               noise_deg: float = 1.0, name: str = "") -> Motion:
+               noise_deg: float = 1.0, name: str = "", fitted: dict[str, np.ndarray] | None = None) -> Motion:
     """A motion through the named gestures (starting from "relaxed"), fitted to ``hand`` if given.
 
     Angles are interpolated per joint with a smootherstep ease (zero velocity and acceleration at
     key poses); noise is Gaussian-filtered so it reads as tremor, not jitter, and everything is
     clamped back into the anatomical limits. Hold frames are labelled with the gesture's name.
+    ``fitted`` (from `fit_library`) saves refitting when one hand performs many scripts.
     """
     rng = np.random.default_rng(seed)
     sequence = [gesture(n) for n in ["relaxed", *names]]
-    if hand is not None:
+    if fitted is not None:
+        keys = np.stack([fitted[g.name] for g in sequence])
+    elif hand is not None:
         keys = fit_gesture_angles(hand, sequence)
     else:
         keys = np.stack([np.radians(g.angles_deg) for g in sequence])
@@ -56,6 +59,12 @@ def synthesize(names: list[str], hand: HandModel | None = None, fps: float = 30.
             "noise_deg": noise_deg}
     return Motion(q_tbs=q, fps=fps, name=name or "+".join(names), hand_name=hand.name if hand else "",
                   labels=np.array(labels, dtype=object), meta=meta)
+
+
+def fit_library(hand: HandModel) -> dict[str, np.ndarray]:
+    """Every gesture of the library fitted to one hand: name -> (15, 3) radians."""
+    gestures = list(GESTURES.values())
+    return dict(zip(GESTURES, fit_gesture_angles(hand, gestures)))
 
 
 def resynthesize(motion: Motion, hand: HandModel) -> Motion | None:

@@ -1,5 +1,8 @@
 """`s2h evaluate`: retarget sample motions onto held-out hands with each method and score the results.
 
+Families: a target of the same style as the source (realistic or stylised proportions) is
+"same-family", as the paper's Mixamo-to-Mixamo pairs; a realistic-to-stylised one is "cross-family".
+
 Ground truth for MSE: each sample motion records the gesture script and seed it was synthesised
 from, so the same performance can be re-synthesised on the target hand with its contacts fitted
 (`motions.synthesis.resynthesize`): what a semantically perfect retarget would produce.
@@ -23,8 +26,11 @@ from s2h_viewer.retarget.methods import METHODS, retarget
 from s2h_viewer.semantics.metrics import RetargetScores, score_retarget
 
 METRICS = ("mse", "s_palm", "s_finger", "contact_precision", "contact_recall", "violation_rate", "jitter")
-HEADERS = {"mse": "MSE", "s_palm": "S_palm", "s_finger": "S_finger", "contact_precision": "Contact P",
-           "contact_recall": "Contact R", "violation_rate": "Violations", "jitter": "Jitter"}
+#: the table's columns, as the paper's Table 1: (header, family the rows are averaged over, metric)
+COLUMNS = (("Same MSE", "same", "mse"), ("Same S_palm", "same", "s_palm"), ("Same S_finger", "same", "s_finger"),
+           ("Cross MSE", "cross", "mse"), ("Cross S_palm", "cross", "s_palm"), ("Cross S_finger", "cross", "s_finger"),
+           ("Contact P", "all", "contact_precision"), ("Contact R", "all", "contact_recall"),
+           ("Violations", "all", "violation_rate"), ("Jitter", "all", "jitter"))
 
 
 @dataclass
@@ -33,7 +39,13 @@ class EvaluationRow:
     motion: str
     source: str
     target: str
+    family: str  # "same" or "cross"
     scores: RetargetScores
+
+
+def hand_family(hand: HandModel) -> str:
+    """The style a hand was generated with ("realistic" for hands from elsewhere)."""
+    return hand.meta.get("params", {}).get("style", "realistic")
 
 
 def evaluate(motions: list[Motion], hands: dict[str, HandModel], targets: list[str], methods: list[str],
@@ -47,33 +59,36 @@ def evaluate(motions: list[Motion], hands: dict[str, HandModel], targets: list[s
         for target_name in targets:
             target = hands[target_name]
             reference = resynthesize(motion, target)
+            family = "same" if hand_family(source) == hand_family(target) else "cross"
             for method in methods:
                 if progress:
                     progress(f"{motion.name} -> {target_name} ({method})")
                 result = retarget(motion, source, target, method)
                 scores = score_retarget(source, motion.q_tbs, target, result.q_tbs,
                                         reference.q_tbs if reference is not None else None)
-                rows.append(EvaluationRow(method, motion.name, source.name, target_name, scores))
+                rows.append(EvaluationRow(method, motion.name, source.name, target_name, family, scores))
     return rows
 
 
 def summarise(rows: list[EvaluationRow]) -> dict[str, dict[str, float]]:
-    """Per method, the mean of each metric over all rows (MSE over rows that have a reference)."""
+    """Per method, each column of ``COLUMNS``: the mean over the rows of its family (NaN if none)."""
     out: dict[str, dict[str, float]] = {}
     for method in dict.fromkeys(r.method for r in rows):
-        mine = [r.scores.as_dict() for r in rows if r.method == method]
-        out[method] = {m: float(np.mean([s[m] for s in mine if s[m] is not None]))
-                       if any(s[m] is not None for s in mine) else float("nan") for m in METRICS}
+        out[method] = {}
+        for header, family, metric in COLUMNS:
+            values = [r.scores.as_dict()[metric] for r in rows
+                      if r.method == method and family in ("all", r.family)]
+            values = [v for v in values if v is not None]
+            out[method][header] = float(np.mean(values)) if values else float("nan")
     return out
 
 
 def format_markdown(summary: dict[str, dict[str, float]]) -> str:
     """The summary as a Markdown table, one row per method."""
-    lines = ["| Method | " + " | ".join(HEADERS[m] for m in METRICS) + " |",
-             "|---|" + "---:|" * len(METRICS)]
+    lines = ["| Method | " + " | ".join(h for h, _, _ in COLUMNS) + " |", "|---|" + "---:|" * len(COLUMNS)]
     for method, values in summary.items():
         label = METHODS[method].label if method in METHODS else method
-        cells = [f"{values[m]:.5f}" if m in ("mse", "jitter") else f"{values[m]:.3f}" for m in METRICS]
+        cells = [f"{values[h]:.5f}" if m in ("mse", "jitter") else f"{values[h]:.3f}" for h, _, m in COLUMNS]
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
@@ -83,10 +98,11 @@ def write_results(rows: list[EvaluationRow], summary: dict[str, dict[str, float]
     out_dir = Path(out_dir)
     buffer = io.StringIO()
     writer = csv.writer(buffer)
-    writer.writerow(["method", "motion", "source", "target", *METRICS])
+    writer.writerow(["method", "motion", "source", "target", "family", *METRICS])
     for r in rows:
         s = r.scores.as_dict()
-        writer.writerow([r.method, r.motion, r.source, r.target, *("" if s[m] is None else s[m] for m in METRICS)])
+        writer.writerow([r.method, r.motion, r.source, r.target, r.family,
+                         *("" if s[m] is None else s[m] for m in METRICS)])
     written = []
     for name, text in (("evaluation.csv", buffer.getvalue()), ("evaluation.md", format_markdown(summary) + "\n")):
         with atomic_path(out_dir / name) as tmp:

@@ -45,7 +45,8 @@ def retarget(motion: Motion, source_hand: HandModel, target_hand: HandModel, met
     return chosen.run(motion, source_hand, target_hand)
 
 
-def _on_target(motion: Motion, target_hand: HandModel, q_tbs, method: str) -> Motion:
+def on_target(motion: Motion, target_hand: HandModel, q_tbs, method: str) -> Motion:
+    """The retargeted motion: same timing and labels, the target's rotations, provenance in ``meta``."""
     return dataclasses.replace(motion, q_tbs=q_tbs, hand_name=target_hand.name,
                                meta={**motion.meta, "retargeted_by": method, "source_hand": motion.hand_name})
 
@@ -53,9 +54,9 @@ def _on_target(motion: Motion, target_hand: HandModel, q_tbs, method: str) -> Mo
 @register("copy", "Copy", "copy the rig's local joint rotations (what most tools do)")
 def retarget_copy(motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
     q_local = tbs_to_rig_local(source_hand, motion.q_tbs)
-    return _on_target(motion, target_hand, rig_local_to_tbs(target_hand, q_local).numpy(), "copy")
+    return on_target(motion, target_hand, rig_local_to_tbs(target_hand, q_local).numpy(), "copy")
 
 
 @register("tbs_copy", "TBS Copy", "copy twist-bend-splay rotations, so a bend stays a bend on any rig")
 def retarget_tbs_copy(motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
-    return _on_target(motion, target_hand, motion.q_tbs.copy(), "tbs_copy")
+    return on_target(motion, target_hand, motion.q_tbs.copy(), "tbs_copy")
