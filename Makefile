@@ -4,7 +4,7 @@ VENV   ?= .venv
 PY      = $(VENV)/bin/python
 STAMP   = $(VENV)/.installed
 
-.PHONY: run test bench assets clean
+.PHONY: run test bench assets train clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -21,6 +21,13 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_asm_fk.py
+	$(PY) benchmarks/bench_retarget.py
+	$(PY) benchmarks/bench_annotate.py
+
+# reproduces assets/models/{asrn,dm}.pt (seeded; about 8.5 minutes each on 2 CPU cores)
+train: $(STAMP)
+	$(VENV)/bin/s2h train --kind asrn
+	$(VENV)/bin/s2h train --kind dm
 
 assets: $(STAMP)
 	$(PY) scripts/generate_assets.py

@@ -11,11 +11,12 @@ from __future__ import annotations
 
 import argparse
 import platform
-import statistics
 import time
 
 import numpy as np
 import torch
+
+from timing import median_seconds  # benchmarks/timing.py, beside this script
 
 from s2h_viewer import samples
 from s2h_viewer.hand import topology as topo
@@ -23,16 +24,6 @@ from s2h_viewer.hand.kinematics import forward_kinematics
 from s2h_viewer.hand.skinning import skin_vertices, skinning_transforms
 from s2h_viewer.semantics.asm import semantic_matrix
 from s2h_viewer.semantics.reference import asm_sequence
-
-
-def median_seconds(fn, repeats: int) -> float:
-    fn()  # warm up
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
 
 
 def skin_per_joint_loop(hand, pose) -> np.ndarray:

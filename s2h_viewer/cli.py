@@ -1,4 +1,5 @@
-"""The `s2h` command: evaluate, render, gestures. Errors print one line, never a traceback."""
+"""The `s2h` command: annotate, retarget, evaluate, train, render, gestures.
+Errors print one line naming the file and the problem, never a traceback."""
 
 from __future__ import annotations
 
@@ -47,17 +48,91 @@ def _cmd_render(args: argparse.Namespace) -> int:
     from s2h_viewer.motions.gestures import gesture
     from s2h_viewer.render.offscreen import render_hands
 
+    from s2h_viewer.io.files import load_hand_file
+
     names = samples.hand_names(args.hands) if args.hands in ("all", "train", "test") else args.hands.split(",")
-    hands = [samples.load_sample_hand(n) for n in names]
+    hands = [load_hand_file(n, _rig_options(args)) for n in names]
     chosen = gesture(args.gesture)
     poses = [tbs_euler_to_quat(torch.as_tensor(fit_gesture_angles(h, [chosen])[0])).numpy() if args.fit
              else tbs_euler_to_quat(torch.as_tensor(np.radians(chosen.angles_deg))).numpy() for h in hands]
     splits = {h["name"]: h["split"] for h in samples.read_index()["hands"]}
-    labels = [f"{h.name} ({splits.get(h.name, '?')})" for h in hands]
+    labels = [f"{h.name} ({splits.get(h.name, 'file')})" for h in hands]
     path = render_hands(hands, poses, args.out, labels=labels, columns=args.columns, view=args.view,
                         show_skeleton=args.skeleton, show_frames=args.frames)
     print(f"wrote {path}")
     return 0
+
+
+def _cmd_train(args: argparse.Namespace) -> int:
+    from s2h_viewer import samples
+    from s2h_viewer.retarget.asrn.inference import MODELS_DIR
+    from s2h_viewer.retarget.asrn.training import TrainConfig, train
+
+    config = TrainConfig(kind=args.kind, steps=args.steps, seed=args.seed, scripts_per_hand=args.scripts,
+                         extra_hands=args.extra_hands)
+    out = Path(args.out) if args.out else MODELS_DIR / f"{args.kind}.pt"
+    history = train(config, samples.load_sample_hands("train"), out, resume=args.resume, show_progress=not args.quiet,
+                    stop_at=args.stop_at)
+    if history:
+        print(f"{args.kind}: step {history[-1]['step']}, loss {history[-1]['loss']:.5f} "
+              f"(semantic {history[-1]['semantic']:.5f}) -> {out}")
+    return 0
+
+
+def _rig_options(args: argparse.Namespace):
+    from s2h_viewer.io.files import RigOptions
+
+    return RigOptions(side=args.side, scheme=args.scheme, joint_map=args.joint_map)
+
+
+def _cmd_annotate(args: argparse.Namespace) -> int:
+    import time
+
+    from s2h_viewer import samples
+    from s2h_viewer.annotate.report import annotation_report
+    from s2h_viewer.annotate.solver import solve_tbs_frames
+    from s2h_viewer.io.annotation import Annotation, save_annotation
+    from s2h_viewer.io.files import load_hand_file
+
+    names = args.hands or samples.hand_names("test")
+    results = []
+    for name in names:
+        hand = load_hand_file(name, _rig_options(args))
+        start = time.perf_counter()
+        solution = solve_tbs_frames(hand)
+        results.append((hand, solution, time.perf_counter() - start))
+        if args.save:
+            path = samples.ASSETS_DIR / "hands" / f"{name}.npz" if Path(name).suffix == "" else Path(name)
+            written = save_annotation(Annotation(solution.frames, ["solver"] * len(solution.frames),
+                                                 solution.confidence, solution.diagnostics), path)
+            print(f"wrote {written}")
+    print(annotation_report(results, against_truth=args.report))
+    return 0
+
+
+def _cmd_retarget(args: argparse.Namespace) -> int:
+    from s2h_viewer.io.files import load_hand_file, load_motion_file, save_motion_file
+    from s2h_viewer.retarget import retarget
+
+    options = _rig_options(args)
+    motion, rig = load_motion_file(args.motion, options=options)
+    source = load_hand_file(args.source, options) if args.source else rig
+    if source is None:
+        from s2h_viewer.samples import load_sample_hand
+        source = load_sample_hand(motion.hand_name)
+    target = load_hand_file(args.target, options)
+    result = retarget(motion, source, target, args.method)
+    path = save_motion_file(args.out, result, target)
+    print(f"{motion.name}: {motion.n_frames} frames, {source.name} -> {target.name} ({args.method}) -> {path}")
+    return 0
+
+
+def _add_rig_options(parser: argparse.ArgumentParser) -> None:
+    from s2h_viewer.hand.rig_mapping import SCHEMES, SIDES
+
+    parser.add_argument("--side", choices=SIDES, default="right", help="which hand of a rig or character")
+    parser.add_argument("--scheme", choices=list(SCHEMES), help="joint naming scheme (default: detect)")
+    parser.add_argument("--joint-map", help='JSON file {"wrist": "<bone>", "index_mcp": "<bone>", ...}')
 
 
 def _cmd_gestures(args: argparse.Namespace) -> int:
@@ -74,7 +149,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
 
     ev = sub.add_parser("evaluate", help="retarget sample motions onto held-out hands and score each method")
-    ev.add_argument("--methods", default="copy,tbs_copy", help="comma-separated method names")
+    ev.add_argument("--methods", default="copy,tbs_copy,dm,asrn,asm_opt", help="comma-separated method names")
     ev.add_argument("--motion", action="append", help="motion npz (default: the shipped samples); repeatable")
     ev.add_argument("--target", action="append", help="target hand name (default: the test split); repeatable")
     ev.add_argument("--out", default="results", help="folder for evaluation.csv and evaluation.md")
@@ -82,7 +157,8 @@ def build_parser() -> argparse.ArgumentParser:
     ev.set_defaults(func=_cmd_evaluate)
 
     rd = sub.add_parser("render", help="render sample hands side by side in one gesture (PNG, off screen)")
-    rd.add_argument("--hands", default="all", help="all, train, test, or comma-separated names")
+    rd.add_argument("--hands", default="all", help="all, train, test, or comma-separated sample names or hand "
+                                                    "files (.glb .gltf .fbx .bvh .npz)")
     rd.add_argument("--gesture", default="relaxed", help="gesture name (see `s2h gestures`)")
     rd.add_argument("--no-fit", dest="fit", action="store_false", help="use the authored angles as they are")
     rd.add_argument("--view", default="three_quarter", choices=["three_quarter", "palm", "back"])
@@ -91,7 +167,38 @@ def build_parser() -> argparse.ArgumentParser:
     rd.add_argument("--frames", action="store_true", help="draw each joint's TBS frame (twist red, bend green, "
                                                           "splay blue) through a see-through skin")
     rd.add_argument("--out", default="hands.png")
+    _add_rig_options(rd)
     rd.set_defaults(func=_cmd_render)
+
+    an = sub.add_parser("annotate", help="find TBS frames by rays cast at each hand's mesh; report and save them")
+    an.add_argument("hands", nargs="*", help="hand files (.glb .gltf .fbx .npz) or sample names (default: test split)")
+    an.add_argument("--report", action="store_true", help="compare with the ground-truth frames of procedural "
+                                                           "hands: mean/max angle error per finger")
+    an.add_argument("--save", action="store_true", help="write each hand's annotation sidecar (<stem>.tbs.json)")
+    _add_rig_options(an)
+    an.set_defaults(func=_cmd_annotate)
+
+    rt = sub.add_parser("retarget", help="retarget a motion file onto a target hand and export it")
+    rt.add_argument("--motion", required=True, help="motion file (.npz .bvh .glb .gltf .fbx)")
+    rt.add_argument("--source", help="hand the motion is performed on (default: its own rig, or its sample hand)")
+    rt.add_argument("--target", required=True, help="target hand file or sample name")
+    rt.add_argument("--method", default="asrn", help="copy, tbs_copy, dm, asrn or asm_opt")
+    rt.add_argument("--out", required=True, help="output file: .glb (on the target rig), .bvh or .npz")
+    _add_rig_options(rt)
+    rt.set_defaults(func=_cmd_retarget)
+
+    tr = sub.add_parser("train", help="train ASRN or DM on the training hands (CPU, seeded, resumable)")
+    tr.add_argument("--kind", choices=["asrn", "dm"], default="asrn")
+    tr.add_argument("--steps", type=int, default=4000)
+    tr.add_argument("--seed", type=int, default=0)
+    tr.add_argument("--scripts", type=int, default=6, help="random gesture scripts per training hand")
+    tr.add_argument("--out", help="checkpoint path (default: assets/models/<kind>.pt)")
+    tr.add_argument("--extra-hands", type=int, default=16, help="unnamed procedural hands added to the 8 shipped "
+                                                                 "training hands")
+    tr.add_argument("--resume", action="store_true", help="continue from the checkpoint at --out")
+    tr.add_argument("--stop-at", type=int, help="end this run at that step (continue later with --resume)")
+    tr.add_argument("--quiet", action="store_true")
+    tr.set_defaults(func=_cmd_train)
 
     gs = sub.add_parser("gestures", help="list the gesture library with its contact labels")
     gs.set_defaults(func=_cmd_gestures)

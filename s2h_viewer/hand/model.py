@@ -17,6 +17,17 @@ from s2h_viewer.errors import InvalidHandError
 from s2h_viewer.hand import topology as topo
 
 
+def palm_axes(positions: np.ndarray) -> np.ndarray:
+    """(3, 3) palm axes of a right hand's (21, 3) joint positions (wrist at the origin): x to the middle
+    knuckle, z out of the back of the hand, y = z x x (toward the thumb)."""
+    x = positions[topo.joint_index("middle_mcp")]
+    z = np.cross(positions[topo.joint_index("pinky_mcp")], positions[topo.joint_index("index_mcp")])
+    x = x / np.linalg.norm(x)
+    z = z - x * (z @ x)
+    z = z / np.linalg.norm(z)
+    return np.stack([x, np.cross(z, x), z], axis=1)
+
+
 @dataclass(eq=False)
 class SkinnedMesh:
     """A triangle mesh in rest pose with linear-blend weights over the 16 rotating joints."""
@@ -101,14 +112,8 @@ class HandModel:
 
     @cached_property
     def palm_frame(self) -> np.ndarray:
-        """(3, 3) canonical palm axes in hand space: x to the middle knuckle, z out of the back, y = z x x."""
-        p = self.rest_positions
-        x = p[topo.joint_index("middle_mcp")]
-        z = np.cross(p[topo.joint_index("pinky_mcp")], p[topo.joint_index("index_mcp")])
-        x = x / np.linalg.norm(x)
-        z = z - x * (z @ x)
-        z = z / np.linalg.norm(z)
-        return np.stack([x, np.cross(z, x), z], axis=1)
+        """(3, 3) canonical palm axes in hand space (see `palm_axes`)."""
+        return palm_axes(self.rest_positions)
 
     @cached_property
     def shape_vector(self) -> np.ndarray:

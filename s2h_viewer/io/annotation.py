@@ -1,0 +1,103 @@
+"""The TBS annotation sidecar: ``<hand file stem>.tbs.json`` beside the hand file, loaded with it.
+
+Schema (version 1)::
+
+    {"schema": "s2h-tbs-annotation", "version": 1,
+     "hand_file": "right.glb", "hand_sha256": "<hex digest of the hand file>",
+     "joints": {"thumb_cmc": {"frame": [[...], [...], [...]], "set_by": "solver" | "manual",
+                              "confidence": 0.9}, ... 15 joints},
+     "diagnostics": ["..."]}
+
+``frame`` rows are the hand-space matrix rows (columns twist, bend, splay). The hash ties the
+annotation to the exact file it was made for: a changed hand file makes the sidecar an error,
+never silently wrong frames.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from s2h_viewer.errors import InputFileError
+from s2h_viewer.hand import topology as topo
+from s2h_viewer.io.atomic import atomic_path
+
+SCHEMA = "s2h-tbs-annotation"
+VERSION = 1
+SET_BY = ("solver", "manual")
+
+
+@dataclass
+class Annotation:
+    """Per articulated joint (15): frame, who set it, and the solver's confidence (1 for manual)."""
+
+    frames: np.ndarray  # (15, 3, 3)
+    set_by: list[str]
+    confidence: np.ndarray  # (15,)
+    diagnostics: list[str] = field(default_factory=list)
+
+
+def sidecar_path(hand_file: str | Path) -> Path:
+    hand_file = Path(hand_file)
+    return hand_file.with_name(f"{hand_file.stem}.tbs.json")
+
+
+def file_sha256(path: str | Path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def save_annotation(annotation: Annotation, hand_file: str | Path) -> Path:
+    """Write the sidecar of ``hand_file`` atomically; returns its path."""
+    hand_file = Path(hand_file)
+    joints = {name: {"frame": np.round(annotation.frames[a], 8).tolist(), "set_by": annotation.set_by[a],
+                     "confidence": round(float(annotation.confidence[a]), 4)}
+              for a, name in enumerate(topo.ARTICULATED_NAMES)}
+    document = {"schema": SCHEMA, "version": VERSION, "hand_file": hand_file.name,
+                "hand_sha256": file_sha256(hand_file), "joints": joints, "diagnostics": annotation.diagnostics}
+    path = sidecar_path(hand_file)
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(document, indent=1) + "\n")
+    return path
+
+
+def load_annotation(hand_file: str | Path) -> Annotation | None:
+    """The sidecar of ``hand_file``, None if there is none; an `InputFileError` naming the sidecar if it
+    is damaged, of another schema or version, or made for a different version of the hand file."""
+    path = sidecar_path(hand_file)
+    if not path.exists():
+        return None
+    try:
+        document = json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise InputFileError(path, f"not valid JSON ({exc})") from None
+    if not isinstance(document, dict) or document.get("schema") != SCHEMA:
+        raise InputFileError(path, f"not an s2h TBS annotation (schema {SCHEMA!r} expected)")
+    if document.get("version") != VERSION:
+        raise InputFileError(path, f"annotation version {document.get('version')!r} is not supported "
+                                   f"(this s2h reads version {VERSION})")
+    if document.get("hand_sha256") != file_sha256(hand_file):
+        raise InputFileError(path, f"was made for a different version of {Path(hand_file).name} (its hash "
+                                   f"differs); re-run `s2h annotate --save` or delete the sidecar")
+    joints = document.get("joints", {})
+    missing = [n for n in topo.ARTICULATED_NAMES if n not in joints]
+    if missing:
+        raise InputFileError(path, f"no frame for {', '.join(missing)}")
+    try:
+        frames = np.array([joints[n]["frame"] for n in topo.ARTICULATED_NAMES], dtype=np.float64)
+        set_by = [str(joints[n].get("set_by", "solver")) for n in topo.ARTICULATED_NAMES]
+        confidence = np.array([float(joints[n].get("confidence", 1.0)) for n in topo.ARTICULATED_NAMES])
+    except (TypeError, ValueError, KeyError) as exc:
+        raise InputFileError(path, f"malformed joint entry ({exc})") from None
+    if frames.shape != (topo.N_ARTICULATED, 3, 3) or not np.isfinite(frames).all():
+        raise InputFileError(path, "frames must be finite 3 x 3 matrices")
+    error = np.abs(frames.transpose(0, 2, 1) @ frames - np.eye(3)).max()
+    if error > 1e-4 or np.any(np.linalg.det(frames) < 0):
+        raise InputFileError(path, f"frames are not right-handed rotations (orthonormality error {error:.2g})")
+    bad = sorted(set(set_by) - set(SET_BY))
+    if bad:
+        raise InputFileError(path, f"unknown set_by value(s) {', '.join(bad)}; expected solver or manual")
+    return Annotation(frames, set_by, confidence, list(document.get("diagnostics", [])))

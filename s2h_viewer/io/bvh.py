@@ -1,0 +1,204 @@
+"""BVH: finger motion with its skeleton, in and out.
+
+A BVH skeleton has every joint's rest orientation equal to the world axes, so its rig frames are the
+identity; it has no mesh, so a hand read from BVH takes TBS frames from an annotation sidecar if there
+is one, else from the palm plane. Rotation channels may come in any order; positions are read but only
+the hand's rotations are used (the wrist stays where it is). Written files use ZXY rotation channels,
+the order Blender and MotionBuilder expect, and the project's joint names.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from s2h_viewer.errors import InputFileError
+from s2h_viewer.hand import topology as topo
+from s2h_viewer.hand.model import HandModel
+from s2h_viewer.hand.motion import Motion
+from s2h_viewer.hand.rig_mapping import map_rig
+from s2h_viewer.io.atomic import atomic_path
+from s2h_viewer.hand.mirror import reflection
+from s2h_viewer.io.rig import (MIRROR_NORMAL, RigSkeleton, build_hand, motion_from_world_rotations,
+                               world_rotations_from_motion)
+
+WRITE_ORDER = "ZXY"
+
+
+@dataclass
+class BvhClip:
+    """A parsed BVH file: joints (End Sites included, with no channels) and their channel data."""
+
+    names: list[str]
+    parents: np.ndarray  # (N,)
+    offsets: np.ndarray  # (N, 3)
+    channels: list[list[str]]  # per joint, e.g. ["Xposition", ..., "Zrotation"]
+    frames: np.ndarray  # (T, total channels)
+    frame_time: float
+
+
+def _tokens(path: Path) -> list[str]:
+    try:
+        return path.read_text(errors="strict").split()
+    except FileNotFoundError:
+        raise InputFileError(path, "file not found") from None
+    except UnicodeDecodeError:
+        raise InputFileError(path, "not a BVH file (binary data)") from None
+
+
+def read_bvh(path: str | Path) -> BvhClip:
+    """Parse a BVH file; an `InputFileError` naming the file and what is wrong with it."""
+    path = Path(path)
+    tokens = _tokens(path)
+    if not tokens or tokens[0] != "HIERARCHY":
+        raise InputFileError(path, "not a BVH file (no HIERARCHY header)")
+    names, parents, offsets, channels = [], [], [], []
+    stack: list[int] = []
+    i = 1
+    try:
+        while tokens[i] != "MOTION":
+            token = tokens[i]
+            if token in ("ROOT", "JOINT", "End"):
+                name = tokens[i + 1] if token != "End" else f"{names[stack[-1]]}_end"
+                names.append(name)
+                parents.append(stack[-1] if stack else -1)
+                offsets.append(np.zeros(3))
+                channels.append([])
+                i += 2
+            elif token == "{":
+                stack.append(len(names) - 1)
+                i += 1
+            elif token == "}":
+                stack.pop()
+                i += 1
+            elif token == "OFFSET":
+                offsets[-1 if not stack else stack[-1]] = np.array(tokens[i + 1:i + 4], dtype=np.float64)
+                i += 4
+            elif token == "CHANNELS":
+                n = int(tokens[i + 1])
+                channels[stack[-1]] = tokens[i + 2:i + 2 + n]
+                i += 2 + n
+            else:
+                raise ValueError(f"unexpected token {token!r}")
+        n_frames = int(tokens[tokens.index("Frames:", i) + 1])
+        frame_time = float(tokens[tokens.index("Time:", i) + 1])
+        start = tokens.index("Time:", i) + 2
+        values = np.array(tokens[start:], dtype=np.float64)
+    except (IndexError, ValueError) as exc:
+        raise InputFileError(path, f"malformed BVH ({exc})") from None
+    width = sum(len(c) for c in channels)
+    if stack or not names:
+        raise InputFileError(path, "malformed BVH (unbalanced braces in the hierarchy)")
+    if width == 0 or len(values) != n_frames * width:
+        raise InputFileError(path, f"MOTION holds {len(values)} numbers, expected {n_frames} frames x {width} "
+                                   f"channels")
+    if frame_time <= 0:
+        raise InputFileError(path, f"frame time {frame_time} is not positive")
+    bad = set(sum(channels, [])) - {f"{a}{k}" for a in "XYZ" for k in ("position", "rotation")}
+    if bad:
+        raise InputFileError(path, f"unknown channels {', '.join(sorted(bad))}")
+    frames = values.reshape(n_frames, width)
+    if not np.isfinite(frames).all():
+        bad_frames = ~np.isfinite(frames).all(axis=1)
+        raise InputFileError(path, f"NaN or infinite values in {int(bad_frames.sum())} frames "
+                                   f"(first at frame {int(np.flatnonzero(bad_frames)[0])})")
+    return BvhClip(names, np.array(parents), np.array(offsets), channels, frames, frame_time)
+
+
+def _local_rotations(clip: BvhClip) -> np.ndarray:
+    """(T, N, 3, 3) each joint's rotation channels as matrices (identity for End Sites)."""
+    out = np.tile(np.eye(3), (len(clip.frames), len(clip.names), 1, 1))
+    column = 0
+    for j, chans in enumerate(clip.channels):
+        rot = [(c[0], column + k) for k, c in enumerate(chans) if c.endswith("rotation")]
+        if rot:
+            order = "".join(axis for axis, _ in rot)
+            angles = clip.frames[:, [col for _, col in rot]]
+            out[:, j] = Rotation.from_euler(order.upper(), angles, degrees=True).as_matrix()
+        column += len(chans)
+    return out
+
+
+def _world(clip: BvhClip, local: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rest world positions (N, 3) and world rotations over time (T, N, 3, 3)."""
+    rest = np.zeros((len(clip.names), 3))
+    world = local.copy()
+    for j, p in enumerate(clip.parents):  # BVH lists parents before children
+        if p >= 0:
+            rest[j] = rest[p] + clip.offsets[j]
+            world[:, j] = world[:, p] @ local[:, j]
+    return rest, world
+
+
+def load_bvh(path: str | Path, side: str = "right", scheme: str | None = None,
+             joint_map: dict[str, str] | None = None, name: str | None = None) -> tuple[HandModel, Motion]:
+    """The hand skeleton of a BVH file and its finger motion (a hand alone or one hand of a body)."""
+    path = Path(path)
+    clip = read_bvh(path)
+    mapping = map_rig(clip.names, path, side, scheme, joint_map)
+    for tip in mapping.missing_tips:  # a finger's End Site is its tip
+        end_site = f"{mapping.joints[topo.JOINT_NAMES[topo.joint_index(tip) - 1]]}_end"
+        if end_site in clip.names:
+            mapping.joints[tip] = end_site
+    rest, world = _world(clip, _local_rotations(clip))
+    matrices = np.tile(np.eye(4), (len(clip.names), 1, 1))
+    matrices[:, :3, 3] = rest
+    hand = build_hand(path, RigSkeleton(clip.names, matrices, clip.parents), mapping, None, side, name)
+    lookup = {n: i for i, n in enumerate(clip.names)}
+    rotating = [lookup[mapping.joints[topo.JOINT_NAMES[j]]] for j in topo.ROTATING_JOINTS]
+    fps = 1.0 / clip.frame_time
+    fps = float(round(fps)) if abs(fps - round(fps)) < 1e-3 else fps  # "Frame Time: 0.0333333" is 30 fps
+    motion = motion_from_world_rotations(hand, world[:, rotating], fps, path)
+    return hand, motion
+
+
+def save_bvh(path: str | Path, motion: Motion, hand: HandModel) -> Path:
+    """Write ``motion`` on ``hand`` as BVH (centimetres, the wrist as root), atomically."""
+    path = Path(path)
+    rotations = world_rotations_from_motion(hand, motion)  # (T, 16, 3, 3) the rig's frames over time
+    rig, positions = hand.rig_frames, hand.rest_positions * 100.0
+    if hand.meta.get("side") == "left":  # written as the left hand it was loaded from
+        s = reflection(MIRROR_NORMAL)
+        rig, positions = s @ rig @ s, positions @ s
+    world = rotations @ rig.transpose(0, 2, 1)  # rotation from rest: BVH's rest frames are the world axes
+    rotating_of_joint = topo.ARTICULATED_OF_JOINT + 1
+    lines = ["HIERARCHY"]
+    columns = []
+
+    def joint(j: int, depth: int) -> None:
+        pad = "  " * depth
+        parent = topo.PARENTS[j]
+        offset = positions[j] - (positions[parent] if parent >= 0 else 0.0)
+        if j in topo.TIP_JOINTS:
+            lines.extend([f"{pad}End Site", f"{pad}{{", f"{pad}  OFFSET {offset[0]:.6f} {offset[1]:.6f} "
+                                                        f"{offset[2]:.6f}", f"{pad}}}"])
+            return
+        keyword = "ROOT" if parent < 0 else "JOINT"
+        chans = ["Xposition", "Yposition", "Zposition"] if parent < 0 else []
+        chans += [f"{a}rotation" for a in WRITE_ORDER]
+        lines.extend([f"{pad}{keyword} {topo.JOINT_NAMES[j]}", f"{pad}{{",
+                      f"{pad}  OFFSET {offset[0]:.6f} {offset[1]:.6f} {offset[2]:.6f}",
+                      f"{pad}  CHANNELS {len(chans)} {' '.join(chans)}"])
+        columns.append(j)
+        for child in np.flatnonzero(topo.PARENTS == j):
+            joint(int(child), depth + 1)
+        lines.append(f"{pad}}}")
+
+    joint(0, 0)
+    data = []
+    for j in columns:
+        r = rotating_of_joint[j]
+        parent = topo.PARENTS[j]
+        local = world[:, r] if parent < 0 else world[:, rotating_of_joint[parent]].transpose(0, 2, 1) @ world[:, r]
+        euler = Rotation.from_matrix(local).as_euler(WRITE_ORDER, degrees=True)
+        data.append(np.concatenate([np.tile(positions[0], (len(local), 1)), euler], 1) if parent < 0 else euler)
+    values = np.concatenate(data, axis=1)
+    lines += ["MOTION", f"Frames: {motion.n_frames}", f"Frame Time: {1.0 / motion.fps:.8f}"]
+    lines += [" ".join(f"{v:.6f}" for v in row) for row in values]
+    with atomic_path(path) as tmp:
+        tmp.write_text("\n".join(lines) + "\n")
+    return path
+

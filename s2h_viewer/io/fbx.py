@@ -1,0 +1,75 @@
+"""FBX (read only, ufbx): a rigged hand or one hand of a character, and its takes as motion.
+
+ufbx converts units to metres and reads the bind pose; it runs in a child process (`fbx_scene`).
+s2h writes no FBX: export to glTF, which Blender, Unity and Unreal all import.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from s2h_viewer.errors import InputFileError
+from s2h_viewer.hand import topology as topo
+from s2h_viewer.hand.model import HandModel
+from s2h_viewer.hand.motion import Motion
+from s2h_viewer.hand.rig_mapping import map_rig
+from s2h_viewer.io.rig import RigMesh, RigSkeleton, build_hand, motion_from_world_rotations
+
+READ_TIMEOUT_S = 300
+
+
+def _read(path: Path, fps: float = 30.0) -> tuple[RigSkeleton, RigMesh | None, list[tuple[str, np.ndarray]]]:
+    """Skeleton, skinned mesh and takes (name, (T, N, 3, 3) world rotations) of an FBX file, read by
+    `fbx_scene` in a child process (see there why)."""
+    if not path.exists():
+        raise InputFileError(path, "file not found")
+    with tempfile.TemporaryDirectory(prefix="s2h-fbx-") as tmp:
+        out = Path(tmp) / "scene.npz"
+        done = subprocess.run([sys.executable, "-m", "s2h_viewer.io.fbx_scene", str(path), str(out), str(fps)],
+                              capture_output=True, text=True, timeout=READ_TIMEOUT_S)
+        if done.returncode != 0 or not out.exists():
+            why = done.stderr.strip().splitlines()[-1] if done.stderr.strip() else f"exit status {done.returncode}"
+            if done.returncode < 0:
+                why = f"the FBX library crashed reading it (signal {-done.returncode})"
+            raise InputFileError(path, f"not a readable FBX file ({why})")
+        with np.load(out) as arrays:
+            data = {k: arrays[k] for k in arrays.files}
+    names = json.loads(str(data["names_json"]))
+    skeleton = RigSkeleton(names, data["world"], data["parents"])
+    mesh = None
+    if "mesh_vertices" in data:
+        mesh = RigMesh(data["mesh_vertices"], data["mesh_faces"], data["mesh_bone_index"], data["mesh_bone_weight"])
+    takes = [(name, data[f"take_{t}"]) for t, name in enumerate(json.loads(str(data["take_names_json"])))]
+    return skeleton, mesh, takes
+
+
+def load_fbx_hand(path: str | Path, side: str = "right", scheme: str | None = None,
+                  joint_map: dict[str, str] | None = None, name: str | None = None) -> HandModel:
+    """The hand of an FBX file (a lone hand or one hand of a character), annotated, as a right hand."""
+    path = Path(path)
+    skeleton, mesh, _ = _read(path)
+    if not skeleton.names:
+        raise InputFileError(path, "has no nodes (no skeleton)")
+    mapping = map_rig(skeleton.names, path, side, scheme, joint_map)
+    return build_hand(path, skeleton, mapping, mesh, side, name)
+
+
+def load_fbx_motion(path: str | Path, hand: HandModel, take: int = 0, fps: float = 30.0) -> Motion:
+    """Take ``take`` of the file, sampled at ``fps``, as finger rotations on ``hand``."""
+    path = Path(path)
+    skeleton, _, takes = _read(path, fps)
+    if not takes:
+        raise InputFileError(path, "has no animation takes")
+    if not 0 <= take < len(takes):
+        raise InputFileError(path, f"has {len(takes)} takes; no take {take}")
+    mapping = map_rig(skeleton.names, path, hand.meta.get("side", "right"), hand.meta.get("rig_scheme"))
+    lookup = {n: i for i, n in enumerate(skeleton.names)}
+    rotating = [lookup[mapping.joints[topo.JOINT_NAMES[j]]] for j in topo.ROTATING_JOINTS]
+    name, world = takes[take]
+    return motion_from_world_rotations(hand, world[:, rotating], fps, path, name or path.stem)

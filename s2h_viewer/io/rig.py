@@ -1,0 +1,205 @@
+"""From a rig read out of any file format (named bones with rest transforms, an optional skinned mesh,
+bone rotations over time) to a `HandModel` and a `Motion`, and back to per-bone rotations.
+
+Hand space is the rig's wrist bone frame (rotation only, origin at the wrist, metres); a left hand
+is mirrored to a right one (`hand.mirror`) and its motion with it. TBS frames come from the
+annotation sidecar when the file has one, else from the ray solver, else (no mesh) from the palm
+plane; ``hand.meta["annotation"]`` says which.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import torch
+from scipy.spatial.transform import Rotation
+
+from s2h_viewer.annotate.solver import estimate_radii, palm_plane_frames, solve_tbs_frames
+from s2h_viewer.errors import InputFileError, InvalidHandError, InvalidMotionError
+from s2h_viewer.hand import topology as topo
+from s2h_viewer.hand.kinematics import rig_local_to_tbs, tbs_to_rig_local
+from s2h_viewer.hand.mirror import mirror_hand, reflection
+from s2h_viewer.hand.model import HandModel, SkinnedMesh
+from s2h_viewer.hand.motion import Motion
+from s2h_viewer.hand.rig_mapping import RigMapping
+from s2h_viewer.io.annotation import load_annotation
+
+#: a tip missing from the rig is put this far beyond its DIP, as a fraction of the DIP bone
+TIP_EXTRAPOLATION = 0.8
+MIRROR_NORMAL = (0.0, 1.0, 0.0)  # a left hand is reflected across its wrist frame's x-z plane
+
+
+@dataclass
+class RigSkeleton:
+    """Bones of a rig as a file stores them (any hierarchy; only the mapped ones matter)."""
+
+    names: list[str]
+    world: np.ndarray  # (N, 4, 4) rest world matrices
+    parents: np.ndarray  # (N,) node parent index, -1 for roots (used to turn world rotations into locals)
+
+
+@dataclass
+class RigMesh:
+    """A skinned mesh in world space at rest; weights over the skeleton's bones, K influences a vertex."""
+
+    vertices: np.ndarray  # (V, 3)
+    faces: np.ndarray  # (F, 3)
+    bone_index: np.ndarray  # (V, K) int, into RigSkeleton.names
+    bone_weight: np.ndarray  # (V, K)
+
+
+def rotation_part(matrices: np.ndarray) -> np.ndarray:
+    """(..., 3, 3) nearest rotations to the upper-left blocks of (..., 4, 4) matrices (scale removed)."""
+    u, _, vt = np.linalg.svd(matrices[..., :3, :3])
+    r = u @ vt
+    flip = np.linalg.det(r) < 0
+    if np.any(flip):
+        u[flip, :, -1] *= -1
+        r = u @ vt
+    return r
+
+
+def _bone_index(skeleton: RigSkeleton, mapping: RigMapping) -> np.ndarray:
+    """(21,) skeleton index of each canonical joint, -1 for a tip the rig lacks."""
+    lookup = {n: i for i, n in enumerate(skeleton.names)}
+    return np.array([lookup.get(mapping.joints.get(name, ""), -1) for name in topo.JOINT_NAMES])
+
+
+def _hand_space(skeleton: RigSkeleton, index: np.ndarray, source: Path) -> tuple[np.ndarray, np.ndarray, float]:
+    """Wrist rotation (3, 3), wrist origin (3,) and the world-to-metres factor."""
+    wrist = skeleton.world[index[0]]
+    positions = skeleton.world[index[index >= 0], :3, 3]
+    if not np.isfinite(skeleton.world).all():
+        raise InputFileError(source, "bone transforms contain NaN or infinite values")
+    length = np.linalg.norm(positions[topo.joint_index("middle_dip")] - positions[0])
+    for factor in (1.0, 0.01, 0.001):  # metres, centimetres (FBX, BVH), millimetres
+        if 0.03 <= length * factor <= 0.6:
+            return rotation_part(wrist), wrist[:3, 3], factor
+    raise InputFileError(source, f"wrist to middle DIP is {length:.4g} file units, not a plausible hand in "
+                                 f"metres, centimetres or millimetres")
+
+
+def build_hand(source: str | Path, skeleton: RigSkeleton, mapping: RigMapping, mesh: RigMesh | None,
+               side: str = "right", name: str | None = None) -> HandModel:
+    """The `HandModel` of a mapped rig, annotated (sidecar, solver or palm plane) and mirrored if left."""
+    source = Path(source)
+    index = _bone_index(skeleton, mapping)
+    wrist_rot, wrist_origin, to_metres = _hand_space(skeleton, index, source)
+    positions = np.zeros((topo.N_JOINTS, 3))
+    present = index >= 0
+    positions[present] = (skeleton.world[index[present], :3, 3] - wrist_origin) @ wrist_rot * to_metres
+    for tip in np.flatnonzero(~present):
+        positions[tip] = positions[tip - 1] + TIP_EXTRAPOLATION * (positions[tip - 1] - positions[tip - 2])
+    offsets = positions - positions[topo.PARENTS.clip(0)]
+    offsets[0] = 0.0
+    rig_frames = wrist_rot.T @ rotation_part(skeleton.world[index[topo.ROTATING_JOINTS]])
+    rig_frames[0] = np.eye(3)
+
+    skinned = None
+    if mesh is not None:
+        skinned = _hand_mesh(mesh, skeleton, mapping, index, wrist_rot, wrist_origin, to_metres, source)
+    try:
+        hand = HandModel(name=name or source.stem, offsets=offsets, rest_frames=palm_plane_frames(positions),
+                         rig_frames=rig_frames, radii=np.full(topo.N_JOINTS, 0.01), mesh=skinned,
+                         source=str(source),
+                         meta={"side": side, "rig_scheme": mapping.scheme, "rig_joints": mapping.joints,
+                               "extrapolated_tips": mapping.missing_tips, "to_metres": to_metres})
+        if side == "left":
+            hand = mirror_hand(hand, MIRROR_NORMAL)
+            hand.rest_frames = palm_plane_frames(hand.rest_positions)  # the guess, made for the right hand
+        return annotate(hand, source)
+    except InvalidHandError as exc:
+        raise InputFileError(source, str(exc)) from None
+
+
+def annotate(hand: HandModel, source: Path) -> HandModel:
+    """Set ``hand``'s TBS frames and radii: the sidecar of ``source``, else the solver, else the palm plane."""
+    annotation = load_annotation(source) if source.exists() else None
+    solution = solve_tbs_frames(hand) if hand.mesh is not None else None
+    if annotation is not None:
+        hand.rest_frames, how = annotation.frames, "sidecar"
+    elif solution is not None:
+        hand.rest_frames, how = solution.frames, "solver"
+    else:
+        how = "palm plane (no mesh)"
+    hand.radii = estimate_radii(hand, solution)
+    hand.meta["annotation"] = how
+    if solution is not None:
+        hand.meta["solver_diagnostics"] = solution.diagnostics
+    hand.validate()
+    return hand
+
+
+def _hand_mesh(mesh: RigMesh, skeleton: RigSkeleton, mapping: RigMapping, index: np.ndarray, wrist_rot: np.ndarray,
+               wrist_origin: np.ndarray, to_metres: float, source: Path) -> SkinnedMesh:
+    """The part of the mesh the hand's bones move, in hand space, weights over the 16 rotating joints."""
+    column = np.full(len(skeleton.names) + 1, -1)  # skeleton bone -> rotating column; -1 not the hand
+    column[index[0]] = 0
+    lookup = {n: i for i, n in enumerate(skeleton.names)}
+    for bone in mapping.palm_bones:
+        column[lookup[bone]] = 0
+    for r, joint in enumerate(topo.ROTATING_JOINTS):
+        column[index[joint]] = r
+    for tip in topo.TIP_JOINTS:  # the tip bone's skin moves with the DIP
+        if index[tip] >= 0:
+            column[index[tip]] = column[index[tip - 1]]
+    cols = column[mesh.bone_index]
+    weights = np.zeros((len(mesh.vertices), topo.N_ROTATING))
+    on_hand = cols >= 0
+    np.add.at(weights, (np.nonzero(on_hand)[0], cols[on_hand]), mesh.bone_weight[on_hand])
+    total = mesh.bone_weight.sum(axis=1)
+    keep = weights.sum(axis=1) >= 0.5 * np.maximum(total, 1e-12)  # a full body: only the hand's vertices
+    if keep.sum() < 100:
+        raise InputFileError(source, f"only {int(keep.sum())} vertices are skinned to the hand's bones; "
+                                     f"is this the right side?")
+    faces = mesh.faces[keep[mesh.faces].all(axis=1)]
+    new_index = np.cumsum(keep) - 1
+    weights = weights[keep] / weights[keep].sum(axis=1, keepdims=True)
+    vertices = (mesh.vertices[keep] - wrist_origin) @ wrist_rot * to_metres
+    return SkinnedMesh(vertices.astype(np.float32), new_index[faces].astype(np.int32), weights.astype(np.float32))
+
+
+def motion_from_world_rotations(hand: HandModel, world_rotations: np.ndarray, fps: float, source: str | Path,
+                                name: str = "") -> Motion:
+    """A `Motion` on ``hand`` from the rig's animated world rotations (T, 16, 3, 3) of the wrist and the
+    15 articulated bones (in the file's world axes, before any mirroring)."""
+    source = Path(source)
+    if not np.isfinite(world_rotations).all():
+        bad = ~np.isfinite(world_rotations).all(axis=(1, 2, 3))
+        raise InputFileError(source, f"NaN or infinite rotations in {int(bad.sum())} frames "
+                                     f"(first at frame {int(np.flatnonzero(bad)[0])})")
+    wrist = world_rotations[:, :1]
+    global_hand = wrist.transpose(0, 1, 3, 2) @ world_rotations  # (T, 16, 3, 3) in the animated wrist frame
+    rig_frames = hand.rig_frames
+    if hand.meta.get("side") == "left":
+        s = reflection(MIRROR_NORMAL)
+        global_hand = s @ global_hand @ s
+    parent = global_hand[:, topo.ARTICULATED_PARENT_ROTATING]
+    local = parent.transpose(0, 1, 3, 2) @ global_hand[:, 1:]
+    rest = rig_frames[topo.ARTICULATED_PARENT_ROTATING].transpose(0, 2, 1) @ rig_frames[1:]
+    q_local = Rotation.from_matrix((local @ rest.transpose(0, 2, 1)).reshape(-1, 3, 3)).as_quat(scalar_first=True)
+    q_tbs = rig_local_to_tbs(hand, torch.as_tensor(q_local.reshape(-1, topo.N_ARTICULATED, 4), dtype=torch.float64))
+    try:
+        return Motion(q_tbs.numpy().astype(np.float32), fps=fps, name=name or source.stem, hand_name=hand.name,
+                      meta={"source": str(source)})
+    except InvalidMotionError as exc:
+        raise InputFileError(source, str(exc)) from None
+
+
+def world_rotations_from_motion(hand: HandModel, motion: Motion) -> np.ndarray:
+    """(T, 16, 3, 3) the rig's bone rotations in hand space (wrist at rest) for ``motion``: what
+    exporters write; for a hand loaded as left, mirrored back to the left rig."""
+    q_local = tbs_to_rig_local(hand, torch.as_tensor(motion.q_tbs, dtype=torch.float64)).numpy()
+    local = Rotation.from_quat(q_local.reshape(-1, 4), scalar_first=True).as_matrix().reshape(-1, 15, 3, 3)
+    rig = hand.rig_frames
+    rest = rig[topo.ARTICULATED_PARENT_ROTATING].transpose(0, 2, 1) @ rig[1:]
+    out = np.broadcast_to(rig, (motion.n_frames, topo.N_ROTATING, 3, 3)).copy()
+    for a in range(topo.N_ARTICULATED):  # parents come before children in articulated order
+        out[:, 1 + a] = out[:, topo.ARTICULATED_PARENT_ROTATING[a]] @ local[:, a] @ rest[a]
+    if hand.meta.get("side") == "left":
+        s = reflection(MIRROR_NORMAL)
+        out = s @ out @ s
+    return out
+

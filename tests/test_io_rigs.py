@@ -1,0 +1,234 @@
+"""Real rigs in and out: glTF/GLB, FBX, BVH, rig name mapping, and clear errors on bad files."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from s2h_viewer.annotate.solver import frame_angle_errors
+from s2h_viewer.errors import InputFileError
+from s2h_viewer.hand import topology as topo
+from s2h_viewer.hand.kinematics import forward_kinematics
+from s2h_viewer.hand.rig_mapping import SCHEMES, map_rig
+from s2h_viewer.io.bvh import load_bvh, save_bvh
+from s2h_viewer.io.fbx import load_fbx_hand, load_fbx_motion
+from s2h_viewer.io.files import load_hand_file, load_motion_file, save_motion_file
+from s2h_viewer.io.gltf import load_gltf_hand, load_gltf_motion, save_gltf_motion
+from s2h_viewer.io.npz import load_motion
+from s2h_viewer.motions.synthesis import synthesize
+from s2h_viewer.retarget import retarget
+from s2h_viewer.samples import ASSETS_DIR
+
+WEBXR = ASSETS_DIR / "hands" / "webxr"
+FBX = ASSETS_DIR / "hands" / "fbx"
+
+
+def positions(hand, motion) -> np.ndarray:
+    """FK joint positions in the hand's palm frame: comparable between rigs of one hand whatever their axes."""
+    return forward_kinematics(hand, motion.q_tbs).positions.numpy() @ hand.palm_frame
+
+
+@pytest.fixture(scope="module")
+def webxr_right():
+    return load_gltf_hand(WEBXR / "generic-hand-right.glb")
+
+
+@pytest.fixture(scope="module")
+def motion_on_birch(sample_hands):
+    return synthesize(["fist", "ok", "pinch", "v_sign", "spread"], sample_hands["birch"], seed=5)
+
+
+def test_webxr_hand_loads_as_a_solved_right_hand(webxr_right):
+    hand = webxr_right
+    assert hand.meta["rig_scheme"] == "webxr" and hand.meta["annotation"] == "solver"
+    assert len(hand.mesh.vertices) == 1360 and 0.15 < hand.hand_length < 0.22
+    # finger metacarpals are palm bones: their skin goes to the wrist column, rows stay normalised
+    np.testing.assert_allclose(hand.mesh.weights.sum(axis=1), 1.0, atol=1e-5)
+    assert hand.mesh.weights[:, 0].max() > 0.99
+    # a right hand: thumb on the +y side of the palm frame, knuckles ahead of the wrist
+    local = hand.rest_positions @ hand.palm_frame
+    assert local[topo.joint_index("thumb_tip"), 1] > 0 > local[topo.joint_index("pinky_mcp"), 1]
+
+
+def test_left_webxr_hand_is_mirrored_into_the_right_one(webxr_right):
+    left = load_gltf_hand(WEBXR / "generic-hand-left.glb", side="left")
+    # the vendor's two models are near mirror images (joints within 3.5 mm), not exact ones
+    np.testing.assert_allclose(left.rest_positions @ left.palm_frame,
+                               webxr_right.rest_positions @ webxr_right.palm_frame, atol=4e-3)
+    assert frame_angle_errors(left.palm_frame.T @ left.rest_frames,
+                              webxr_right.palm_frame.T @ webxr_right.rest_frames).max() < 10.0
+
+
+def test_glb_round_trip_of_a_procedural_hand_and_motion(sample_hands, motion_on_birch, tmp_path):
+    hand = sample_hands["iris"]
+    motion = retarget(motion_on_birch, sample_hands["birch"], hand, "tbs_copy")
+    path = save_gltf_motion(tmp_path / "iris.glb", motion, hand)
+    loaded = load_gltf_hand(path)
+    wrist = hand.rig_frames[0]  # the loaded hand's space is its wrist bone's frame
+    np.testing.assert_allclose(loaded.offsets, hand.offsets @ wrist, atol=1e-6)
+    np.testing.assert_allclose(loaded.mesh.vertices, hand.mesh.vertices @ wrist, atol=1e-5)
+    assert frame_angle_errors(loaded.rest_frames, wrist.T @ hand.rest_frames).max() < 10.0
+    again = load_gltf_motion(path, loaded)
+    assert again.n_frames == motion.n_frames
+    np.testing.assert_allclose(positions(loaded, again), positions(hand, motion), atol=1e-5)
+
+
+def test_glb_export_onto_the_webxr_rig_adds_an_animation_to_its_own_file(webxr_right, sample_hands,
+                                                                          motion_on_birch, tmp_path):
+    motion = retarget(motion_on_birch, sample_hands["birch"], webxr_right, "tbs_copy")
+    path = save_gltf_motion(tmp_path / "webxr_anim.glb", motion, webxr_right)
+    reloaded = load_gltf_hand(path)
+    assert reloaded.meta["rig_scheme"] == "webxr" and len(reloaded.mesh.faces) == len(webxr_right.mesh.faces)
+    again = load_gltf_motion(path, webxr_right)
+    np.testing.assert_allclose(positions(webxr_right, again), positions(webxr_right, motion), atol=1e-5)
+
+
+@pytest.mark.parametrize("side", ["right", "left"])
+def test_bvh_round_trip(webxr_right, sample_hands, motion_on_birch, tmp_path, side):
+    hand = webxr_right if side == "right" else load_gltf_hand(WEBXR / "generic-hand-left.glb", side="left")
+    motion = retarget(motion_on_birch, sample_hands["birch"], hand, "tbs_copy")
+    path = save_bvh(tmp_path / f"{side}.bvh", motion, hand)
+    skeleton, again = load_bvh(path, side=side)
+    assert again.n_frames == motion.n_frames and again.fps == motion.fps
+    np.testing.assert_allclose(skeleton.rest_positions @ skeleton.palm_frame,
+                               hand.rest_positions @ hand.palm_frame, atol=1e-6)
+    np.testing.assert_allclose(positions(skeleton, again), positions(hand, motion), atol=1e-5)
+
+
+def test_npz_and_files_dispatch_round_trip(sample_hands, motion_on_birch, tmp_path):
+    hand = sample_hands["birch"]
+    path = save_motion_file(tmp_path / "m.npz", motion_on_birch, hand)
+    motion, rig = load_motion_file(path)
+    assert rig is None and motion.hand_name == "birch"
+    np.testing.assert_array_equal(motion.q_tbs, load_motion(path).q_tbs)
+    assert load_hand_file("birch").name == "birch"
+
+
+def test_fbx_mixamo_rig_matches_the_hand_it_was_made_from(sample_hands):
+    kale = sample_hands["kale"]
+    hand = load_fbx_hand(FBX / "mixamo_right_hand.fbx")
+    assert hand.meta["rig_scheme"] == "mixamo" and hand.mesh is not None
+    np.testing.assert_allclose(hand.rest_positions @ hand.palm_frame, kale.rest_positions @ kale.palm_frame,
+                               atol=1e-5)
+    assert frame_angle_errors(hand.palm_frame.T @ hand.rest_frames, kale.palm_frame.T @ kale.rest_frames).max() < 10
+
+
+def test_fbx_take_is_the_counting_motion_it_was_baked_from(sample_hands):
+    kale, birch = sample_hands["kale"], sample_hands["birch"]
+    counting = load_motion(ASSETS_DIR / "motions" / "counting.npz")
+    expected = retarget(counting, birch, kale, "tbs_copy")
+    hand = load_fbx_hand(FBX / "mixamo_right_hand.fbx")
+    motion = load_fbx_motion(FBX / "mixamo_right_hand.fbx", hand)
+    assert motion.n_frames == counting.n_frames and motion.fps == counting.fps
+    error = np.abs(positions(hand, motion) - positions(kale, expected))
+    assert error.mean() < 1e-4 and error.max() < 2e-3  # Blender's baked keys, within 2 mm
+
+
+@pytest.mark.parametrize("scheme,names,tips_missing", [
+    ("mixamo", ["mixamorig:RightHand"] + [f"mixamorig:RightHand{f}{i}" for f in ("Thumb", "Index", "Middle", "Ring",
+                                                                                   "Pinky") for i in range(1, 5)], 0),
+    ("openxr", ["XR_HAND_JOINT_WRIST_EXT"] + [f"XR_HAND_JOINT_{f}_{p}_EXT" for f in ("INDEX", "MIDDLE", "RING", "LITTLE")
+                                              for p in ("PROXIMAL", "INTERMEDIATE", "DISTAL", "TIP")]
+     + [f"XR_HAND_JOINT_THUMB_{p}_EXT" for p in ("METACARPAL", "PROXIMAL", "DISTAL", "TIP")], 0),
+    ("rigify", ["DEF-hand.R"] + [f"DEF-thumb.0{i}.R" for i in (1, 2, 3)]
+     + [f"DEF-f_{f}.0{i}.R" for f in ("index", "middle", "ring", "pinky") for i in (1, 2, 3)], 5),
+    ("mano", ["wrist"] + [f"{f}{i}" for f in ("index", "middle", "pinky", "ring", "thumb") for i in (1, 2, 3)], 5),
+])
+def test_built_in_rig_schemes_are_detected(scheme, names, tips_missing):
+    mapping = map_rig(names + ["Hips", "Spine"], "rig.glb")
+    assert mapping.scheme == scheme and len(mapping.missing_tips) == tips_missing
+    assert len(mapping.joints) == topo.N_JOINTS - tips_missing
+    assert set(SCHEMES) >= {"s2h", "webxr", "openxr", "mixamo", "rigify", "mano"}
+
+
+def test_left_hand_of_a_character_is_chosen_by_side():
+    names = [f"mixamorig:{s}Hand{f}{i}" for s in ("Left", "Right") for f in ("Thumb", "Index", "Middle", "Ring",
+                                                                              "Pinky") for i in range(1, 5)]
+    mapping = map_rig(names + ["mixamorig:LeftHand", "mixamorig:RightHand"], "body.fbx", side="left")
+    assert mapping.joints["index_mcp"] == "mixamorig:LeftHandIndex1"
+
+
+def test_user_joint_map_and_its_errors(tmp_path):
+    bones = [f"Bone.{i:03d}" for i in range(21)]
+    user = dict(zip(topo.JOINT_NAMES, bones))
+    assert map_rig(bones, "x.glb", user_map=user).joints == user
+    with pytest.raises(InputFileError, match="x.glb: joint map names bones the rig does not have: Bone.020"):
+        map_rig(bones[:20], "x.glb", user_map=user)
+    bad = tmp_path / "map.json"
+    bad.write_text(json.dumps({"wrist": "a", "index_knuckle": "b"}))
+    from s2h_viewer.hand.rig_mapping import load_user_mapping
+    with pytest.raises(InputFileError, match="map.json: unknown joint names index_knuckle"):
+        load_user_mapping(bad)
+
+
+# --- bad input: one clear error naming the file and the problem ---
+
+def _truncated(src, dst, keep=0.5):
+    data = src.read_bytes()
+    dst.write_bytes(data[:int(len(data) * keep)])
+    return dst
+
+
+def test_corrupt_glb_fbx_bvh_give_clear_errors(tmp_path, sample_hands, motion_on_birch):
+    glb = _truncated(WEBXR / "generic-hand-right.glb", tmp_path / "broken.glb")
+    with pytest.raises(InputFileError, match=r"broken\.glb: "):
+        load_gltf_hand(glb)
+    fbx = tmp_path / "broken.fbx"
+    fbx.write_bytes(b"Kaydara FBX Binary  \x00\x1a\x00" + bytes(range(256)) * 4)
+    with pytest.raises(InputFileError, match=r"broken\.fbx: not a readable FBX file"):
+        load_fbx_hand(fbx)
+    bvh = save_bvh(tmp_path / "good.bvh", motion_on_birch, sample_hands["birch"])
+    broken = _truncated(bvh, tmp_path / "broken.bvh", 0.3)
+    with pytest.raises(InputFileError, match=r"broken\.bvh: "):
+        load_bvh(broken)
+
+
+def test_four_finger_rigs_are_refused_naming_the_missing_finger(tmp_path, sample_hands, motion_on_birch):
+    with pytest.raises(InputFileError, match=r"four_finger_hand\.fbx: .*missing pinky_mcp, pinky_pip, pinky_dip "
+                                             r"\(no pinky finger"):
+        load_fbx_hand(FBX / "four_finger_hand.fbx")
+    text = save_bvh(tmp_path / "h.bvh", motion_on_birch, sample_hands["birch"]).read_text()
+    four = tmp_path / "four.bvh"
+    four.write_text(text.replace("ring_", "extra_"))
+    with pytest.raises(InputFileError, match=r"four\.bvh: .*no ring finger"):
+        load_bvh(four)
+
+
+def test_nan_rotations_are_refused_with_the_frame(tmp_path, sample_hands, motion_on_birch):
+    lines = save_bvh(tmp_path / "h.bvh", motion_on_birch, sample_hands["birch"]).read_text().splitlines()
+    first_frame = lines.index(next(line for line in lines if line.startswith("Frame Time"))) + 1
+    values = lines[first_frame + 7].split()
+    values[5] = "nan"
+    lines[first_frame + 7] = " ".join(values)
+    bad = tmp_path / "nan.bvh"
+    bad.write_text("\n".join(lines))
+    with pytest.raises(InputFileError, match=r"nan\.bvh: NaN or infinite values in 1 frames \(first at frame 7\)"):
+        load_bvh(bad)
+
+
+def test_cli_prints_one_line_and_no_traceback_for_a_bad_file(tmp_path):
+    glb = _truncated(WEBXR / "generic-hand-right.glb", tmp_path / "broken.glb")
+    for argv in (["annotate", str(glb)], ["annotate", str(FBX / "four_finger_hand.fbx")],
+                 ["retarget", "--motion", str(glb), "--target", "iris", "--out", str(tmp_path / "o.glb")]):
+        done = subprocess.run([sys.executable, "-m", "s2h_viewer.cli", *argv], capture_output=True, text=True)
+        assert done.returncode == 2, done.stderr
+        assert "Traceback" not in done.stderr and len(done.stderr.strip().splitlines()) == 1
+        assert done.stderr.startswith("s2h: error: ") and (".glb: " in done.stderr or ".fbx: " in done.stderr)
+    assert not (tmp_path / "o.glb").exists()
+
+
+def test_cli_retarget_exports_onto_the_webxr_rig(tmp_path):
+    out = tmp_path / "counting_on_webxr.glb"
+    shutil.copy(WEBXR / "generic-hand-right.glb", tmp_path / "hand.glb")
+    done = subprocess.run([sys.executable, "-m", "s2h_viewer.cli", "retarget", "--motion",
+                           str(ASSETS_DIR / "motions" / "counting.npz"), "--target", str(tmp_path / "hand.glb"),
+                           "--method", "tbs_copy", "--out", str(out)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    hand = load_gltf_hand(tmp_path / "hand.glb")
+    motion = load_gltf_motion(out, hand)
+    assert motion.n_frames == load_motion(ASSETS_DIR / "motions" / "counting.npz").n_frames
