@@ -19,10 +19,12 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 
     hands = {h.name: h for h in samples.load_sample_hands("all")}
     motions = [load_motion(p) for p in args.motion] if args.motion else samples.load_sample_motions()
+    from s2h_viewer.io.files import load_hand_file
+
     targets = args.target or samples.hand_names("test")
-    unknown = [t for t in targets if t not in hands]
-    if unknown:
-        raise S2HError(f"unknown target hand(s): {', '.join(unknown)}; have {', '.join(hands)}")
+    for target in targets:  # a target may also be a hand file (a real rig, say)
+        if target not in hands:
+            hands[target] = load_hand_file(target, _rig_options(args))
     methods = args.methods.split(",")
     total = len(motions) * len(targets) * len(methods)
     with tqdm(total=total, desc="evaluate", unit="clip", file=sys.stderr, disable=args.quiet) as bar:
@@ -151,9 +153,11 @@ def build_parser() -> argparse.ArgumentParser:
     ev = sub.add_parser("evaluate", help="retarget sample motions onto held-out hands and score each method")
     ev.add_argument("--methods", default="copy,tbs_copy,dm,asrn,asm_opt", help="comma-separated method names")
     ev.add_argument("--motion", action="append", help="motion npz (default: the shipped samples); repeatable")
-    ev.add_argument("--target", action="append", help="target hand name (default: the test split); repeatable")
+    ev.add_argument("--target", action="append", help="target sample hand name or hand file (default: the test "
+                                                      "split); repeatable")
     ev.add_argument("--out", default="results", help="folder for evaluation.csv and evaluation.md")
     ev.add_argument("--quiet", action="store_true", help="no progress bar")
+    _add_rig_options(ev)
     ev.set_defaults(func=_cmd_evaluate)
 
     rd = sub.add_parser("render", help="render sample hands side by side in one gesture (PNG, off screen)")

@@ -232,3 +232,13 @@ def test_cli_retarget_exports_onto_the_webxr_rig(tmp_path):
     hand = load_gltf_hand(tmp_path / "hand.glb")
     motion = load_gltf_motion(out, hand)
     assert motion.n_frames == load_motion(ASSETS_DIR / "motions" / "counting.npz").n_frames
+
+
+def test_cli_evaluate_takes_a_hand_file_as_target(tmp_path):
+    target = str(WEBXR / "generic-hand-right.glb")
+    done = subprocess.run([sys.executable, "-m", "s2h_viewer.cli", "evaluate", "--quiet", "--methods",
+                           "tbs_copy,asrn", "--motion", str(ASSETS_DIR / "motions" / "counting.npz"),
+                           "--target", target, "--out", str(tmp_path)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    rows = (tmp_path / "evaluation.csv").read_text().splitlines()
+    assert len(rows) == 3 and all(f",birch,{target}," in row for row in rows[1:])
