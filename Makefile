@@ -14,10 +14,10 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 run: $(STAMP)
-	$(VENV)/bin/s2h evaluate
+	$(VENV)/bin/s2h view
 
 test: $(STAMP)
-	$(PY) -m pytest -q -m "not benchmark"
+	bash scripts/test.sh $(PY)
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_asm_fk.py

@@ -1,4 +1,4 @@
-"""The `s2h` command: annotate, retarget, evaluate, train, render, gestures.
+"""The `s2h` command: view, annotate, retarget, evaluate, train, render, gestures.
 Errors print one line naming the file and the problem, never a traceback."""
 
 from __future__ import annotations
@@ -129,6 +129,22 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_view(args: argparse.Namespace) -> int:
+    from s2h_viewer.app.main_window import CompareSetup, default_setup, run
+    from s2h_viewer.io.files import load_hand_file, load_motion_file
+    from s2h_viewer.samples import load_sample_hand
+
+    setup = default_setup()
+    if args.motion:
+        motion, rig = load_motion_file(args.motion, options=_rig_options(args))
+        setup = CompareSetup(motion, rig or load_sample_hand(motion.hand_name), setup.targets)
+    if args.target:
+        setup.targets = [load_hand_file(t, _rig_options(args)) for t in args.target]
+    if args.methods:
+        setup.methods = args.methods.split(",")
+    return run(setup)
+
+
 def _add_rig_options(parser: argparse.ArgumentParser) -> None:
     from s2h_viewer.hand.rig_mapping import SCHEMES, SIDES
 
@@ -173,6 +189,13 @@ def build_parser() -> argparse.ArgumentParser:
     rd.add_argument("--out", default="hands.png")
     _add_rig_options(rd)
     rd.set_defaults(func=_cmd_render)
+
+    vw = sub.add_parser("view", help="the desktop viewer: compare retargeting methods on a timeline")
+    vw.add_argument("--motion", help="motion file (default: the shipped gestures clip)")
+    vw.add_argument("--target", action="append", help="target hand file or sample name (default: iris, laurel)")
+    vw.add_argument("--methods", help="comma-separated methods (default: the last used, or tbs_copy,asrn)")
+    _add_rig_options(vw)
+    vw.set_defaults(func=_cmd_view)
 
     an = sub.add_parser("annotate", help="find TBS frames by rays cast at each hand's mesh; report and save them")
     an.add_argument("hands", nargs="*", help="hand files (.glb .gltf .fbx .npz) or sample names (default: test split)")

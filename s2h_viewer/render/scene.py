@@ -6,13 +6,16 @@ camera below), so every hand, whatever its rig's wrist orientation, is shown the
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pyvista as pv
 import torch
+from scipy.spatial import cKDTree
 
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.kinematics import HandPose, forward_kinematics
-from s2h_viewer.hand.model import HandModel
+from s2h_viewer.hand.model import HandModel, SkinnedMesh
 from s2h_viewer.hand.skinning import skin_vertices
 
 SKIN_COLOUR = "#e0ac8c"
@@ -58,3 +61,21 @@ def frame_arrows(hand: HandModel, pose: HandPose, frame: int = 0, scale: float |
         out.append(cloud.glyph(orient="vectors", scale=False, factor=scale, geom=pv.Arrow(shaft_radius=0.04,
                                                                                             tip_radius=0.1)))
     return out
+
+
+def display_hand(hand: HandModel, max_faces: int = 8000) -> HandModel:
+    """``hand`` with a lighter mesh for interactive views (software OpenGL draws triangles slowly).
+
+    vtkDecimatePro removes vertices but never moves the ones it keeps, so each kept vertex takes the
+    skin weights of the original vertex at its position.
+    """
+    if hand.mesh is None or len(hand.mesh.faces) <= max_faces:
+        return hand
+    faces = np.hstack([np.full((len(hand.mesh.faces), 1), 3), hand.mesh.faces]).astype(np.int64)
+    full = pv.PolyData(hand.mesh.vertices.astype(np.float64), faces)
+    light = full.decimate_pro(1.0 - max_faces / len(hand.mesh.faces), preserve_topology=True, splitting=False)
+    light = light.clean()
+    _, nearest = cKDTree(hand.mesh.vertices).query(np.asarray(light.points))
+    mesh = SkinnedMesh(np.asarray(light.points, dtype=np.float32),
+                       light.regular_faces.astype(np.int32), hand.mesh.weights[nearest])
+    return dataclasses.replace(hand, mesh=mesh)

@@ -1,0 +1,1 @@
+"""The desktop application: main window, actions, background work, settings (`s2h view`)."""

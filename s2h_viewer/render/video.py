@@ -1,0 +1,37 @@
+"""Video files from rendered frames (MP4 through imageio-ffmpeg, GIF through Pillow), written atomically."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from pathlib import Path
+
+import imageio.v2 as imageio
+import numpy as np
+
+from s2h_viewer.io.atomic import atomic_path
+
+VIDEO_SUFFIXES = (".mp4", ".gif")
+
+
+def write_video(path: str | Path, frames: Iterable[np.ndarray], fps: float) -> Path:
+    """Write RGB frames (H, W, 3) uint8 as MP4 (H.264) or GIF by suffix; returns the path."""
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in VIDEO_SUFFIXES:
+        raise ValueError(f"{path}: video must be {' or '.join(VIDEO_SUFFIXES)}")
+    with atomic_path(path) as tmp:
+        if suffix == ".mp4":
+            writer = imageio.get_writer(tmp, fps=fps, codec="libx264", quality=8, macro_block_size=16,
+                                        ffmpeg_log_level="error")
+        else:
+            writer = imageio.get_writer(tmp, mode="I", duration=1000.0 / fps, loop=0)
+        with writer:
+            for frame in frames:
+                writer.append_data(_even(np.asarray(frame)[..., :3]) if suffix == ".mp4" else np.asarray(frame))
+    return path
+
+
+def _even(frame: np.ndarray) -> np.ndarray:
+    """H.264 wants sizes in multiples of 16 (macro blocks): pad with the edge colour rather than rescale."""
+    h, w = frame.shape[:2]
+    return np.pad(frame, ((0, -h % 16), (0, -w % 16), (0, 0)), mode="edge")

@@ -1,0 +1,72 @@
+"""What the compare view shows, computed once per clip: each method's motion on each target, its FK,
+and its ASM error against the source (per joint and per cell, every frame) and clip scores.
+
+Pure computation (no Qt): the app runs `build_comparison` off the GUI thread and only draws.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from s2h_viewer.hand.kinematics import HandPose, forward_kinematics
+from s2h_viewer.hand.model import HandModel
+from s2h_viewer.hand.motion import Motion
+from s2h_viewer.retarget.methods import retarget
+from s2h_viewer.semantics.asm import semantic_matrix
+from s2h_viewer.semantics.metrics import RetargetScores, per_joint_cosine, score_retarget
+
+
+@dataclass
+class MethodResult:
+    """One method's retarget onto one target hand."""
+
+    method: str
+    target: HandModel
+    motion: Motion
+    pose: HandPose  # FK of every frame (float32, no grad)
+    cell_error: np.ndarray  # (T, 20, 29) 1 - cosine per ASM cell, NaN where masked
+    scores: RetargetScores
+
+    @property
+    def joint_error(self) -> np.ndarray:
+        """(T, 20) 1 - mean cosine over each finger joint's ASM row: the heatmap colour per joint."""
+        return np.nanmean(self.cell_error, axis=-1)
+
+
+@dataclass
+class Comparison:
+    source: HandModel
+    motion: Motion
+    source_pose: HandPose
+    results: list[MethodResult]  # targets x methods, target-major
+
+    @property
+    def n_frames(self) -> int:
+        return self.motion.n_frames
+
+
+def build_comparison(motion: Motion, source: HandModel, targets: list[HandModel], methods: list[str],
+                     progress: Callable[[int, int, str], None] | None = None) -> Comparison:
+    """Retarget ``motion`` onto every target with every method; ``progress(done, total, what)``."""
+    with torch.no_grad():
+        source_pose = forward_kinematics(source, motion.q_tbs)
+        source_asm = semantic_matrix(source_pose)
+    total = len(targets) * len(methods)
+    results = []
+    for target in targets:
+        for method in methods:
+            if progress:
+                progress(len(results), total, f"{method} -> {target.name}")
+            moved = retarget(motion, source, target, method)
+            with torch.no_grad():
+                pose = forward_kinematics(target, moved.q_tbs)
+                cell_error = 1.0 - per_joint_cosine(source_asm, semantic_matrix(pose)).numpy()
+            scores = score_retarget(source, motion.q_tbs, target, moved.q_tbs)
+            results.append(MethodResult(method, target, moved, pose, cell_error, scores))
+    if progress:
+        progress(total, total, "done")
+    return Comparison(source, motion, source_pose, results)

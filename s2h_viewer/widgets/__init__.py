@@ -1,0 +1,1 @@
+"""Reusable Qt widgets (the only core-importing Qt code besides app/): viewports, timeline, heatmap."""
