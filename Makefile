@@ -23,6 +23,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_asm_fk.py
 	$(PY) benchmarks/bench_retarget.py
 	$(PY) benchmarks/bench_annotate.py
+	$(PY) benchmarks/bench_playback.py
 
 # reproduces assets/models/{asrn,dm}.pt (seeded; about 8.5 minutes each on 2 CPU cores)
 train: $(STAMP)

@@ -79,3 +79,34 @@ def test_export_retargeted_motion_and_a_bad_file_gives_a_dialog(window, tmp_path
     window.add_target_file(str(broken))
     assert shown and shown[0].startswith(str(broken)) and len(window.setup.targets) == 1
 
+
+
+def test_annotation_mode_solve_turn_undo_save(window, qtbot, tmp_path):
+    import shutil
+
+    from s2h_viewer.io.annotation import load_annotation
+    from s2h_viewer.samples import ASSETS_DIR
+    glb = shutil.copy(ASSETS_DIR / "hands" / "webxr" / "generic-hand-right.glb", tmp_path / "hand.glb")
+    window.annotate_file(str(glb))
+    assert window.tabs.currentWidget() is window.annotate_view
+    with qtbot.waitSignal(window.annotation_ready, timeout=60_000):
+        window.run_solver()
+    session = window.annotation
+    view = window.annotate_view
+    view.select(4)  # index_pip
+    solved = session.frames[4].copy()
+    arrows_before = view._arrow_meshes[2].points.copy()
+    view.turn_selected(30)
+    assert session.set_by[4] == "manual" and window.undo_stack.count() == 1
+    angle = np.degrees(np.arccos(np.clip((np.trace(solved.T @ session.frames[4]) - 1) / 2, -1, 1)))
+    assert abs(angle - 30) < 1e-6
+    np.testing.assert_allclose(session.frames[4][:, 0], solved[:, 0], atol=1e-12)  # twist unchanged
+    assert np.abs(view._arrow_meshes[2].points - arrows_before).max() > 1e-4  # the splay arrow moved
+    window.undo_stack.undo()
+    np.testing.assert_allclose(session.frames[4], solved, atol=1e-12)
+    assert session.set_by[4] == "solver"
+    window.undo_stack.redo()
+    path = window.save_annotation()
+    saved = load_annotation(glb)
+    assert path.name == "hand.tbs.json" and saved.set_by[4] == "manual"
+    np.testing.assert_allclose(saved.frames[4], session.frames[4], atol=1e-7)

@@ -128,7 +128,7 @@ def test_cli_reports_bad_input_in_one_line(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert err.startswith("s2h: error:") and "bad.npz" in err and "\n" not in err
     assert main(["evaluate", "--target", "nobody", "--quiet"]) == 2
-    assert "unknown target hand(s): nobody" in capsys.readouterr().err
+    assert "no sample hand 'nobody'; have aster" in capsys.readouterr().err
 
 
 def test_cli_render_writes_a_picture_of_hands(tmp_path):

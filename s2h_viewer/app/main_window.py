@@ -6,16 +6,23 @@ import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from PySide6.QtCore import QObject, QSettings, QThread, Signal
-from PySide6.QtGui import QAction, QKeySequence
-from PySide6.QtWidgets import (QComboBox, QFileDialog, QMainWindow, QMessageBox, QProgressDialog, QSplitter,
-                               QVBoxLayout, QWidget)
+from collections.abc import Callable
 
+import numpy as np
+from PySide6.QtCore import QObject, QSettings, QThread, Signal
+from PySide6.QtGui import QAction, QKeySequence, QUndoCommand, QUndoStack
+from PySide6.QtWidgets import (QComboBox, QFileDialog, QMainWindow, QMessageBox, QProgressDialog, QSplitter,
+                               QTabWidget, QVBoxLayout, QWidget)
+
+from s2h_viewer.annotate.editing import AnnotationSession
+from s2h_viewer.annotate.solver import solve_tbs_frames
 from s2h_viewer.errors import S2HError
+from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.retarget.comparison import Comparison, build_comparison
 from s2h_viewer.retarget.methods import METHODS
+from s2h_viewer.widgets.annotation_view import AnnotationView
 from s2h_viewer.widgets.asm_heatmap import AsmHeatmap
 from s2h_viewer.widgets.compare_view import CompareView
 from s2h_viewer.widgets.scores_table import ScoresTable
@@ -23,7 +30,9 @@ from s2h_viewer.widgets.timeline import Timeline
 
 SHORTCUTS = (("Space", "play / pause"), ("Left / Right", "previous / next frame"), ("Home / End", "first / last frame"),
              ("Ctrl+O", "open a motion"), ("Ctrl+T", "add a target hand"), ("Ctrl+S", "export a screenshot"),
-             ("Ctrl+E", "export a video"), ("Ctrl+Z / Ctrl+Shift+Z", "undo / redo (annotation mode, to come)"))
+             ("Ctrl+E", "export a video"), ("Ctrl+Shift+O", "open a hand to annotate"), ("Ctrl+R", "run the TBS solver"),
+             ("Ctrl+Shift+S", "save the annotation sidecar"), ("Ctrl+Z / Ctrl+Shift+Z", "undo / redo a frame turn"),
+             ("click a joint / the list", "select it; drag the dial to turn its frame about the twist axis"))
 
 
 @dataclass
@@ -36,28 +45,49 @@ class CompareSetup:
     methods: list[str] = field(default_factory=lambda: ["tbs_copy", "asrn"])
 
 
-class ComparisonWorker(QObject):
-    """Runs `build_comparison` in a QThread; reports progress, the result or the error message."""
+class Task(QObject):
+    """Runs ``fn(progress)`` in a QThread; reports progress, the result, or the error's one-line message."""
 
     progress = Signal(int, int, str)
     finished = Signal(object)
     failed = Signal(str)
 
-    def __init__(self, setup: CompareSetup):
+    def __init__(self, fn: Callable[[Callable[[int, int, str], None]], object]):
         super().__init__()
-        self.setup = setup
+        self.fn = fn
 
     def run(self) -> None:
-        s = self.setup
         try:
-            self.finished.emit(build_comparison(s.motion, s.source, s.targets, s.methods,
-                                                progress=lambda d, t, w: self.progress.emit(d, t, w)))
+            self.finished.emit(self.fn(lambda done, total, what: self.progress.emit(done, total, what)))
         except (S2HError, KeyError, ValueError) as exc:
             self.failed.emit(str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc))
 
 
+class EditFrameCommand(QUndoCommand):
+    """One turn of a joint's TBS frame (undoable): the frame and its "set by" before and after."""
+
+    def __init__(self, window: "MainWindow", joint: int, before: np.ndarray, after: np.ndarray, before_by: str):
+        super().__init__(f"turn {topo.ARTICULATED_NAMES[joint]}")
+        self.window, self.joint, self.before, self.after, self.before_by = window, joint, before, after, before_by
+
+    def _set(self, frame: np.ndarray, by: str) -> None:
+        session = self.window.annotation
+        session.frames[self.joint] = frame
+        session.set_by[self.joint] = by
+        self.window.annotate_view.select(self.joint)
+        self.window.annotate_view.refresh_list()
+        self.window.annotate_view.refresh()
+
+    def redo(self) -> None:
+        self._set(self.after, "manual")
+
+    def undo(self) -> None:
+        self._set(self.before, self.before_by)
+
+
 class MainWindow(QMainWindow):
     comparison_ready = Signal()
+    annotation_ready = Signal()
 
     def __init__(self, setup: CompareSetup, settings: QSettings | None = None):
         super().__init__()
@@ -82,11 +112,19 @@ class MainWindow(QMainWindow):
         splitter.addWidget(self.view)
         splitter.addWidget(side)
         splitter.setStretchFactor(0, 3)
-        central = QWidget()
-        layout = QVBoxLayout(central)
+        compare = QWidget()
+        layout = QVBoxLayout(compare)
         layout.addWidget(splitter, 1)
         layout.addWidget(self.timeline)
-        self.setCentralWidget(central)
+        self.annotate_view = AnnotationView()
+        self.annotation: AnnotationSession | None = None
+        self.undo_stack = QUndoStack(self)
+        self.annotate_view.frame_edited.connect(self._frame_edited)
+        self.tabs = QTabWidget()
+        self.tabs.addTab(compare, "Compare")
+        self.tabs.addTab(self.annotate_view, "Annotate")
+        self.setCentralWidget(self.tabs)
+        self.setAcceptDrops(True)
 
         self.timeline.frame_changed.connect(self.show_frame)
         self.heatmap_choice.currentIndexChanged.connect(lambda _: self.show_frame(self.timeline.frame))
@@ -118,6 +156,16 @@ class MainWindow(QMainWindow):
         self._action(file_menu, "Export retargeted motion...", self.export_motion)
         file_menu.addSeparator()
         self._action(file_menu, "Quit", self.close, "Ctrl+Q")
+        edit_menu = bar.addMenu("&Edit")
+        undo = self.undo_stack.createUndoAction(self, "Undo")
+        undo.setShortcut(QKeySequence.StandardKey.Undo)
+        redo = self.undo_stack.createRedoAction(self, "Redo")
+        redo.setShortcut(QKeySequence.StandardKey.Redo)
+        edit_menu.addActions([undo, redo])
+        annotate_menu = bar.addMenu("&Annotate")
+        self._action(annotate_menu, "Open hand...", self.open_hand_to_annotate, "Ctrl+Shift+O")
+        self._action(annotate_menu, "Run TBS solver", self.run_solver, "Ctrl+R")
+        self._action(annotate_menu, "Save annotation", self.save_annotation, "Ctrl+Shift+S")
         methods_menu = bar.addMenu("&Methods")
         chosen = self.settings.value("compare/methods", self.setup.methods)
         chosen = [m for m in (chosen if isinstance(chosen, list) else [chosen]) if m in METHODS] or self.setup.methods
@@ -149,23 +197,33 @@ class MainWindow(QMainWindow):
         QMessageBox.critical(self, "s2h-viewer", message)
 
     # --- computing the comparison off the GUI thread ---
-    def start_comparison(self) -> None:
+    def _start_task(self, fn, label: str, total: int, on_done: Callable[[object], None]) -> None:
+        """Run ``fn(progress)`` off the GUI thread behind a progress dialog; errors become a dialog."""
         if self._thread is not None:
             return
         self.timeline.set_playing(False)
         self._thread = QThread(self)
-        worker = ComparisonWorker(self.setup)
-        worker.moveToThread(self._thread)
-        self._thread.started.connect(worker.run)
-        total = len(self.setup.targets) * len(self.setup.methods)
-        self._progress = QProgressDialog("Retargeting...", None, 0, total, self)
+        task = Task(fn)
+        task.moveToThread(self._thread)
+        self._thread.started.connect(task.run)
+        self._progress = QProgressDialog(label, None, 0, total, self)
         self._progress.setWindowTitle("s2h-viewer")
         self._progress.setMinimumDuration(300)
-        worker.progress.connect(self._on_progress)
-        worker.finished.connect(self._on_comparison)
-        worker.failed.connect(self._on_failure)
-        self._worker = worker
+        task.progress.connect(self._on_progress)
+        self._on_done = on_done
+        task.finished.connect(self._on_task_done)  # a bound slot of this window: runs on the GUI thread
+        task.failed.connect(self._on_failure)
+        self._task = task
         self._thread.start()
+
+    def _on_task_done(self, result: object) -> None:
+        self._finish_thread()
+        self._on_done(result)
+
+    def start_comparison(self) -> None:
+        s = self.setup
+        self._start_task(lambda progress: build_comparison(s.motion, s.source, s.targets, s.methods, progress),
+                         "Retargeting...", len(s.targets) * len(s.methods), self._on_comparison)
 
     def _finish_thread(self) -> None:
         if self._progress is not None:
@@ -180,15 +238,14 @@ class MainWindow(QMainWindow):
         if self._progress is not None:
             self._progress.setMaximum(total)
             self._progress.setValue(done)
-            self._progress.setLabelText(f"Retargeting: {what}")
-        self.statusBar().showMessage(f"Retargeting {done}/{total}: {what}")
+            self._progress.setLabelText(what)
+        self.statusBar().showMessage(f"{done}/{total}: {what}")
 
     def _on_failure(self, message: str) -> None:
         self._finish_thread()
         self.error(message)
 
     def _on_comparison(self, comparison: Comparison) -> None:
-        self._finish_thread()
         self.comparison = comparison
         self.view.set_comparison(comparison)
         self.scores.show_comparison(comparison)
@@ -330,6 +387,82 @@ class MainWindow(QMainWindow):
         self._remember(path)
         self.statusBar().showMessage(f"wrote {path}", 5000)
         return Path(path)
+
+    # --- annotation mode ---
+    def open_hand_to_annotate(self) -> None:
+        path, _ = QFileDialog.getOpenFileName(self, "Open hand to annotate", self._last_dir(),
+                                              "Hands (*.glb *.gltf *.fbx *.npz)")
+        if path:
+            self.annotate_file(path)
+
+    def annotate_file(self, path: str) -> None:
+        """Load a hand (its sidecar or solver frames come with it) and show it in annotation mode."""
+        from s2h_viewer.io.files import load_hand_file
+        try:
+            hand = load_hand_file(path)
+        except S2HError as exc:
+            self.error(str(exc))
+            return
+        self._remember(path)
+        self.annotation = AnnotationSession(hand, Path(path))
+        self.undo_stack.clear()
+        self.annotate_view.set_session(self.annotation)
+        self.tabs.setCurrentWidget(self.annotate_view)
+        self.statusBar().showMessage(f"{hand.name}: frames from {hand.meta.get('annotation', 'the file')}", 5000)
+
+    def run_solver(self) -> None:
+        if self.annotation is None:
+            self.error("Open a hand to annotate first (Annotate > Open hand).")
+            return
+        hand = self.annotation.hand
+
+        def solve(progress):
+            progress(0, 1, f"casting rays at {hand.name}")
+            return solve_tbs_frames(hand)
+
+        self._start_task(solve, "Running the TBS solver...", 1, self._on_solution)
+
+    def _on_solution(self, solution) -> None:
+        self.annotation.apply_solution(solution)
+        self.undo_stack.clear()
+        self.annotate_view.refresh_list()
+        self.annotate_view.refresh()
+        review = int(solution.needs_review.sum())
+        self.statusBar().showMessage(f"solver: {review} joint(s) to review", 5000)
+        self.annotation_ready.emit()
+
+    def _frame_edited(self, joint: int, before: np.ndarray, after: np.ndarray) -> None:
+        previous = self.annotation.set_by[joint]
+        self.undo_stack.push(EditFrameCommand(self, joint, before, after, previous))
+
+    def save_annotation(self) -> Path | None:
+        from s2h_viewer.io.annotation import save_annotation
+        session = self.annotation
+        if session is None or session.hand_file is None or session.hand_file.suffix == "":
+            self.error("Open a hand file to annotate first; sample hands by name have no file to annotate.")
+            return None
+        try:
+            path = save_annotation(session.annotation(), session.hand_file)
+        except OSError as exc:
+            self.error(f"{session.hand_file}: could not save the annotation ({exc})")
+            return None
+        self.undo_stack.setClean()
+        self.statusBar().showMessage(f"wrote {path}", 5000)
+        return path
+
+    # --- drag and drop: a motion replaces the clip, a hand is opened for annotation ---
+    def dragEnterEvent(self, event) -> None:
+        if event.mimeData().hasUrls():
+            event.acceptProposedAction()
+
+    def dropEvent(self, event) -> None:
+        from s2h_viewer.io.files import MOTION_SUFFIXES
+        for url in event.mimeData().urls():
+            path = url.toLocalFile()
+            if Path(path).suffix.lower() in (".glb", ".gltf", ".fbx") or self.tabs.currentWidget() is self.annotate_view:
+                self.annotate_file(path)
+            elif Path(path).suffix.lower() in MOTION_SUFFIXES:
+                self.load_motion(path)
 
     def closeEvent(self, event) -> None:
         self.settings.setValue("window/geometry", self.saveGeometry())

@@ -24,7 +24,7 @@ from s2h_viewer.retarget.methods import METHODS
 
 ERROR_RANGE = (0.0, 0.1)  # 1 - cosine; 0.1 is already a clearly different pose
 ERROR_COLOURMAP = "plasma"
-DISPLAY_FACES = 8000
+DISPLAY_FACES = 10000
 
 
 class _HandActors:
