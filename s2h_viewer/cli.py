@@ -40,17 +40,42 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _render_comparison(args: argparse.Namespace) -> int:
+    """`s2h render --motion`: compare mode off screen, one frame (PNG) or the timeline (MP4, GIF)."""
+    from tqdm import tqdm
+
+    from s2h_viewer import samples
+    from s2h_viewer.io.files import load_hand_file, load_motion_file
+    from s2h_viewer.render.compare_scene import render_comparison
+    from s2h_viewer.retarget.comparison import build_comparison
+
+    motion, rig = load_motion_file(args.motion, options=_rig_options(args))
+    source = rig or samples.load_sample_hand(motion.hand_name)
+    targets = [load_hand_file(t, _rig_options(args)) for t in (args.target or ["iris", "laurel"])]
+    methods = (args.methods or "tbs_copy,asrn").split(",")
+    with tqdm(total=len(targets) * len(methods), desc="retarget", file=sys.stderr, disable=args.quiet) as bar:
+        comparison = build_comparison(motion, source, targets, methods,
+                                      progress=lambda done, total, what: (bar.set_postfix_str(what),
+                                                                          bar.update(done - bar.n)))
+    with tqdm(total=comparison.n_frames, desc="render", unit="frame", file=sys.stderr, disable=args.quiet) as bar:
+        path = render_comparison(comparison, args.out, frame=args.frame,
+                                 progress=lambda done, total: bar.update(done - bar.n))
+    print(f"wrote {path}")
+    return 0
+
+
 def _cmd_render(args: argparse.Namespace) -> int:
+    if args.motion:
+        return _render_comparison(args)
     import numpy as np
     import torch
 
     from s2h_viewer import samples
     from s2h_viewer.hand.rotations import tbs_euler_to_quat
+    from s2h_viewer.io.files import load_hand_file
     from s2h_viewer.motions.fitting import fit_gesture_angles
     from s2h_viewer.motions.gestures import gesture
     from s2h_viewer.render.offscreen import render_hands
-
-    from s2h_viewer.io.files import load_hand_file
 
     names = samples.hand_names(args.hands) if args.hands in ("all", "train", "test") else args.hands.split(",")
     hands = [load_hand_file(n, _rig_options(args)) for n in names]
@@ -186,7 +211,12 @@ def build_parser() -> argparse.ArgumentParser:
     rd.add_argument("--skeleton", action="store_true", help="draw bones through a see-through skin")
     rd.add_argument("--frames", action="store_true", help="draw each joint's TBS frame (twist red, bend green, "
                                                           "splay blue) through a see-through skin")
-    rd.add_argument("--out", default="hands.png")
+    rd.add_argument("--out", default="hands.png", help=".png, or with --motion also .mp4 / .gif (the whole timeline)")
+    rd.add_argument("--motion", help="compare mode: retarget this motion file and render the grid of methods")
+    rd.add_argument("--target", action="append", help="with --motion: target hand file or sample name (repeatable)")
+    rd.add_argument("--methods", help="with --motion: comma-separated methods (default tbs_copy,asrn)")
+    rd.add_argument("--frame", type=int, help="with --motion and a .png: the frame to draw (default 0)")
+    rd.add_argument("--quiet", action="store_true", help="no progress bars")
     _add_rig_options(rd)
     rd.set_defaults(func=_cmd_render)
 

@@ -89,6 +89,7 @@ def test_annotation_mode_solve_turn_undo_save(window, qtbot, tmp_path):
     glb = shutil.copy(ASSETS_DIR / "hands" / "webxr" / "generic-hand-right.glb", tmp_path / "hand.glb")
     window.annotate_file(str(glb))
     assert window.tabs.currentWidget() is window.annotate_view
+    assert [a.text() for a in window.recent_menu.actions()] == ["hand.glb (annotate)"]
     with qtbot.waitSignal(window.annotation_ready, timeout=60_000):
         window.run_solver()
     session = window.annotation

@@ -28,6 +28,7 @@ from s2h_viewer.widgets.compare_view import CompareView
 from s2h_viewer.widgets.scores_table import ScoresTable
 from s2h_viewer.widgets.timeline import Timeline
 
+RECENT_FILES = 8
 SHORTCUTS = (("Space", "play / pause"), ("Left / Right", "previous / next frame"), ("Home / End", "first / last frame"),
              ("Ctrl+O", "open a motion"), ("Ctrl+T", "add a target hand"), ("Ctrl+S", "export a screenshot"),
              ("Ctrl+E", "export a video"), ("Ctrl+Shift+O", "open a hand to annotate"), ("Ctrl+R", "run the TBS solver"),
@@ -150,6 +151,8 @@ class MainWindow(QMainWindow):
         file_menu = bar.addMenu("&File")
         self._action(file_menu, "Open motion...", self.open_motion, "Ctrl+O")
         self._action(file_menu, "Add target hand...", self.add_target, "Ctrl+T")
+        self.recent_menu = file_menu.addMenu("Open recent")
+        self._fill_recent()
         file_menu.addSeparator()
         self._action(file_menu, "Export screenshot (PNG)...", self.export_screenshot, "Ctrl+S")
         self._action(file_menu, "Export video (MP4, GIF)...", self.export_video, "Ctrl+E")
@@ -284,8 +287,27 @@ class MainWindow(QMainWindow):
     def _last_dir(self) -> str:
         return str(self.settings.value("files/last_dir", str(Path.home())))
 
-    def _remember(self, path: str) -> None:
+    def _remember(self, path: str, kind: str | None = None) -> None:
+        """Remember the folder, and with ``kind`` ("motion", "target" or "annotate") the file as recent."""
         self.settings.setValue("files/last_dir", str(Path(path).parent))
+        if kind:
+            recent = [r for r in self._recent() if r != f"{kind}:{path}"]
+            self.settings.setValue("files/recent", [f"{kind}:{path}", *recent][:RECENT_FILES])
+            self._fill_recent()
+
+    def _recent(self) -> list[str]:
+        recent = self.settings.value("files/recent", [])
+        return [recent] if isinstance(recent, str) else list(recent or [])
+
+    def _fill_recent(self) -> None:
+        self.recent_menu.clear()
+        opens = {"motion": self.load_motion, "target": self.add_target_file, "annotate": self.annotate_file}
+        for entry in self._recent():
+            kind, _, path = entry.partition(":")
+            if kind in opens:
+                action = self.recent_menu.addAction(f"{Path(path).name} ({kind})")
+                action.triggered.connect(lambda _=False, p=path, k=kind: opens[k](p))
+        self.recent_menu.setEnabled(bool(self.recent_menu.actions()))
 
     def open_motion(self) -> None:
         path, _ = QFileDialog.getOpenFileName(self, "Open motion", self._last_dir(),
@@ -302,7 +324,7 @@ class MainWindow(QMainWindow):
         except (S2HError, KeyError) as exc:
             self.error(str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc))
             return
-        self._remember(path)
+        self._remember(path, "motion")
         self.setup = dataclasses.replace(self.setup, motion=motion, source=source)
         self.start_comparison()
 
@@ -319,7 +341,7 @@ class MainWindow(QMainWindow):
         except S2HError as exc:
             self.error(str(exc))
             return
-        self._remember(path)
+        self._remember(path, "target")
         self.setup = dataclasses.replace(self.setup, targets=[*self.setup.targets, hand])
         self.start_comparison()
 
@@ -403,7 +425,7 @@ class MainWindow(QMainWindow):
         except S2HError as exc:
             self.error(str(exc))
             return
-        self._remember(path)
+        self._remember(path, "annotate")
         self.annotation = AnnotationSession(hand, Path(path))
         self.undo_stack.clear()
         self.annotate_view.set_session(self.annotation)

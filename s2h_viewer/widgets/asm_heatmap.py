@@ -9,7 +9,7 @@ from PySide6.QtGui import QImage, QPixmap
 from PySide6.QtWidgets import QLabel, QVBoxLayout, QWidget
 
 from s2h_viewer.hand import topology as topo
-from s2h_viewer.widgets.compare_view import ERROR_COLOURMAP, ERROR_RANGE
+from s2h_viewer.render.compare_scene import ERROR_COLOURMAP, ERROR_RANGE
 
 CELL = 12  # pixels per matrix cell
 
