@@ -51,6 +51,9 @@ def main() -> None:
         print(f"{label:24s} >= {fewest:6d} faces/hand: {rates[-1]:5.1f} frames/s "
               f"(skinning {skin * 1000:5.1f} ms + rendering {render * 1000:5.1f} ms per frame)")
     print(f"display meshes: {rates[1] / rates[0]:.1f} x the baseline's frame rate (target >= 30 frames/s)")
+    skin, render, _ = playback(comparison, DISPLAY_FACES, size=(1024, 640))
+    print(f"display meshes at 1024 x 640: {1 / (skin + render):5.1f} frames/s (software OpenGL is bound by pixels: "
+          f"{1 / (skin + render) / rates[1]:.1f} x the 1400 x 900 rate)")
 
 
 if __name__ == "__main__":
