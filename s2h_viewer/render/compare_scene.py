@@ -17,7 +17,7 @@ from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.kinematics import HandPose
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.skinning import skin_vertices
-from s2h_viewer.render.scene import BONE_COLOUR, SKIN_COLOUR, display_hand, skeleton, to_view
+from s2h_viewer.render.scene import BONE_COLOUR, SKIN_COLOUR, display_hand, skeleton, surface, to_view
 from s2h_viewer.retarget.comparison import Comparison
 from s2h_viewer.retarget.methods import METHODS
 
@@ -34,8 +34,7 @@ class PosedHand:
         self.hand, self.pose, self.joint_error = hand, pose, joint_error
         self.error_actor = self.mesh = None
         if hand.mesh is not None:
-            faces = np.hstack([np.full((len(hand.mesh.faces), 1), 3), hand.mesh.faces]).astype(np.int64)
-            self.mesh = pv.PolyData(to_view(hand, skin_vertices(hand, pose, 0)), faces)
+            self.mesh = surface(hand, to_view(hand, skin_vertices(hand, pose, 0)))
             if joint_error is None:
                 self.mesh_actor = plotter.add_mesh(self.mesh, color=SKIN_COLOUR, opacity=opacity, specular=0.2,
                                                    reset_camera=False)

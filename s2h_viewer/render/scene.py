@@ -34,10 +34,15 @@ def to_view(hand: HandModel, points: np.ndarray) -> np.ndarray:
     return points @ hand.palm_frame
 
 
+def surface(hand: HandModel, vertices: np.ndarray) -> pv.PolyData:
+    """The hand's mesh triangles over the given (V, 3) vertices (rest, posed, in any space)."""
+    faces = np.hstack([np.full((len(hand.mesh.faces), 1), 3), hand.mesh.faces]).astype(np.int64)
+    return pv.PolyData(np.asarray(vertices, dtype=np.float64), faces)
+
+
 def posed_mesh(hand: HandModel, pose: HandPose, frame: int = 0) -> pv.PolyData:
     """The skinned mesh at one frame, in view space, with normals for smooth shading."""
-    faces = np.hstack([np.full((len(hand.mesh.faces), 1), 3), hand.mesh.faces]).astype(np.int64)
-    mesh = pv.PolyData(to_view(hand, skin_vertices(hand, pose, frame)), faces)
+    mesh = surface(hand, to_view(hand, skin_vertices(hand, pose, frame)))
     return mesh.compute_normals(auto_orient_normals=False, split_vertices=False)
 
 
@@ -71,9 +76,7 @@ def display_hand(hand: HandModel, max_faces: int = 8000) -> HandModel:
     """
     if hand.mesh is None or len(hand.mesh.faces) <= max_faces:
         return hand
-    faces = np.hstack([np.full((len(hand.mesh.faces), 1), 3), hand.mesh.faces]).astype(np.int64)
-    full = pv.PolyData(hand.mesh.vertices.astype(np.float64), faces)
-    light = full.decimate_pro(1.0 - max_faces / len(hand.mesh.faces), preserve_topology=True, splitting=False)
+    light = surface(hand, hand.mesh.vertices).decimate_pro(1.0 - max_faces / len(hand.mesh.faces), preserve_topology=True, splitting=False)
     light = light.clean()
     _, nearest = cKDTree(hand.mesh.vertices).query(np.asarray(light.points))
     mesh = SkinnedMesh(np.asarray(light.points, dtype=np.float32),

@@ -13,7 +13,8 @@ from PySide6.QtWidgets import QDial, QHBoxLayout, QLabel, QListWidget, QSplitter
 from s2h_viewer.annotate.editing import AnnotationSession, rotate_about_twist
 from s2h_viewer.annotate.solver import LOW_CONFIDENCE
 from s2h_viewer.hand import topology as topo
-from s2h_viewer.render.scene import AXIS_COLOURS, BONE_COLOUR, SKIN_COLOUR, display_hand, to_view
+from s2h_viewer.render.scene import (AXIS_COLOURS, BONE_COLOUR, SKIN_COLOUR, display_hand, pose_frame, skeleton,
+                                     surface, to_view)
 
 LEGEND = "TBS frames: twist (along the bone) red, bend green, splay (out of the back) blue"
 
@@ -71,13 +72,10 @@ class AnnotationView(QWidget):
         plotter.set_background("white")
         hand = display_hand(session.hand)
         if hand.mesh is not None:
-            faces = np.hstack([np.full((len(hand.mesh.faces), 1), 3), hand.mesh.faces]).astype(np.int64)
-            plotter.add_mesh(pv.PolyData(to_view(hand, hand.mesh.vertices.astype(np.float64)), faces),
-                             color=SKIN_COLOUR, opacity=0.3)
-        points = to_view(hand, hand.rest_positions)
-        children = np.arange(1, topo.N_JOINTS)
-        lines = np.column_stack([np.full(len(children), 2), topo.PARENTS[children], children]).ravel()
-        plotter.add_mesh(pv.PolyData(points, lines=lines), color=BONE_COLOUR, line_width=3)
+            plotter.add_mesh(surface(hand, to_view(hand, hand.mesh.vertices)), color=SKIN_COLOUR, opacity=0.3)
+        rest = np.zeros((1, topo.N_ARTICULATED, 4))
+        rest[..., 0] = 1.0
+        plotter.add_mesh(skeleton(hand, pose_frame(hand, rest[0])), color=BONE_COLOUR, line_width=3)
         self._arrow_meshes = [_arrows(session, axis, self.selected) for axis in range(3)]
         for mesh, colour in zip(self._arrow_meshes, AXIS_COLOURS):
             plotter.add_mesh(mesh, color=colour)
