@@ -4,7 +4,7 @@ VENV   ?= .venv
 PY      = $(VENV)/bin/python
 STAMP   = $(VENV)/.installed
 
-.PHONY: run test bench assets train clean
+.PHONY: run test bench assets train screenshots clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -29,6 +29,10 @@ bench: $(STAMP)
 train: $(STAMP)
 	$(VENV)/bin/s2h train --kind asrn
 	$(VENV)/bin/s2h train --kind dm
+
+# docs/compare_mode.png and docs/annotation_mode.png from the real window (under Xvfb without a display)
+screenshots: $(STAMP)
+	$(if $(DISPLAY),,xvfb-run -a -s "-screen 0 1600x1000x24") $(PY) scripts/make_screenshots.py
 
 assets: $(STAMP)
 	$(PY) scripts/generate_assets.py

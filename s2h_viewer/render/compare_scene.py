@@ -1,8 +1,9 @@
 """The compare grid as pyvista data, for any plotter: the app's Qt viewport and `s2h render`'s
-off-screen one. One row per target hand: the source, then one subplot per method. Each retargeted
-hand's skin is coloured by its per-joint ASM error (1 - cosine against the source) at the current
-frame, spread over the surface by the skin weights; meshes are drawn at most `DISPLAY_FACES` faces
-(software OpenGL draws triangles slowly). Every camera is linked.
+off-screen one. The source once, in a column spanning every row; then one row per target hand and
+one subplot per method. Each retargeted hand's skin is coloured by its per-joint ASM error
+(1 - cosine against the source) at the current frame, spread over the surface by the skin weights;
+meshes are drawn at most `DISPLAY_FACES` faces with one camera-following light (software OpenGL
+draws triangles slowly). Every camera is linked.
 """
 
 from __future__ import annotations
@@ -51,11 +52,13 @@ class PosedHand:
         if self.mesh is None:
             self.bones.points = to_view(self.hand, self.pose.positions[frame].numpy().astype(np.float64))
             return
-        self.mesh.points = to_view(self.hand, skin_vertices(self.hand, self.pose, frame))
+        self.mesh.points[:] = to_view(self.hand, skin_vertices(self.hand, self.pose, frame))  # in place: the
+        self.mesh.GetPoints().Modified()  # GPU buffers are refilled, not reallocated
         if self.joint_error is not None:
             per_rotating = np.zeros(topo.N_ROTATING)  # wrist 0, then each articulated joint's ASM row
             per_rotating[1:] = np.nan_to_num(self.joint_error[frame, topo.ARTICULATED_JOINTS - 1])
-            self.mesh["error"] = self.hand.mesh.weights @ per_rotating
+            self.mesh.point_data["error"][:] = self.hand.mesh.weights @ per_rotating
+            self.mesh.point_data.GetArray("error").Modified()
 
     def set_opacity(self, opacity: float) -> None:
         if self.mesh is not None:
@@ -63,14 +66,20 @@ class PosedHand:
 
 
 def grid_shape(comparison: Comparison) -> tuple[int, int]:
-    """(rows, columns): a row per target, the source then each method."""
+    """(rows, columns): a row per target, each method in a column, after the source's column."""
     targets = len(dict.fromkeys(id(r.target) for r in comparison.results)) or 1
     return targets, 1 + len(comparison.results) // targets
 
 
+def grid_layout(comparison: Comparison) -> dict:
+    """Plotter keywords for the grid: its shape, the source's column merged over all rows (drawn once)."""
+    rows, columns = grid_shape(comparison)
+    return {"shape": (rows, columns), "groups": [(np.s_[:], 0)] if rows > 1 else None, "border": False}
+
+
 def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
              display_faces: int | None = DISPLAY_FACES) -> list[PosedHand]:
-    """Fill a plotter made with ``shape=grid_shape(comparison)``; returns the hands to update per frame."""
+    """Fill a plotter made with ``**grid_layout(comparison)``; returns the hands to update per frame."""
     light: dict[int, HandModel] = {}
 
     def shown(hand: HandModel) -> HandModel:
@@ -80,17 +89,18 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
             light[id(hand)] = display_hand(hand, display_faces)
         return light[id(hand)]
 
-    panels = []
-    for target in dict.fromkeys(id(r.target) for r in comparison.results):
-        panels.append((shown(comparison.source), comparison.source_pose, None, f"source: {comparison.source.name}"))
-        panels += [(shown(r.target), r.pose, r.joint_error,
+    panels = [((0, 0), shown(comparison.source), comparison.source_pose, None, f"source: {comparison.source.name}")]
+    for row, target in enumerate(dict.fromkeys(id(r.target) for r in comparison.results)):
+        results = [r for r in comparison.results if id(r.target) == target]
+        panels += [((row, 1 + k), shown(r.target), r.pose, r.joint_error,
                     f"{METHODS[r.method].label} -> {r.target.name}\nS_palm {r.scores.s_palm:.3f}  "
-                    f"S_finger {r.scores.s_finger:.3f}") for r in comparison.results if id(r.target) == target]
-    columns = grid_shape(comparison)[1]
+                    f"S_finger {r.scores.s_finger:.3f}") for k, r in enumerate(results)]
     hands = []
-    for i, (hand, pose, error, label) in enumerate(panels):
-        plotter.subplot(i // columns, i % columns)
+    for cell, hand, pose, error, label in panels:
+        plotter.subplot(*cell)
         plotter.set_background("white")
+        plotter.renderer.remove_all_lights()  # one light that follows the camera: a quarter of the
+        plotter.renderer.add_light(pv.Light(light_type="headlight"))  # shading cost of pyvista's five-light kit
         hands.append(PosedHand(plotter, hand, pose, error, opacity))
         plotter.add_text(label, font_size=9, color="black", position="upper_left")
         plotter.view_vector((0.15, 0.45, -0.85), viewup=(1.0, 0.0, 0.0))
@@ -98,8 +108,8 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
         plotter.camera.zoom(0.8)  # room for a moving hand and the label
     coloured = next((h.error_actor for h in hands if h.error_actor is not None), None)
     if coloured is not None:
-        plotter.subplot((len(panels) - 1) // columns, (len(panels) - 1) % columns)
-        plotter.add_scalar_bar("ASM error (1 - cos)", mapper=coloured.mapper, vertical=True, position_x=0.84,
+        plotter.subplot(*panels[-1][0])
+        plotter.add_scalar_bar("ASM error (1 - cos)", mapper=coloured.mapper, vertical=True, position_x=0.76,
                                position_y=0.08, height=0.55, width=0.1, title_font_size=10, label_font_size=9,
                                color="black", n_labels=4, fmt="%.2f")
     plotter.link_views()
@@ -114,7 +124,7 @@ def render_comparison(comparison: Comparison, path: str | Path, frame: int | Non
     from s2h_viewer.render.video import VIDEO_SUFFIXES, write_video
 
     path = Path(path)
-    plotter = pv.Plotter(off_screen=True, shape=grid_shape(comparison), window_size=size, border=False)
+    plotter = pv.Plotter(off_screen=True, window_size=size, **grid_layout(comparison))
     plotter.render_window.SetMultiSamples(0)
     hands = populate(plotter, comparison)
     plotter.show(auto_close=False)

@@ -7,7 +7,7 @@ import numpy as np
 from pyvistaqt import QtInteractor
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
-from s2h_viewer.render.compare_scene import PosedHand, grid_shape, populate
+from s2h_viewer.render.compare_scene import PosedHand, grid_layout, populate
 from s2h_viewer.retarget.comparison import Comparison
 
 
@@ -30,8 +30,7 @@ class CompareView(QWidget):
             self._layout.removeWidget(self.interactor)
             self.interactor.close()
             self.interactor.deleteLater()
-        self.interactor = QtInteractor(self, shape=grid_shape(comparison), border=False, multi_samples=0,
-                                       auto_update=False)
+        self.interactor = QtInteractor(self, multi_samples=0, auto_update=False, **grid_layout(comparison))
         self._layout.addWidget(self.interactor)
         self._hands = populate(self.interactor, comparison, self.opacity)
         self.show_frame(0)
