@@ -24,6 +24,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_retarget.py
 	$(PY) benchmarks/bench_annotate.py
 	$(PY) benchmarks/bench_playback.py
+	$(if $(DISPLAY),,xvfb-run -a -s "-screen 0 1600x1000x24") $(PY) benchmarks/bench_window_playback.py
 
 # reproduces assets/models/{asrn,dm}.pt (seeded; about 8.5 minutes each on 2 CPU cores)
 train: $(STAMP)

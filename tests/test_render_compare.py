@@ -22,3 +22,29 @@ def test_render_compare_writes_a_frame_and_a_whole_clip(sample_hands, tmp_path):
     frames = imageio.mimread(gif, memtest=False)
     assert len(frames) == motion.n_frames
     assert not np.array_equal(frames[0], frames[len(frames) // 2])  # the hands move
+
+
+def test_back_faces_are_skipped_only_where_they_cannot_be_seen(sample_hands):
+    import pyvista as pv
+
+    from s2h_viewer.hand.kinematics import forward_kinematics
+    from s2h_viewer.io.files import load_hand_file
+    from s2h_viewer.render.compare_scene import PosedHand
+    from s2h_viewer.samples import ASSETS_DIR
+
+    webxr = load_hand_file(ASSETS_DIR / "hands" / "webxr" / "generic-hand-right.glb")  # an open mesh (wrist hole)
+    images, culling = [], []
+    for hand, opacity in ((sample_hands["iris"], 1.0), (sample_hands["iris"], 0.5), (webxr, 1.0)):
+        motion = synthesize(["fist"], hand, seed=0)
+        plotter = pv.Plotter(off_screen=True, window_size=(320, 320))
+        posed = PosedHand(plotter, hand, forward_kinematics(hand, motion.q_tbs), None, opacity)
+        posed.show(motion.n_frames - 1)
+        plotter.view_vector((0.15, 0.45, -0.85), viewup=(1.0, 0.0, 0.0))
+        culling.append(posed.mesh_actor.prop.culling)
+        images.append(plotter.screenshot(return_img=True).astype(int))
+        posed.mesh_actor.prop.culling = "none"
+        images.append(plotter.screenshot(return_img=True).astype(int))
+        plotter.close()
+    assert culling == ["back", "none", "none"]
+    assert (images[0] != 255).any(axis=-1).mean() > 0.05  # the hand is in the picture
+    assert np.abs(images[0] - images[1]).max() <= 2  # the culled closed skin looks exactly the same

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 import pyvista as pv
+import trimesh
 
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.kinematics import HandPose
@@ -36,14 +37,15 @@ class PosedHand:
         self.error_actor = self.mesh = None
         if hand.mesh is not None:
             self.mesh = surface(hand, to_view(hand, skin_vertices(hand, pose, 0)))
+            self.closed = is_closed_outward(self.mesh)
             if joint_error is None:
-                self.mesh_actor = plotter.add_mesh(self.mesh, color=SKIN_COLOUR, opacity=opacity, specular=0.2,
-                                                   reset_camera=False)
+                self.mesh_actor = plotter.add_mesh(self.mesh, color=SKIN_COLOUR, specular=0.2, reset_camera=False)
             else:
                 self.mesh["error"] = np.zeros(self.mesh.n_points)
                 self.mesh_actor = self.error_actor = plotter.add_mesh(
-                    self.mesh, scalars="error", cmap=ERROR_COLOURMAP, clim=ERROR_RANGE, opacity=opacity,
-                    specular=0.2, show_scalar_bar=False, reset_camera=False)
+                    self.mesh, scalars="error", cmap=ERROR_COLOURMAP, clim=ERROR_RANGE, specular=0.2,
+                    show_scalar_bar=False, reset_camera=False)
+            self.set_opacity(opacity)
         else:  # a skeleton-only hand (BVH): bones as tubes
             self.bones = skeleton(hand, pose, 0)
             plotter.add_mesh(self.bones, color=BONE_COLOUR, line_width=4, reset_camera=False)
@@ -61,8 +63,16 @@ class PosedHand:
             self.mesh.point_data.GetArray("error").Modified()
 
     def set_opacity(self, opacity: float) -> None:
+        """See-through below 1; an opaque closed skin skips its back faces (about a third of the drawing)."""
         if self.mesh is not None:
-            self.mesh_actor.GetProperty().SetOpacity(opacity)
+            self.mesh_actor.prop.opacity = opacity
+            self.mesh_actor.prop.culling = "back" if self.closed and opacity >= 1.0 else "none"
+
+
+def is_closed_outward(mesh: pv.PolyData) -> bool:
+    """Watertight with outward-facing triangles: only then are its back faces never seen."""
+    closed = trimesh.Trimesh(np.asarray(mesh.points), mesh.regular_faces, process=False)
+    return bool(closed.is_watertight and closed.is_winding_consistent and closed.volume > 0)
 
 
 def grid_shape(comparison: Comparison) -> tuple[int, int]:

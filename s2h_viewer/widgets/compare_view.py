@@ -1,5 +1,8 @@
 """Compare mode's viewport: the compare grid (`render.compare_scene`) in one `QtInteractor` with
-linked cameras, no multisampling (software OpenGL pays 3-4x for it), redrawn on ``show_frame``."""
+linked cameras, no multisampling (software OpenGL pays 3-4x for it), redrawn on ``show_frame``.
+
+The widget renders the scene in its own paint, so a new frame asks for a repaint (``update``)
+rather than rendering too (that drew every frame twice); exports render synchronously."""
 
 from __future__ import annotations
 
@@ -24,7 +27,7 @@ class CompareView(QWidget):
         self.opacity = 1.0
 
     def set_comparison(self, comparison: Comparison) -> None:
-        """Lay out one subplot per hand: a row per target, the source then each method."""
+        """Lay out one subplot per hand: the source once, then a row per target, a column per method."""
         self.comparison = comparison
         if self.interactor is not None:  # pyvista fixes the subplot layout at construction: start afresh
             self._layout.removeWidget(self.interactor)
@@ -38,14 +41,14 @@ class CompareView(QWidget):
         for hand in self._hands:
             hand.show(frame)
         if self.interactor is not None:
-            self.interactor.render()
+            self.interactor.update()
 
     def set_mesh_opacity(self, opacity: float) -> None:
         self.opacity = opacity
         for hand in self._hands:
             hand.set_opacity(opacity)
         if self.interactor is not None:
-            self.interactor.render()
+            self.interactor.update()
 
     def grab_rgb(self) -> np.ndarray:
         """The current view as an (H, W, 3) uint8 image (what screenshot and video export save)."""
