@@ -9,47 +9,25 @@ The window: the default samples (source + 2 targets x TBS Copy, ASRN), 1400 x 90
 
 from __future__ import annotations
 
-import sys
-import tempfile
 import time
-from pathlib import Path
-
-from PySide6.QtCore import QEventLoop, QSettings, QTimer
-from PySide6.QtWidgets import QApplication
 
 from bench_playback import playback  # this folder is on sys.path when the script runs
-from s2h_viewer.app.main_window import MainWindow, default_setup
+from s2h_viewer.app.scripted import scripted_window, wait_for
 from s2h_viewer.render.compare_scene import DISPLAY_FACES
 
 SECONDS = 8.0
 
 
-def wait(signal=None, seconds: float = 300.0) -> None:
-    """Run the event loop until ``signal`` fires or ``seconds`` pass."""
-    loop = QEventLoop()
-    if signal is not None:
-        signal.connect(loop.quit)
-    QTimer.singleShot(int(seconds * 1000), loop.quit)
-    loop.exec()
-
-
 def main() -> None:
-    app = QApplication.instance() or QApplication(sys.argv)
-    with tempfile.TemporaryDirectory() as tmp:
-        window = MainWindow(default_setup(), QSettings(str(Path(tmp) / "settings.ini"), QSettings.Format.IniFormat))
-        window.resize(1400, 900)
-        window.show()
-        window.start_comparison()
-        wait(window.comparison_ready)
-        wait(seconds=1.0)
+    with scripted_window() as window:
+        wait_for(seconds=1.0)
         viewport = (window.view.interactor.width(), window.view.interactor.height())
         start, t0 = window.timeline.frame, time.perf_counter()
         window.timeline.set_playing(True)
-        wait(seconds=SECONDS)
+        wait_for(seconds=SECONDS)
         window.timeline.set_playing(False)
         in_window = (window.timeline.frame - start) / (time.perf_counter() - t0)
         comparison = window.comparison
-        window.close()
     skin, render, _ = playback(comparison, DISPLAY_FACES, size=viewport)
     off_screen = 1 / (skin + render)
     print(f"{len(comparison.results)} retargets + source, viewport {viewport[0]} x {viewport[1]}")
@@ -57,7 +35,6 @@ def main() -> None:
           f"{render * 1000:4.1f} ms)")
     print(f"in the window:         {in_window:5.1f} frames/s ({in_window / off_screen:.2f} x off screen; the rest "
           f"of {1000 / in_window:.0f} ms a frame is Qt composing the window and the X server copy)")
-    app.quit()
 
 
 if __name__ == "__main__":

@@ -1,0 +1,40 @@
+"""The real window driven by a script (README screenshots, the window benchmark): the main window on
+the shipped samples with throwaway settings, and a wait on its threaded work."""
+
+from __future__ import annotations
+
+import sys
+import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+from PySide6.QtCore import QEventLoop, QSettings, QTimer
+from PySide6.QtWidgets import QApplication
+
+from s2h_viewer.app.main_window import MainWindow, default_setup
+
+
+def wait_for(signal=None, seconds: float = 300.0) -> None:
+    """Run the event loop until ``signal`` fires or ``seconds`` pass."""
+    loop = QEventLoop()
+    if signal is not None:
+        signal.connect(loop.quit)
+    QTimer.singleShot(int(seconds * 1000), loop.quit)
+    loop.exec()
+
+
+@contextmanager
+def scripted_window(size: tuple[int, int] = (1400, 900)) -> Iterator[MainWindow]:
+    """The main window on the shipped samples, shown, its comparison ready; the user's settings untouched."""
+    QApplication.instance() or QApplication(sys.argv)
+    with tempfile.TemporaryDirectory() as tmp:
+        window = MainWindow(default_setup(), QSettings(str(Path(tmp) / "settings.ini"), QSettings.Format.IniFormat))
+        window.resize(*size)
+        window.show()
+        window.start_comparison()
+        wait_for(window.comparison_ready)
+        try:
+            yield window
+        finally:
+            window.close()
