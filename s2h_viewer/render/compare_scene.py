@@ -54,8 +54,8 @@ class PosedHand:
         if self.mesh is None:
             self.bones.points = to_view(self.hand, self.pose.positions[frame].numpy().astype(np.float64))
             return
-        self.mesh.points[:] = to_view(self.hand, skin_vertices(self.hand, self.pose, frame))  # in place: the
-        self.mesh.GetPoints().Modified()  # GPU buffers are refilled, not reallocated
+        self.mesh.points[:] = to_view(self.hand, skin_vertices(self.hand, self.pose, frame))  # in place: no new
+        self.mesh.GetPoints().Modified()  # VTK arrays per frame
         if self.joint_error is not None:
             per_rotating = np.zeros(topo.N_ROTATING)  # wrist 0, then each articulated joint's ASM row
             per_rotating[1:] = np.nan_to_num(self.joint_error[frame, topo.ARTICULATED_JOINTS - 1])
@@ -75,16 +75,12 @@ def is_closed_outward(mesh: pv.PolyData) -> bool:
     return bool(closed.is_watertight and closed.is_winding_consistent and closed.volume > 0)
 
 
-def grid_shape(comparison: Comparison) -> tuple[int, int]:
-    """(rows, columns): a row per target, each method in a column, after the source's column."""
-    targets = len(dict.fromkeys(id(r.target) for r in comparison.results)) or 1
-    return targets, 1 + len(comparison.results) // targets
-
-
 def grid_layout(comparison: Comparison) -> dict:
-    """Plotter keywords for the grid: its shape, the source's column merged over all rows (drawn once)."""
-    rows, columns = grid_shape(comparison)
-    return {"shape": (rows, columns), "groups": [(np.s_[:], 0)] if rows > 1 else None, "border": False}
+    """Plotter keywords for the grid: a row per target, a column per method after the source's column,
+    which is merged over all rows (the source is drawn once)."""
+    rows = len(dict.fromkeys(id(r.target) for r in comparison.results)) or 1
+    shape = (rows, 1 + len(comparison.results) // rows)
+    return {"shape": shape, "groups": [(np.s_[:], 0)] if rows > 1 else None, "border": False}
 
 
 def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
