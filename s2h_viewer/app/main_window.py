@@ -216,7 +216,7 @@ class MainWindow(QMainWindow):
         self._on_done = on_done
         task.finished.connect(self._on_task_done)  # a bound slot of this window: runs on the GUI thread
         task.failed.connect(self._on_failure)
-        self._task = task
+        self._task = task  # held: Qt would otherwise lose the Python object while it runs
         self._thread.start()
 
     def _on_task_done(self, result: object) -> None:
@@ -309,11 +309,25 @@ class MainWindow(QMainWindow):
                 action.triggered.connect(lambda _=False, p=path, k=kind: opens[k](p))
         self.recent_menu.setEnabled(bool(self.recent_menu.actions()))
 
-    def open_motion(self) -> None:
-        path, _ = QFileDialog.getOpenFileName(self, "Open motion", self._last_dir(),
-                                              "Motions (*.npz *.bvh *.glb *.gltf *.fbx)")
+    def _ask_to_open(self, title: str, file_filter: str, then: Callable[[str], None]) -> None:
+        """A file dialog in the last folder; ``then(path)`` unless the user cancels."""
+        path, _ = QFileDialog.getOpenFileName(self, title, self._last_dir(), file_filter)
         if path:
-            self.load_motion(path)
+            then(path)
+
+    def _load_hand(self, path: str, kind: str) -> HandModel | None:
+        """The hand in ``path`` (remembered as a recent ``kind``), or None after an error dialog."""
+        from s2h_viewer.io.files import load_hand_file
+        try:
+            hand = load_hand_file(path)
+        except S2HError as exc:
+            self.error(str(exc))
+            return None
+        self._remember(path, kind)
+        return hand
+
+    def open_motion(self) -> None:
+        self._ask_to_open("Open motion", "Motions (*.npz *.bvh *.glb *.gltf *.fbx)", self.load_motion)
 
     def load_motion(self, path: str) -> None:
         from s2h_viewer.io.files import load_motion_file
@@ -329,19 +343,12 @@ class MainWindow(QMainWindow):
         self.start_comparison()
 
     def add_target(self) -> None:
-        path, _ = QFileDialog.getOpenFileName(self, "Add target hand", self._last_dir(),
-                                              "Hands (*.glb *.gltf *.fbx *.npz *.bvh)")
-        if path:
-            self.add_target_file(path)
+        self._ask_to_open("Add target hand", "Hands (*.glb *.gltf *.fbx *.npz *.bvh)", self.add_target_file)
 
     def add_target_file(self, path: str) -> None:
-        from s2h_viewer.io.files import load_hand_file
-        try:
-            hand = load_hand_file(path)
-        except S2HError as exc:
-            self.error(str(exc))
+        hand = self._load_hand(path, "target")
+        if hand is None:
             return
-        self._remember(path, "target")
         self.setup = dataclasses.replace(self.setup, targets=[*self.setup.targets, hand])
         self.start_comparison()
 
@@ -412,20 +419,13 @@ class MainWindow(QMainWindow):
 
     # --- annotation mode ---
     def open_hand_to_annotate(self) -> None:
-        path, _ = QFileDialog.getOpenFileName(self, "Open hand to annotate", self._last_dir(),
-                                              "Hands (*.glb *.gltf *.fbx *.npz)")
-        if path:
-            self.annotate_file(path)
+        self._ask_to_open("Open hand to annotate", "Hands (*.glb *.gltf *.fbx *.npz)", self.annotate_file)
 
     def annotate_file(self, path: str) -> None:
         """Load a hand (its sidecar or solver frames come with it) and show it in annotation mode."""
-        from s2h_viewer.io.files import load_hand_file
-        try:
-            hand = load_hand_file(path)
-        except S2HError as exc:
-            self.error(str(exc))
+        hand = self._load_hand(path, "annotate")
+        if hand is None:
             return
-        self._remember(path, "annotate")
         self.annotation = AnnotationSession(hand, Path(path))
         self.undo_stack.clear()
         self.annotate_view.set_session(self.annotation)

@@ -107,7 +107,7 @@ def _local_matrix(node: pygltflib.Node) -> np.ndarray:
 def _skinned_mesh(doc: _Document) -> RigMesh | None:
     """All skinned triangle primitives of the file, posed at rest, as one mesh."""
     parts = []
-    for node_index, node in enumerate(doc.gltf.nodes):
+    for node in doc.gltf.nodes:
         if node.mesh is None or node.skin is None:
             continue
         skin = doc.gltf.skins[node.skin]

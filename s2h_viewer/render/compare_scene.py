@@ -86,14 +86,14 @@ def grid_layout(comparison: Comparison) -> dict:
 def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
              display_faces: int | None = DISPLAY_FACES) -> list[PosedHand]:
     """Fill a plotter made with ``**grid_layout(comparison)``; returns the hands to update per frame."""
-    light: dict[int, HandModel] = {}
+    displayed: dict[int, HandModel] = {}
 
     def shown(hand: HandModel) -> HandModel:
         if display_faces is None:
             return hand
-        if id(hand) not in light:
-            light[id(hand)] = display_hand(hand, display_faces)
-        return light[id(hand)]
+        if id(hand) not in displayed:
+            displayed[id(hand)] = display_hand(hand, display_faces)
+        return displayed[id(hand)]
 
     panels = [((0, 0), shown(comparison.source), comparison.source_pose, None, f"source: {comparison.source.name}")]
     for row, target in enumerate(dict.fromkeys(id(r.target) for r in comparison.results)):
