@@ -12,12 +12,13 @@ from scipy.spatial.transform import Rotation
 from conftest import random_tbs_motion
 from s2h_viewer.errors import InvalidHandError
 from s2h_viewer.hand import topology as topo
-from s2h_viewer.hand.kinematics import forward_kinematics, identity_motion, rig_local_to_tbs, tbs_to_rig_local
+from s2h_viewer.hand.kinematics import (forward_kinematics, identity_motion, rest_motion, rig_local_to_tbs,
+                                        tbs_to_rig_local)
 from s2h_viewer.hand.mirror import mirror_hand, mirror_motion
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
-from s2h_viewer.hand.rotations import (matrix_to_tbs_euler, quat_angle, quat_to_matrix, quat_to_tbs_euler,
-                                       random_quats, tbs_euler_to_quat)
+from s2h_viewer.hand.rotations import (matrix_to_tbs_euler, quat_angle, quat_multiply, quat_to_matrix,
+                                       quat_to_tbs_euler, random_quats, tbs_euler_to_quat)
 from s2h_viewer.hand.skinning import skin_vertices
 from s2h_viewer.semantics.reference import fk_frame
 
@@ -52,9 +53,9 @@ def test_fk_matches_a_hand_computed_chain():
     np.testing.assert_allclose(pose.frames[0, 8].numpy(), pose.frames[0, 7].numpy())  # tip takes its parent's
 
 
-def test_identity_rotations_give_the_rest_pose(sample_hands):
+def test_the_rest_tbs_rotations_give_the_rest_pose(sample_hands):
     for hand in sample_hands.values():
-        pose = forward_kinematics(hand, identity_motion(3, torch.float64))
+        pose = forward_kinematics(hand, rest_motion(hand, 3, torch.float64))
         np.testing.assert_allclose(pose.positions[2].numpy(), hand.rest_positions, atol=1e-12)
         np.testing.assert_allclose(pose.frames[1, topo.ARTICULATED_JOINTS].numpy(), hand.rest_frames, atol=1e-12)
 
@@ -96,8 +97,8 @@ def test_rig_local_rotation_moves_the_rig_frame_as_tbs_moves_the_tbs_frame(skele
 
 
 def test_pure_bend_of_40_degrees_decomposes_to_bend_only():
-    q = tbs_euler_to_quat(torch.tensor([0.0, 0.0, math.radians(40)], dtype=torch.float64))
-    twist, splay, bend = quat_to_tbs_euler(q).tolist()
+    q = tbs_euler_to_quat(torch.tensor([0.0, math.radians(40), 0.0], dtype=torch.float64))
+    twist, bend, splay = quat_to_tbs_euler(q).tolist()
     assert math.degrees(bend) == pytest.approx(40.0, abs=1e-9)
     assert abs(twist) < 1e-9 and abs(splay) < 1e-9
     # the rotation is about the bend axis (y) and flexes the finger toward its pad (-z)
@@ -105,10 +106,10 @@ def test_pure_bend_of_40_degrees_decomposes_to_bend_only():
     assert r[2, 0] < 0 and r[1, 1] == pytest.approx(1.0)
 
 
-def test_tbs_euler_matches_scipy_intrinsic_xzy(rng):
+def test_tbs_euler_matches_scipy_intrinsic_xyz(rng):
     r = quat_to_matrix(random_quats((500,), generator=rng))
     ours = matrix_to_tbs_euler(r).numpy()
-    theirs = Rotation.from_matrix(r.numpy()).as_euler("XZY")  # intrinsic twist(x), splay(z), bend(y)
+    theirs = Rotation.from_matrix(r.numpy()).as_euler("XYZ")  # intrinsic twist(x), bend(y), splay(z)
     np.testing.assert_allclose(ours, theirs, atol=1e-9)
 
 
@@ -127,12 +128,13 @@ def test_mirroring_twice_is_identity_and_keeps_the_pose(sample_hands, rng):
     np.testing.assert_allclose(mirrored, original @ s.T, atol=1e-6)
 
 
-def test_skinning_identity_is_rest_and_a_pure_bend_moves_only_that_finger(sample_hands):
+def test_skinning_the_rest_pose_is_rest_and_a_pure_bend_moves_only_that_finger(sample_hands):
     hand = sample_hands["kale"]
-    rest = skin_vertices(hand, forward_kinematics(hand, identity_motion(1, torch.float64)))
+    rest = skin_vertices(hand, forward_kinematics(hand, rest_motion(hand, 1, torch.float64)))
     np.testing.assert_allclose(rest, hand.mesh.vertices, atol=1e-5)
-    q = identity_motion(1, torch.float64)
-    q[0, 3 * 2 + 1] = tbs_euler_to_quat(torch.tensor([0.0, 0.0, math.radians(80)], dtype=torch.float64))
+    q = rest_motion(hand, 1, torch.float64)
+    bend = tbs_euler_to_quat(torch.tensor([0.0, math.radians(80), 0.0], dtype=torch.float64))
+    q[0, 3 * 2 + 1] = quat_multiply(q[0, 3 * 2 + 1], bend)
     moved = np.linalg.norm(skin_vertices(hand, forward_kinematics(hand, q)) - hand.mesh.vertices, axis=1)
     middle_distal = hand.mesh.weights[:, 1 + 3 * 2 + 1:1 + 3 * 2 + 3].sum(1) > 0.99  # middle PIP + DIP bones
     thumb = hand.mesh.weights[:, 1:4].sum(1) > 0.99

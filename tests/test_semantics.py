@@ -51,9 +51,11 @@ def test_uniformly_scaled_hand_has_perfect_palm_and_finger_scores(skeleton_hands
     big = dataclasses.replace(hand, offsets=hand.offsets * 1.37, radii=hand.radii * 1.37)
     q = random_tbs_motion(10, rng)
     d_a, d_b = semantic_matrix(forward_kinematics(hand, q)), semantic_matrix(forward_kinematics(big, q))
-    s_palm, s_finger = palm_and_finger_scores(d_a, d_b)
+    s_palm, s_finger, s_finger_paper = palm_and_finger_scores(d_a, d_b)
     assert s_palm == pytest.approx(1.0, abs=1e-12) and s_finger == pytest.approx(1.0, abs=1e-12)
-    assert semantic_similarity(d_a, d_b, hand.hand_length).item() == pytest.approx(1.0, abs=1e-12)
+    assert s_finger_paper == pytest.approx(0.95, abs=1e-12)  # the official figure counts the zero diagonal
+    assert semantic_similarity(d_a, d_b).item() == pytest.approx(1.0, abs=1e-12)
+    np.testing.assert_allclose(d_a.numpy(), d_b.numpy(), atol=1e-12)  # in palm lengths: the same numbers
     # while a different pose on the same hand scores clearly lower
     other = semantic_matrix(forward_kinematics(hand, random_tbs_motion(10, rng)))
     assert palm_and_finger_scores(d_a, other)[1] < 0.95
@@ -66,10 +68,10 @@ def test_zero_norm_cells_are_masked_not_divided_by(skeleton_hands, rng):
     cos, valid = masked_cosine(d, d)
     assert not valid[:, range(20), range(20)].any()  # the diagonal m == k is masked
     assert valid.sum() == 3 * 20 * 28
-    loss = semantic_similarity(d.detach(), d, hand.hand_length)
+    loss = semantic_similarity(d.detach(), d)
     loss.backward()
     assert torch.isfinite(q.grad).all()
-    w = semantic_weights(d.detach(), hand.hand_length)
+    w = semantic_weights(d.detach())
     assert torch.allclose(w.sum((-1, -2)), torch.full((3,), 580.0, dtype=w.dtype))  # 20*28 + 20*9 + 20 * 1
 
 
@@ -79,8 +81,8 @@ def test_float32_asm_has_an_exact_zero_diagonal_and_finite_gradients(sample_hand
     q = random_tbs_motion(64, rng).float().requires_grad_()
     d = semantic_matrix(forward_kinematics(hand, q))
     assert torch.all(d[:, range(20), range(20)] == 0)
-    source = semantic_matrix(forward_kinematics(hand, random_tbs_motion(64, rng).float())) / hand.hand_length
-    loss = -semantic_similarity(source, d / hand.hand_length, 1.0)
+    source = semantic_matrix(forward_kinematics(hand, random_tbs_motion(64, rng).float()))
+    loss = -semantic_similarity(source, d)
     loss.backward()
     assert torch.isfinite(q.grad).all() and q.grad.abs().max() < 1e3
 
@@ -88,18 +90,22 @@ def test_float32_asm_has_an_exact_zero_diagonal_and_finite_gradients(sample_hand
 def test_weights_favour_the_nearest_joints(skeleton_hands):
     hand = skeleton_hands[0]
     d = semantic_matrix(forward_kinematics(hand, identity_motion(1, torch.float64)))
-    w = semantic_weights(d, hand.hand_length)[0]
+    w = semantic_weights(d)[0]
     # index MCP's row: its own PIP (nearest joint) outweighs the pinky tip (far away)
     assert w[4, 5] > w[4, 19] > 1.0
     assert torch.all(w[:, 20:] == 1.0)
 
 
 def test_anatomical_loss_is_zero_inside_limits_and_positive_outside():
-    inside = torch.zeros(2, 15, 3, dtype=torch.float64)
-    inside[..., 2] = math.radians(60)  # bends within [0, 90]
-    inside[:, 3, 1] = math.radians(8)  # index MCP (a knuckle) splays 8 deg: allowed
+    inside = torch.zeros(2, 15, 3, dtype=torch.float64)  # (twist, bend, splay) per joint
+    inside[..., 1] = math.radians(60)  # bends within [0, 90]
+    inside[:, 3, 2] = math.radians(25)  # index MCP (a knuckle) splays 25 deg: allowed (30)
+    inside[:, 0, 2] = math.radians(50)  # the thumb CMC splays 50 deg: allowed (60)
+    inside[:, 0, 1] = math.radians(-40)  # and extends 40 deg: allowed (-60)
+    inside[:, 6, 1] = math.radians(-8)  # the middle MCP hyperextends 8 deg: allowed (-10)
     assert anatomical_loss(tbs_euler_to_quat(inside)).item() == pytest.approx(0.0, abs=1e-20)
-    for joint, axis, degrees in [(4, 0, 10.0), (4, 1, 5.0), (3, 1, 15.0), (4, 2, 100.0), (4, 2, -10.0)]:
+    for joint, axis, degrees in [(4, 0, 10.0), (4, 2, 5.0), (3, 2, 35.0), (0, 2, 65.0), (0, 1, -65.0),
+                                 (3, 1, -15.0), (4, 1, 95.0), (4, 1, -10.0)]:
         outside = inside.clone()
         outside[:, joint, axis] = math.radians(degrees)
         assert anatomical_loss(tbs_euler_to_quat(outside)).item() > 1e-4, (joint, axis, degrees)
@@ -136,8 +142,8 @@ def test_distance_matrix_is_scale_free(skeleton_hands, rng):
     hand = skeleton_hands[3]
     big = dataclasses.replace(hand, offsets=hand.offsets * 2.0)
     q = random_tbs_motion(4, rng)
-    np.testing.assert_allclose(distance_matrix(forward_kinematics(hand, q), hand.hand_length).numpy(),
-                               distance_matrix(forward_kinematics(big, q), big.hand_length).numpy(), atol=1e-12)
+    np.testing.assert_allclose(distance_matrix(forward_kinematics(hand, q)).numpy(),
+                               distance_matrix(forward_kinematics(big, q)).numpy(), atol=1e-12)
 
 
 def test_score_retarget_on_itself_is_perfect(sample_hands, rng):

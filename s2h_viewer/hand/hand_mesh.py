@@ -171,20 +171,21 @@ def _marching_cubes(hand: HandModel, spacing: float) -> trimesh.Trimesh:
     return mesh
 
 
-def build_hand_mesh(hand: HandModel, target_faces: tuple[int, int] = (8_000, 30_000)) -> SkinnedMesh:
+def build_hand_mesh(hand: HandModel, detail: float = 82.0, max_faces: int = 30_000) -> SkinnedMesh:
     """Marching cubes on the hand's signed distance, Taubin-smoothed (keeps volume), checked
-    watertight and within ``target_faces``, then skinned.
+    watertight and at most ``max_faces``, then skinned.
 
-    The grid step starts at 1/82 of the hand length (about 25k faces on a realistic hand); a broader
-    or thicker hand that comes out denser is sampled again, coarser, aiming at 25k faces.
+    The grid step is 1/``detail`` of the hand length (82: about 25k faces on a realistic hand; about
+    30: a low-poly game hand of 2-4k); a broader or thicker hand that comes out denser than
+    ``max_faces`` is sampled again, coarser, aiming at 25k faces.
     """
-    spacing = hand.hand_length / 82.0
+    spacing = hand.hand_length / detail
     mesh = _marching_cubes(hand, spacing)
-    if len(mesh.faces) > target_faces[1]:
+    if len(mesh.faces) > max_faces:
         mesh = _marching_cubes(hand, spacing * float(np.sqrt(len(mesh.faces) / 25_000)))
-    if not mesh.is_watertight or not target_faces[0] <= len(mesh.faces) <= target_faces[1]:
+    if not mesh.is_watertight or len(mesh.faces) > max_faces:
         raise RuntimeError(f"hand {hand.name!r}: generated mesh is not watertight or has {len(mesh.faces)} "
-                           f"faces (want {target_faces[0]}-{target_faces[1]})")
+                           f"faces (want at most {max_faces})")
     trimesh.smoothing.filter_taubin(mesh, iterations=30)
     vertices = np.asarray(mesh.vertices, dtype=np.float64)
     return SkinnedMesh(vertices=vertices.astype(np.float32), faces=np.asarray(mesh.faces, dtype=np.int32),

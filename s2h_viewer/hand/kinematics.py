@@ -1,12 +1,15 @@
 """Batched, differentiable forward kinematics and rig-local <-> TBS rotation conversion.
 
-Conventions (DESIGN.md section 2), with ``p`` the parent of articulated joint ``j``:
+Conventions (DESIGN.md section 2), with ``p`` the parent of articulated joint ``j`` and ``C`` the
+canonical-pose TBS frames (``HandModel.canonical_frames``; wrist = I):
 
-- global TBS frame: ``M_j(t) = M_p(t) @ (M_rest_p^T M_rest_j) @ R_tbs_j(t)`` (wrist frame = I);
-- position: ``x_j(t) = x_p(t) + M_p(t) @ (M_rest_p^T offset_j)``, so identity rotations give the rest pose;
+- global TBS frame: ``M_j(t) = M_p(t) @ (C_p^T C_j) @ R_tbs_j(t)``, so identity rotations give the
+  canonical (flat, straight) pose and ``HandModel.rest_tbs`` gives the rig's rest pose;
+- position: ``x_j(t) = x_p(t) + M_p(t) @ (M_rest_p^T offset_j)`` (a bone is rigid in its parent's frame);
 - rig-local rotation (what a glTF/FBX/BVH rig stores, relative to rest, in the parent's rest rig frame):
-  ``Q_j = K_j R_tbs_j K_j^T`` with ``K_j = B_p^T M_rest_j`` the TBS frame seen from the parent's rig
-  frame ``B_p``; the node's full local rotation is then ``Q_j @ (B_p^T B_j)``.
+  ``Q_j = K_j (R_rest_j^T R_tbs_j) K_j^T`` with ``R_rest_j`` the rest pose's TBS rotation and
+  ``K_j = B_p^T M_rest_j`` the rest TBS frame seen from the parent's rig frame ``B_p``; the node's full
+  local rotation is then ``Q_j @ (B_p^T B_j)``.
 """
 
 from __future__ import annotations
@@ -44,10 +47,11 @@ def _as_tensor(x: np.ndarray | torch.Tensor, dtype: torch.dtype) -> torch.Tensor
 
 
 def _chain_rest(hand: HandModel) -> tuple[np.ndarray, np.ndarray]:
-    """Per finger and level: TBS rest rotation relative to the parent's TBS frame (5, 3, 3, 3)
-    and each joint's offset in its parent's TBS rest frame (5, 4, 3); the wrist frame is I."""
-    parent_frames = np.concatenate([np.eye(3)[None], hand.rest_frames])[topo.ARTICULATED_PARENT_ROTATING]
-    local_rot = parent_frames.transpose(0, 2, 1) @ hand.rest_frames
+    """Per finger and level: the canonical TBS frame relative to the parent's (5, 3, 3, 3) and each
+    joint's offset in its parent's TBS rest frame (5, 4, 3); the wrist frame is I."""
+    canonical = hand.canonical_frames
+    parent_frames = np.concatenate([np.eye(3)[None], canonical])[topo.ARTICULATED_PARENT_ROTATING]
+    local_rot = parent_frames.transpose(0, 2, 1) @ canonical
     offsets = hand.offsets[1:].reshape(5, 4, 3)
     finger_frames = hand.rest_frames.reshape(5, 3, 3, 3)
     local_off = offsets.copy()
@@ -98,21 +102,28 @@ def _tbs_in_parent_rig_frame(hand: HandModel, dtype: torch.dtype) -> torch.Tenso
 
 
 def tbs_to_rig_local(hand: HandModel, q_tbs: torch.Tensor | np.ndarray) -> torch.Tensor:
-    """TBS rotations (T, 15, 4) -> the rig's local rotations relative to rest (``Q = K R_tbs K^T``)."""
+    """TBS rotations (T, 15, 4) -> the rig's local rotations relative to rest (``Q = K R_rest^T R_tbs K^T``)."""
     q = _as_tensor(q_tbs, torch.float32)
     k = _tbs_in_parent_rig_frame(hand, q.dtype)
-    return canonical_quat(quat_multiply(quat_multiply(k, q), quat_conjugate(k)))
+    from_rest = quat_multiply(quat_conjugate(torch.as_tensor(hand.rest_tbs, dtype=q.dtype)), q)
+    return canonical_quat(quat_multiply(quat_multiply(k, from_rest), quat_conjugate(k)))
 
 
 def rig_local_to_tbs(hand: HandModel, q_local: torch.Tensor | np.ndarray) -> torch.Tensor:
-    """The rig's local rotations relative to rest (T, 15, 4) -> TBS rotations (``R_tbs = K^T Q K``)."""
+    """The rig's local rotations relative to rest (T, 15, 4) -> TBS rotations (``R_tbs = R_rest K^T Q K``)."""
     q = _as_tensor(q_local, torch.float32)
     k = _tbs_in_parent_rig_frame(hand, q.dtype)
-    return canonical_quat(quat_multiply(quat_multiply(quat_conjugate(k), q), k))
+    from_rest = quat_multiply(quat_multiply(quat_conjugate(k), q), k)
+    return canonical_quat(quat_multiply(torch.as_tensor(hand.rest_tbs, dtype=q.dtype), from_rest))
+
+
+def rest_motion(hand: HandModel, n_frames: int, dtype: torch.dtype = torch.float32) -> torch.Tensor:
+    """(T, 15, 4) the rig's rest pose held for ``n_frames``."""
+    return torch.as_tensor(hand.rest_tbs, dtype=dtype).expand(n_frames, -1, -1).clone()
 
 
 def identity_motion(n_frames: int, dtype: torch.dtype = torch.float32) -> torch.Tensor:
-    """(T, 15, 4) identity rotations: the rest pose."""
+    """(T, 15, 4) identity rotations: the canonical (flat, straight) pose."""
     q = torch.zeros(n_frames, topo.N_ARTICULATED, 4, dtype=dtype)
     q[..., 0] = 1.0
     return q

@@ -12,9 +12,11 @@ from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from s2h_viewer.errors import InvalidHandError
 from s2h_viewer.hand import topology as topo
+from s2h_viewer.hand.canonical import canonical_turns
 
 
 def palm_axes(positions: np.ndarray) -> np.ndarray:
@@ -40,6 +42,11 @@ class SkinnedMesh:
 @dataclass(eq=False)
 class HandModel:
     """A right hand: rest offsets, ground-truth/annotated TBS frames, the rig's own joint frames.
+
+    TBS rotations are measured from the hand's anatomical canonical pose (``canonical_frames``), not
+    from the rest pose the rig was bound in; the rest pose is one pose among others (``rest_tbs``).
+    ``offsets`` are fixed once the hand is built (derived geometry is cached); ``rest_frames`` may be
+    re-annotated.
 
     ``rig_frames`` are the rig's rest global orientations (wrist + 15 articulated joints). They are
     what makes rig-local rotations (Copy) differ from TBS rotations (TBS Copy) between rigs whose
@@ -104,6 +111,32 @@ class HandModel:
         for j in range(1, topo.N_JOINTS):
             pos[j] = pos[topo.PARENTS[j]] + self.offsets[j]
         return pos
+
+    @cached_property
+    def canonical_turns(self) -> np.ndarray:
+        """(15, 3, 3) global rotations taking each rest bone to the canonical pose (see `canonical`)."""
+        return canonical_turns(self.offsets)
+
+    @property
+    def canonical_frames(self) -> np.ndarray:
+        """(15, 3, 3) global TBS frames in the canonical pose: the frames identity ``Q_tbs`` gives."""
+        return self.canonical_turns @ self.rest_frames
+
+    @property
+    def rest_tbs(self) -> np.ndarray:
+        """(15, 4) the rig's rest pose as TBS quaternions (w, x, y, z) measured from the canonical pose."""
+        canonical = np.concatenate([np.eye(3)[None], self.canonical_frames])
+        rest = np.concatenate([np.eye(3)[None], self.rest_frames])
+        parent = topo.ARTICULATED_PARENT_ROTATING
+        local_canonical = canonical[parent].transpose(0, 2, 1) @ canonical[1:]
+        local_rest = rest[parent].transpose(0, 2, 1) @ rest[1:]
+        q = Rotation.from_matrix(local_canonical.transpose(0, 2, 1) @ local_rest).as_quat(scalar_first=True)
+        return np.where(q[:, :1] < 0, -q, q)
+
+    @cached_property
+    def palm_length(self) -> float:
+        """Wrist to middle knuckle: the official unit of ASM magnitudes (fixed under any finger pose)."""
+        return float(np.linalg.norm(self.rest_positions[topo.joint_index("middle_mcp")]))
 
     @cached_property
     def hand_length(self) -> float:

@@ -4,8 +4,9 @@ Hand space is canonical: x toward the fingers, y toward the thumb, z out of the 
 metres. Each finger is a chain of bones whose frames *are* the TBS frames (x along the bone,
 y across it, z toward its back), so ground truth is exact. What varies between hands: length,
 palm width and length, finger lengths and phalanx ratios, knuckle arc and spread, thumb base,
-abduction and pronation, thickness, rest curl, and the rig's own bone-axis convention (so that
-rig-local rotations, i.e. Copy, differ between hands as they do between real rigs).
+abduction and pronation, thickness, the rest pose the rig is bound in (flat to strongly curled and
+fanned, as game and XR hands are), mesh density (low-poly avatars too), and the rig's own bone-axis
+convention (so that rig-local rotations, i.e. Copy, differ between hands as they do between real rigs).
 """
 
 from __future__ import annotations
@@ -54,29 +55,36 @@ class HandParams:
     thumb_drop: float
     thumb_pronation: float
     thickness: float  # scales every radius
+    mesh_detail: float  # marching-cubes grid steps per hand length (82: ~25k faces; ~30: low-poly)
     rig_convention: str
     rig_roll: float  # base roll of rig frames about the bone axis
     rig_roll_jitter: float  # per-joint extra roll, uniform in +-this
 
 
-#: sampling ranges (low, high) per style. "realistic": adult human hands. "stylised": the wider
-#: proportions of game and cartoon avatars: short or long, thick fingers, big thumbs, curled rests.
+#: sampling ranges (low, high) per style. "realistic": adult human hands, bound flat to mildly
+#: curled. "stylised": the wider proportions of game and cartoon avatars: short thick or long slender
+#: (anime) fingers, big thumbs, wide palms, rests from flat to strongly curled and fanned, low-poly
+#: meshes now and then (``LOW_POLY_SHARE``).
 STYLES: dict[str, dict[str, tuple[float, float]]] = {
     "realistic": dict(
         hand_length=(0.150, 0.215), middle_ratio=(0.43, 0.47), index_scale=(0.86, 0.95), ring_scale=(0.90, 0.98),
         pinky_scale=(0.70, 0.81), phalanx_jitter=(-0.03, 0.03), knuckle_spacing=(0.100, 0.125),
         index_arc=(0.94, 0.99), ring_arc=(0.94, 0.99), pinky_arc=(0.84, 0.91), index_fan=(3, 8),
-        ring_fan=(-6, -2), pinky_fan=(-13, -7), rest_curl=(5, 15), thumb_x=(0.12, 0.22), thumb_y=(0.10, 0.13),
+        ring_fan=(-6, -2), pinky_fan=(-13, -7), rest_curl=(0, 20), thumb_x=(0.12, 0.22), thumb_y=(0.10, 0.13),
         thumb_z=(-0.06, -0.035), thumb_scale=(0.95, 1.05), thumb_abduction=(35, 50), thumb_drop=(25, 40),
         thumb_pronation=(60, 80), thickness=(0.88, 1.15)),
     "stylised": dict(
-        hand_length=(0.140, 0.240), middle_ratio=(0.37, 0.50), index_scale=(0.80, 1.0), ring_scale=(0.85, 1.0),
-        pinky_scale=(0.62, 0.88), phalanx_jitter=(-0.06, 0.06), knuckle_spacing=(0.12, 0.17),
-        index_arc=(0.90, 1.0), ring_arc=(0.90, 1.0), pinky_arc=(0.78, 0.95), index_fan=(0, 12),
-        ring_fan=(-8, 0), pinky_fan=(-18, -4), rest_curl=(0, 25), thumb_x=(0.08, 0.30), thumb_y=(0.09, 0.15),
-        thumb_z=(-0.08, -0.02), thumb_scale=(0.80, 1.25), thumb_abduction=(25, 60), thumb_drop=(15, 45),
-        thumb_pronation=(60, 85), thickness=(1.0, 1.6)),
+        hand_length=(0.130, 0.250), middle_ratio=(0.34, 0.54), index_scale=(0.80, 1.0), ring_scale=(0.85, 1.0),
+        pinky_scale=(0.62, 0.88), phalanx_jitter=(-0.06, 0.06), knuckle_spacing=(0.12, 0.19),
+        index_arc=(0.90, 1.0), ring_arc=(0.90, 1.0), pinky_arc=(0.78, 0.95), index_fan=(0, 18),
+        ring_fan=(-12, 0), pinky_fan=(-26, -4), rest_curl=(0, 45), thumb_x=(0.08, 0.30), thumb_y=(0.09, 0.15),
+        thumb_z=(-0.08, -0.02), thumb_scale=(0.80, 1.35), thumb_abduction=(25, 60), thumb_drop=(15, 45),
+        thumb_pronation=(60, 85), thickness=(0.9, 1.8)),
 }
+#: share of stylised hands with a low-poly mesh, and their grid steps per hand length
+LOW_POLY_SHARE = 0.35
+LOW_POLY_DETAIL = (28.0, 40.0)
+FULL_DETAIL = 82.0
 #: finger diameter at the knuckle may fill at most this share of the knuckle spacing (fingers never fuse).
 MAX_FINGER_FILL = 0.85
 
@@ -117,6 +125,8 @@ def sample_params(seed: int, rig_convention: str | None = None, style: str = "re
         thumb_drop=float(u("thumb_drop")),
         thumb_pronation=float(u("thumb_pronation")),
         thickness=float(min(u("thickness"), MAX_FINGER_FILL * spacing * hand_length / widest)),
+        mesh_detail=float(rng.uniform(*LOW_POLY_DETAIL)) if style == "stylised" and rng.random() < LOW_POLY_SHARE
+        else FULL_DETAIL,
         rig_convention=rig_convention or str(rng.choice(sorted(RIG_CONVENTIONS))),
         rig_roll=float(rng.uniform(-180, 180)),
         rig_roll_jitter=float(rng.uniform(0, 25)),
@@ -191,6 +201,6 @@ def generate_hand(seed: int, name: str | None = None, rig_convention: str | None
         meta={"params": asdict(params)},
     )
     if with_mesh:
-        hand.mesh = build_hand_mesh(hand)
+        hand.mesh = build_hand_mesh(hand, params.mesh_detail)
         hand.validate()
     return hand

@@ -3,9 +3,9 @@
 roma does the work (it uses (x, y, z, w)); these wrappers fix the project's scalar-first
 convention and ``w >= 0`` on output in one place.
 
-TBS Euler angles: intrinsic twist (x), then splay (z), then bend (y), i.e.
-``R = Rx(twist) @ Rz(splay) @ Ry(bend)``; a positive bend about the bend axis (y) flexes the
-finger toward its pad side (-z). Chosen so a pure bend or a pure splay decomposes exactly.
+TBS Euler angles, the official code's order (DESIGN.md section 2): intrinsic twist (x), then bend (y),
+then splay (z), i.e. ``R = Rx(twist) @ Ry(bend) @ Rz(splay)``, angles ordered (twist, bend, splay); a
+positive bend about the bend axis (y) flexes the finger toward its pad side (-z).
 """
 
 from __future__ import annotations
@@ -56,31 +56,33 @@ def random_quats(shape: tuple[int, ...], generator: torch.Generator | None = Non
     return canonical_quat(torch.randn(*shape, 4, generator=generator, dtype=dtype))
 
 
-def tbs_euler_to_matrix(twist: torch.Tensor, splay: torch.Tensor, bend: torch.Tensor) -> torch.Tensor:
-    """Rotation ``Rx(twist) @ Rz(splay) @ Ry(bend)`` (radians) as (..., 3, 3)."""
-    x = torch.stack([twist, torch.zeros_like(twist), torch.zeros_like(twist)], -1)
-    z = torch.stack([torch.zeros_like(splay), torch.zeros_like(splay), splay], -1)
-    y = torch.stack([torch.zeros_like(bend), bend, torch.zeros_like(bend)], -1)
-    return roma.rotvec_to_rotmat(x) @ roma.rotvec_to_rotmat(z) @ roma.rotvec_to_rotmat(y)
+def tbs_euler_to_matrix(twist: torch.Tensor, bend: torch.Tensor, splay: torch.Tensor) -> torch.Tensor:
+    """Rotation ``Rx(twist) @ Ry(bend) @ Rz(splay)`` (radians) as (..., 3, 3)."""
+    zero = torch.zeros_like(twist)
+    x = torch.stack([twist, zero, zero], -1)
+    y = torch.stack([zero, bend, zero], -1)
+    z = torch.stack([zero, zero, splay], -1)
+    return roma.rotvec_to_rotmat(x) @ roma.rotvec_to_rotmat(y) @ roma.rotvec_to_rotmat(z)
 
 
 def matrix_to_tbs_euler(r: torch.Tensor) -> torch.Tensor:
-    """(..., 3, 3) -> (..., 3) angles (twist, splay, bend) in radians; differentiable.
+    """(..., 3, 3) -> (..., 3) angles (twist, bend, splay) in radians; differentiable.
 
-    From ``R = Rx(a) Rz(b) Ry(c)``: ``R01 = -sin b``, ``(R21, R11) ~ (sin a, cos a)``,
-    ``(R02, R00) ~ (sin c, cos c)``. ``atan2`` keeps gradients finite away from splay = 90 deg.
+    From ``R = Rx(a) Ry(b) Rz(c)``: ``R02 = sin b``, ``(-R12, R22) ~ (sin a, cos a)``,
+    ``(-R01, R00) ~ (sin c, cos c)``. Bend comes from ``atan2`` over the full column norm, not the
+    official code's clamped ``asin`` (which saturates at 39.5 deg), so it reaches +-90 deg.
     """
-    splay = torch.atan2(-r[..., 0, 1], torch.sqrt(r[..., 0, 0] ** 2 + r[..., 0, 2] ** 2 + 1e-12))
-    twist = torch.atan2(r[..., 2, 1], r[..., 1, 1])
-    bend = torch.atan2(r[..., 0, 2], r[..., 0, 0])
-    return torch.stack([twist, splay, bend], -1)
+    bend = torch.atan2(r[..., 0, 2], torch.sqrt(r[..., 0, 0] ** 2 + r[..., 0, 1] ** 2 + 1e-12))
+    twist = torch.atan2(-r[..., 1, 2], r[..., 2, 2])
+    splay = torch.atan2(-r[..., 0, 1], r[..., 0, 0])
+    return torch.stack([twist, bend, splay], -1)
 
 
 def tbs_euler_to_quat(angles: torch.Tensor) -> torch.Tensor:
-    """(..., 3) angles (twist, splay, bend) in radians -> (..., 4) quaternions (w, x, y, z)."""
+    """(..., 3) angles (twist, bend, splay) in radians -> (..., 4) quaternions (w, x, y, z)."""
     return matrix_to_quat(tbs_euler_to_matrix(angles[..., 0], angles[..., 1], angles[..., 2]))
 
 
 def quat_to_tbs_euler(q: torch.Tensor) -> torch.Tensor:
-    """(..., 4) quaternions (w, x, y, z) -> (..., 3) angles (twist, splay, bend) in radians."""
+    """(..., 4) quaternions (w, x, y, z) -> (..., 3) angles (twist, bend, splay) in radians."""
     return matrix_to_tbs_euler(quat_to_matrix(q))

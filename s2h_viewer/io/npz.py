@@ -1,8 +1,10 @@
 """The project's own npz formats for hands and motions (schema-versioned, atomic writes).
 
-Motion npz (schema 1): ``q_tbs`` float32 (T, 15, 4) quaternions (w, x, y, z) in TBS space,
+Motion npz (schema 2): ``q_tbs`` float32 (T, 15, 4) quaternions (w, x, y, z) in TBS space measured
+from the hand's canonical pose (schema 1 measured them from the rig's rest pose: refused, see
+``MOTION_SCHEMA_VERSION``),
 ``fps`` float, ``name`` str, ``hand_name`` str (the hand it is posed on), ``labels`` str (T,)
-(gesture held at each frame, "" between gestures), ``meta_json`` (provenance: gesture script, seed), ``schema`` = "s2h-motion", ``schema_version`` = 1.
+(gesture held at each frame, "" between gestures), ``meta_json`` (provenance: gesture script, seed), ``schema`` = "s2h-motion", ``schema_version`` = 2.
 
 Hand npz (schema 1): ``name``, ``offsets`` (21, 3), ``rest_frames`` (15, 3, 3), ``rig_frames``
 (16, 3, 3), ``radii`` (21,), optional ``mesh_vertices`` (V, 3), ``mesh_faces`` (F, 3),
@@ -22,7 +24,10 @@ from s2h_viewer.hand.model import HandModel, SkinnedMesh
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.io.atomic import atomic_path
 
-SCHEMA_VERSION = 1
+HAND_SCHEMA_VERSION = 1
+#: 2: TBS rotations measured from the canonical pose (DESIGN.md section 2); 1 (rest pose) is refused
+MOTION_SCHEMA_VERSION = 2
+_SCHEMA_VERSIONS = {"s2h-hand": HAND_SCHEMA_VERSION, "s2h-motion": MOTION_SCHEMA_VERSION}
 
 
 def _open(path: Path, schema: str) -> dict[str, np.ndarray]:
@@ -37,9 +42,14 @@ def _open(path: Path, schema: str) -> dict[str, np.ndarray]:
     if found != schema:
         raise InputFileError(path, f"not an {schema} file (schema {found or 'missing'})")
     version = int(arrays.get("schema_version", 0))
-    if version > SCHEMA_VERSION:
+    current = _SCHEMA_VERSIONS[schema]
+    if version > current:
         raise InputFileError(path, f"{schema} schema version {version} is newer than this program reads "
-                                   f"({SCHEMA_VERSION})")
+                                   f"({current})")
+    if schema == "s2h-motion" and version < current:
+        raise InputFileError(path, f"motion saved with schema {version}, whose TBS rotations were measured "
+                                   f"from the rig's rest pose, not the canonical pose; re-export it from its "
+                                   f"source file (BVH, glTF, FBX) or regenerate it (`make assets`)")
     return arrays
 
 
@@ -53,7 +63,7 @@ def save_motion(motion: Motion, path: str | Path) -> Path:
     """Write a motion npz atomically."""
     path = Path(path)
     with atomic_path(path) as tmp, open(tmp, "wb") as fh:
-        np.savez_compressed(fh, schema="s2h-motion", schema_version=SCHEMA_VERSION, q_tbs=motion.q_tbs,
+        np.savez_compressed(fh, schema="s2h-motion", schema_version=MOTION_SCHEMA_VERSION, q_tbs=motion.q_tbs,
                             fps=np.float64(motion.fps), name=motion.name, hand_name=motion.hand_name,
                             labels=motion.labels.astype(str), meta_json=json.dumps(motion.meta))
     return path
@@ -76,7 +86,7 @@ def load_motion(path: str | Path) -> Motion:
 def save_hand(hand: HandModel, path: str | Path) -> Path:
     """Write a hand npz atomically (mesh included when present)."""
     path = Path(path)
-    fields = dict(schema="s2h-hand", schema_version=SCHEMA_VERSION, name=hand.name, offsets=hand.offsets,
+    fields = dict(schema="s2h-hand", schema_version=HAND_SCHEMA_VERSION, name=hand.name, offsets=hand.offsets,
                   rest_frames=hand.rest_frames, rig_frames=hand.rig_frames, radii=hand.radii, source=hand.source,
                   meta_json=json.dumps(hand.meta))
     if hand.mesh is not None:

@@ -15,17 +15,22 @@ from s2h_viewer.hand.kinematics import forward_kinematics
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.rotations import tbs_euler_to_quat
 from s2h_viewer.motions.gestures import Gesture
-from s2h_viewer.semantics.anatomy import BEND_LIMIT, KNUCKLE_SPLAY_LIMIT
+from s2h_viewer.semantics.anatomy import BEND_HIGH, BEND_LOW, SPLAY_LIMIT
 from s2h_viewer.semantics.contacts import CONTACT_PAIRS, CONTACT_TOLERANCE, contact_gaps, pair_index
 
 
+#: authored poses stay this far inside the 90 deg bend limit, where the XYZ Euler angles lock
+SYNTHESIS_BEND_MARGIN = np.radians(1.0)
+
+
 def clamp_to_limits(angles: torch.Tensor) -> torch.Tensor:
-    """(..., 15, 3) radians with twist and non-knuckle splay zeroed, knuckle splay and bend clamped."""
-    knuckle = torch.as_tensor(topo.ARTICULATED_IS_KNUCKLE)
-    splay = torch.where(knuckle, angles[..., 1].clamp(-KNUCKLE_SPLAY_LIMIT, KNUCKLE_SPLAY_LIMIT),
-                        torch.zeros_like(angles[..., 1]))
-    bend = angles[..., 2].clamp(0.0, BEND_LIMIT)
-    return torch.stack([torch.zeros_like(bend), splay, bend], -1)
+    """(..., 15, 3) radians (twist, bend, splay) with twist zeroed and bend and splay clamped into the
+    anatomical limits (non-knuckle splay to 0)."""
+    dtype = angles.dtype
+    bend = angles[..., 1].clamp(BEND_LOW.to(dtype), BEND_HIGH.to(dtype) - SYNTHESIS_BEND_MARGIN)
+    limit = SPLAY_LIMIT.to(dtype)
+    splay = torch.maximum(torch.minimum(angles[..., 2], limit), -limit)
+    return torch.stack([torch.zeros_like(bend), bend, splay], -1)
 
 
 THUMB_STARTS_DEG = (0.0, 15.0, -10.0)  # offsets of the thumb's bends: one batched multi-start
@@ -42,12 +47,12 @@ def fit_gesture_angles(hand: HandModel, gestures: list[Gesture], steps: int = 30
     n = len(gestures)
     starts = authored.repeat(len(THUMB_STARTS_DEG), 1, 1)
     for i, offset in enumerate(THUMB_STARTS_DEG):
-        starts[i * n:(i + 1) * n, 0:3, 2] += np.radians(offset)
+        starts[i * n:(i + 1) * n, 0:3, 1] += np.radians(offset)
     base = clamp_to_limits(starts)
     want = torch.as_tensor(np.stack([g.contact_vector() for g in gestures])).repeat(len(THUMB_STARTS_DEG), 1)
     free = torch.zeros_like(base)
-    free[..., 2] = 1.0
-    free[..., 1] = torch.as_tensor(topo.ARTICULATED_IS_KNUCKLE, dtype=base.dtype)
+    free[..., 1] = 1.0
+    free[..., 2] = torch.as_tensor(topo.ARTICULATED_IS_KNUCKLE, dtype=base.dtype)
     delta = torch.zeros_like(base, requires_grad=True)
     optimiser = torch.optim.Adam([delta], lr=lr)
     tol = CONTACT_TOLERANCE

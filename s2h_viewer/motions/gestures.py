@@ -1,8 +1,11 @@
 """The gesture library: key poses in TBS angles, each labelled with the contacts that define it.
 
-Angles are degrees per articulated joint (twist, splay, bend); twist stays 0, splay is used only at
-knuckles (within +-10 deg), bend within [0, 90] (DESIGN.md section 5 limits), so every pose has
-zero anatomical violation. The angles are authored for an average hand; `fit_gesture_angles`
+Angles are degrees per articulated joint (twist, bend, splay) measured from the canonical pose (flat
+hand, straight fingers, thumb in the palm plane), so a fist is the same angles on every hand. Twist
+stays 0, splay is used only at knuckles, bends stay inside the anatomical limits (DESIGN.md section
+5), so every pose has zero anatomical violation. The thumb's authored CMC angles are offsets from
+where a relaxed thumb sits (``THUMB_CMC_REST``: below the palm plane and across it), not from the
+flattened canonical thumb. The angles are authored for an average hand; `fit_gesture_angles`
 adjusts them to a particular hand until the labelled contacts hold (and others stay apart).
 """
 
@@ -24,6 +27,9 @@ T_OUT = (0, 0, 0)
 T_SIDE = (12, 8, 5)  # alongside the index
 T_OVER = (40, 35, 40)  # over curled fingers
 T_ACROSS = (55, 40, 20)  # folded across the palm
+#: (bend, splay) of a relaxed thumb's CMC from the canonical (flattened) thumb, degrees: the mean rest
+#: pose of the procedural family, added to every authored thumb CMC.
+THUMB_CMC_REST = (8.0, 30.0)
 
 
 @dataclass(frozen=True)
@@ -32,7 +38,7 @@ class Gesture:
 
     name: str
     category: str  # "gesture", "count" or "letter"
-    angles_deg: np.ndarray  # (15, 3) twist, splay, bend per articulated joint
+    angles_deg: np.ndarray  # (15, 3) twist, bend, splay per articulated joint
     contacts: frozenset[tuple[str, str]]
     description: str
 
@@ -47,8 +53,9 @@ class Gesture:
 def _pose(thumb=T_OUT, index=EXT, middle=EXT, ring=EXT, pinky=EXT, splay=(0, 0, 0, 0, 0)) -> np.ndarray:
     angles = np.zeros((topo.N_ARTICULATED, 3))
     for f, bends in enumerate((thumb, index, middle, ring, pinky)):
-        angles[3 * f:3 * f + 3, 2] = bends
-        angles[3 * f, 1] = splay[f]
+        angles[3 * f:3 * f + 3, 1] = bends
+        angles[3 * f, 2] = splay[f]
+    angles[0, 1:] += THUMB_CMC_REST
     return angles
 
 

@@ -1,7 +1,12 @@
 """The anatomical loss L_ana and the violation rate built on the same limits (DESIGN.md section 5).
 
-Limits per articulated joint, angles from ``matrix_to_tbs_euler``: twist 0; splay 0 except knuckles
-(|splay| <= 10 deg); bend within [0, 90 deg] (no hyperextension, no more than a right angle).
+Angles are measured from the canonical pose (``matrix_to_tbs_euler``: twist, bend, splay), with the
+official code's limits (model/tbs/tbs_net.py ``anatomical_loss``, euler branch):
+
+- twist: 0 on every joint;
+- splay: 0 on PIP/DIP and the thumb MCP/IP; within +-30 deg on the four MCPs, +-60 deg on the thumb CMC;
+- bend: >= -10 deg on the four MCPs (hyperextension), >= -60 deg on the thumb CMC, >= 0 elsewhere;
+  <= 90 deg on all (the official asin clamp disabled this term; ours reaches it).
 """
 
 from __future__ import annotations
@@ -14,17 +19,32 @@ import torch
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.rotations import quat_to_tbs_euler
 
-KNUCKLE_SPLAY_LIMIT = math.pi / 18
-BEND_LIMIT = math.pi / 2
+_THUMB_CMC = 0
+_FINGER_MCPS = [3, 6, 9, 12]
+
+
+def _limits() -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """(15,) splay half-range, (15,) lowest bend, (15,) highest bend, radians."""
+    splay = torch.zeros(topo.N_ARTICULATED, dtype=torch.float64)
+    splay[_FINGER_MCPS] = math.radians(30)
+    splay[_THUMB_CMC] = math.radians(60)
+    bend_low = torch.zeros(topo.N_ARTICULATED, dtype=torch.float64)
+    bend_low[_FINGER_MCPS] = -math.radians(10)
+    bend_low[_THUMB_CMC] = -math.radians(60)
+    bend_high = torch.full((topo.N_ARTICULATED,), math.pi / 2, dtype=torch.float64)
+    return splay, bend_low, bend_high
+
+
+SPLAY_LIMIT, BEND_LOW, BEND_HIGH = _limits()
 
 
 def anatomical_excess(q_tbs: torch.Tensor) -> torch.Tensor:
-    """(T, 15, 3) how far (radians, >= 0) each joint's twist, splay and bend lie outside their limits."""
-    twist, splay, bend = quat_to_tbs_euler(q_tbs).unbind(-1)
-    knuckle = torch.as_tensor(topo.ARTICULATED_IS_KNUCKLE)
-    splay_excess = torch.where(knuckle, torch.relu(splay.abs() - KNUCKLE_SPLAY_LIMIT), splay.abs())
-    bend_excess = torch.relu(bend - BEND_LIMIT) + torch.relu(-bend)
-    return torch.stack([twist.abs(), splay_excess, bend_excess], -1)
+    """(..., 15, 3) how far (radians, >= 0) each joint's twist, bend and splay lie outside their limits."""
+    twist, bend, splay = quat_to_tbs_euler(q_tbs).unbind(-1)
+    dtype = twist.dtype
+    splay_excess = torch.relu(splay.abs() - SPLAY_LIMIT.to(dtype))
+    bend_excess = torch.relu(bend - BEND_HIGH.to(dtype)) + torch.relu(BEND_LOW.to(dtype) - bend)
+    return torch.stack([twist.abs(), bend_excess, splay_excess], -1)
 
 
 def anatomical_loss(q_tbs: torch.Tensor) -> torch.Tensor:

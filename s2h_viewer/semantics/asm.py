@@ -1,7 +1,9 @@
 """The Anatomy-based Semantic Matrix and the distance matrix of the DM baseline (DESIGN.md section 4).
 
-Palm anchor rule (fixed here): 3 evenly spaced interior points (1/4, 1/2, 3/4) on each of the
-segments wrist -> index MCP, wrist -> middle MCP, wrist -> pinky MCP, in that order (9 anchors).
+Palm anchors, the official code's (utils/armatures.py ``palm_anchors``), in its column order: the
+points 1/3 of the way from the wrist to the middle, ring, pinky and index knuckles, then 2/3 of the
+way to the same four, then halfway to the thumb CMC (9 anchors). Like the official ASM, both
+matrices are in units of the wrist -> middle-knuckle distance, so magnitudes compare across hands.
 """
 
 from __future__ import annotations
@@ -11,19 +13,28 @@ import torch
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.kinematics import HandPose
 
-ANCHOR_FRACTIONS = (0.25, 0.5, 0.75)
-ANCHOR_KNUCKLES = tuple(topo.joint_index(n) for n in ("index_mcp", "middle_mcp", "pinky_mcp"))
+#: (knuckle joint, fraction of the way from the wrist) of each palm anchor, in column order
+ANCHORS: tuple[tuple[int, float], ...] = tuple(
+    (topo.joint_index(f"{finger}_mcp"), fraction) for fraction in (1 / 3, 2 / 3)
+    for finger in ("middle", "ring", "pinky", "index")) + ((topo.joint_index("thumb_cmc"), 0.5),)
+_ANCHOR_JOINTS = [j for j, _ in ANCHORS]
+_ANCHOR_FRACTIONS = [f for _, f in ANCHORS]
+_MIDDLE_MCP = topo.joint_index("middle_mcp")
 #: (20, 29) True at the cells m == k (a joint seen from itself): zero by definition, masked everywhere.
 SELF_CELLS = torch.cat([torch.eye(topo.N_FINGER_JOINTS, dtype=torch.bool),
                         torch.zeros(topo.N_FINGER_JOINTS, topo.N_ANCHORS, dtype=torch.bool)], 1)
 
 
 def palm_anchors(positions: torch.Tensor) -> torch.Tensor:
-    """(T, 21, 3) joint positions -> (T, 9, 3) palm anchors (the wrist is the origin)."""
-    knuckles = positions[:, list(ANCHOR_KNUCKLES)]  # (T, 3, 3)
+    """(T, 21, 3) joint positions -> (T, 9, 3) palm anchors."""
     wrist = positions[:, :1]
-    fractions = positions.new_tensor(ANCHOR_FRACTIONS)[None, None, :, None]
-    return (wrist[:, :, None] + fractions * (knuckles - wrist)[:, :, None]).reshape(-1, topo.N_ANCHORS, 3)
+    fractions = positions.new_tensor(_ANCHOR_FRACTIONS)[None, :, None]
+    return wrist + fractions * (positions[:, _ANCHOR_JOINTS] - wrist)
+
+
+def palm_unit(pose: HandPose) -> torch.Tensor:
+    """(T, 1) the wrist -> middle-knuckle distance per frame: the ASM's unit of length."""
+    return (pose.positions[:, _MIDDLE_MCP] - pose.positions[:, 0]).norm(dim=-1, keepdim=True)
 
 
 def asm_columns(pose: HandPose) -> torch.Tensor:
@@ -32,9 +43,10 @@ def asm_columns(pose: HandPose) -> torch.Tensor:
 
 
 def semantic_matrix(pose: HandPose) -> torch.Tensor:
-    """ASM ``D[t, k, m] = M_k^T (x_m - x_k)``: (T, 20, 29, 3), each column point seen from joint k's frame.
+    """ASM ``D[t, k, m] = M_k^T (x_m - x_k) / |x_middle_mcp - x_wrist|``: (T, 20, 29, 3), each column
+    point seen from joint k's frame, in units of the palm length.
 
-    Invariant to moving or rotating the whole hand; ``D[:, k, k]`` is zero (callers mask it).
+    Invariant to moving, rotating or scaling the whole hand; ``D[:, k, k]`` is zero (callers mask it).
     Computed in homogeneous form, ``[x_m, 1] @ [[M_k], [-x_k^T M_k]]``, as one (29 x 4) @ (4 x 60)
     product per frame: BLAS does that far faster than 580 tiny 3 x 3 products, and the output is
     written once. Rounding leaves about 1e-8 on the diagonal in float32, so it is set to exact zero.
@@ -47,10 +59,11 @@ def semantic_matrix(pose: HandPose) -> torch.Tensor:
     columns = torch.cat([asm_columns(pose), x.new_ones(n_frames, topo.N_ASM_COLUMNS, 1)], -1)
     seen = torch.bmm(columns, torch.cat([rotate, shift], 1))
     d = seen.reshape(n_frames, topo.N_ASM_COLUMNS, topo.N_FINGER_JOINTS, 3).transpose(1, 2)
+    d = d / palm_unit(pose)[:, :, None, None]
     return d.masked_fill(SELF_CELLS[None, :, :, None], 0.0)
 
 
-def distance_matrix(pose: HandPose, hand_length: float) -> torch.Tensor:
-    """The DM baseline's feature (Zhang et al. 2023): (T, 20, 29) distances ``|x_m - x_k|`` / hand length."""
+def distance_matrix(pose: HandPose) -> torch.Tensor:
+    """The DM baseline's feature (Zhang et al. 2023): (T, 20, 29) distances ``|x_m - x_k|`` in palm lengths."""
     x = pose.finger_positions
-    return (asm_columns(pose)[:, None, :, :] - x[:, :, None, :]).norm(dim=-1) / hand_length
+    return (asm_columns(pose)[:, None, :, :] - x[:, :, None, :]).norm(dim=-1) / palm_unit(pose)[:, :, None]

@@ -2,7 +2,9 @@
 
 Sites: the five fingertip pads (a point 60% along the last phalanx, with the interpolated finger
 radius) and the palm (the rectangle spanned by the wrist and the four finger knuckles in the
-canonical palm frame, thickened by the palm half-thickness). A pair is in contact when the gap
+canonical palm frame, thickened by the palm half-thickness). A finger meets the palm with the
+nearer of its pad and its tip: in a fist the last phalanx stands on the palm tip first, with every
+bend inside the anatomical 90 deg. A pair is in contact when the gap
 between the surfaces is below ``CONTACT_TOLERANCE`` x hand length (1.5%, DESIGN.md section 5).
 Everything is torch and differentiable, so gesture fitting can pull pads together.
 """
@@ -59,10 +61,15 @@ def contact_gaps(hand: HandModel, pose: HandPose) -> torch.Tensor:
     tip_gap = (pads[:, list(ia)] - pads[:, list(ib)]).norm(dim=-1) - pad_r[list(ia)] - pad_r[list(ib)]
 
     frame, lower, upper = (torch.as_tensor(a, dtype=dtype) for a in _palm_box(hand))
-    local = pads @ frame
-    nearest = torch.maximum(torch.minimum(local, upper), lower)
-    palm_gap = (local - nearest).norm(dim=-1) - pad_r - radii[0]
-    return torch.cat([tip_gap, palm_gap], -1)
+
+    def palm_gap(points: torch.Tensor, point_r: torch.Tensor) -> torch.Tensor:
+        local = points @ frame
+        nearest = torch.maximum(torch.minimum(local, upper), lower)
+        return (local - nearest).norm(dim=-1) - point_r - radii[0]
+
+    tips = pose.positions[:, topo.TIP_JOINTS]
+    palm = torch.minimum(palm_gap(pads, pad_r), palm_gap(tips, radii[topo.TIP_JOINTS]))
+    return torch.cat([tip_gap, palm], -1)
 
 
 def detect_contacts(hand: HandModel, pose: HandPose, tolerance: float = CONTACT_TOLERANCE) -> np.ndarray:

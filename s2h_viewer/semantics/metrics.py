@@ -22,14 +22,16 @@ def per_joint_cosine(d_source: torch.Tensor, d_target: torch.Tensor) -> torch.Te
     return torch.where(valid, cos, torch.full_like(cos, float("nan")))
 
 
-def palm_and_finger_scores(d_source: torch.Tensor, d_target: torch.Tensor) -> tuple[float, float]:
-    """S_palm (mean cosine over the 9 anchor columns) and S_finger (over the 20 finger columns)."""
+def palm_and_finger_scores(d_source: torch.Tensor, d_target: torch.Tensor) -> tuple[float, float, float]:
+    """S_palm (mean cosine over the 9 anchor columns), S_finger (over the 20 finger columns, masked cells
+    left out) and the paper-compatible S_finger (the official code's: masked cells count as cosine 0,
+    so a hand compared with itself scores 0.95)."""
     cos, valid = masked_cosine(d_source, d_target)
     finger = slice(0, topo.N_FINGER_JOINTS)
     anchors = slice(topo.N_FINGER_JOINTS, None)
     s_palm = cos[..., anchors].sum() / valid[..., anchors].sum()
     s_finger = cos[..., finger].sum() / valid[..., finger].sum()
-    return float(s_palm), float(s_finger)
+    return float(s_palm), float(s_finger), float(cos[..., finger].mean())
 
 
 def joint_position_mse(pose: HandPose, reference: HandPose, hand_length: float) -> float:
@@ -52,6 +54,7 @@ class RetargetScores:
 
     s_palm: float
     s_finger: float
+    s_finger_paper: float  # the official code's S_finger (zero diagonal counted), for the paper's Table 1
     contact_precision: float
     contact_recall: float
     violation_rate: float
@@ -70,13 +73,15 @@ def score_retarget(source_hand: HandModel, source_q: np.ndarray | torch.Tensor, 
         src_pose = forward_kinematics(source_hand, torch.as_tensor(np.asarray(source_q), dtype=torch.float64))
         tgt_q = torch.as_tensor(np.asarray(target_q), dtype=torch.float64)
         tgt_pose = forward_kinematics(target_hand, tgt_q)
-        s_palm, s_finger = palm_and_finger_scores(semantic_matrix(src_pose), semantic_matrix(tgt_pose))
+        s_palm, s_finger, s_finger_paper = palm_and_finger_scores(semantic_matrix(src_pose),
+                                                                  semantic_matrix(tgt_pose))
         precision, recall = contact_precision_recall(detect_contacts(source_hand, src_pose),
                                                      detect_contacts(target_hand, tgt_pose))
         mse = None
         if reference_q is not None:
             ref = forward_kinematics(target_hand, torch.as_tensor(np.asarray(reference_q), dtype=torch.float64))
             mse = joint_position_mse(tgt_pose, ref, target_hand.hand_length)
-        return RetargetScores(s_palm=s_palm, s_finger=s_finger, contact_precision=precision,
+        return RetargetScores(s_palm=s_palm, s_finger=s_finger, s_finger_paper=s_finger_paper,
+                              contact_precision=precision,
                               contact_recall=recall, violation_rate=violation_rate(tgt_q),
                               jitter=jitter(tgt_pose, target_hand.hand_length), mse=mse)

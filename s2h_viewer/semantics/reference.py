@@ -11,14 +11,15 @@ from scipy.spatial.transform import Rotation
 
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
-from s2h_viewer.semantics.asm import ANCHOR_FRACTIONS, ANCHOR_KNUCKLES
+from s2h_viewer.semantics.asm import ANCHORS
 
 
 def fk_frame(hand: HandModel, q_tbs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """One frame (15, 4) -> positions (21, 3) and global TBS frames (21, 3, 3), joint by joint."""
     rot = Rotation.from_quat(q_tbs, scalar_first=True).as_matrix()
     rest = {int(j): hand.rest_frames[a] for a, j in enumerate(topo.ARTICULATED_JOINTS)}
-    rest[0] = np.eye(3)
+    canonical = {int(j): hand.canonical_frames[a] for a, j in enumerate(topo.ARTICULATED_JOINTS)}
+    rest[0] = canonical[0] = np.eye(3)
     positions = np.zeros((topo.N_JOINTS, 3))
     frames = np.zeros((topo.N_JOINTS, 3, 3))
     frames[0] = np.eye(3)
@@ -26,19 +27,20 @@ def fk_frame(hand: HandModel, q_tbs: np.ndarray) -> tuple[np.ndarray, np.ndarray
         p = topo.PARENTS[j]
         positions[j] = positions[p] + frames[p] @ rest[p].T @ hand.offsets[j]
         if j in rest:
-            frames[j] = frames[p] @ rest[p].T @ rest[j] @ rot[topo.ARTICULATED_OF_JOINT[j]]
+            frames[j] = frames[p] @ canonical[p].T @ canonical[j] @ rot[topo.ARTICULATED_OF_JOINT[j]]
         else:
             frames[j] = frames[p]
     return positions, frames
 
 
 def asm_frame(positions: np.ndarray, frames: np.ndarray) -> np.ndarray:
-    """One frame's ASM (20, 29, 3) from FK output."""
-    anchors = [positions[0] + f * (positions[k] - positions[0]) for k in ANCHOR_KNUCKLES for f in ANCHOR_FRACTIONS]
+    """One frame's ASM (20, 29, 3) from FK output, in units of the wrist -> middle-knuckle distance."""
+    anchors = [positions[0] + f * (positions[k] - positions[0]) for k, f in ANCHORS]
     columns = np.concatenate([positions[1:], np.array(anchors)])
+    unit = np.linalg.norm(positions[topo.joint_index("middle_mcp")] - positions[0])
     out = np.zeros((topo.N_FINGER_JOINTS, topo.N_ASM_COLUMNS, 3))
     for k in range(topo.N_FINGER_JOINTS):
-        out[k] = (columns - positions[k + 1]) @ frames[k + 1]
+        out[k] = (columns - positions[k + 1]) @ frames[k + 1] / unit
     return out
 
 

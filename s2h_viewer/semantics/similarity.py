@@ -33,24 +33,25 @@ def masked_cosine(d_a: torch.Tensor, d_b: torch.Tensor) -> tuple[torch.Tensor, t
     return torch.where(valid, cos, torch.zeros_like(cos)), valid
 
 
-def semantic_weights(d_source: torch.Tensor, hand_length: float) -> torch.Tensor:
-    """``w[k, m] = 1 + softmax_m(-|D[k, m]| / hand_length)`` over the 20 finger columns, 1 for anchors.
+def semantic_weights(d_source: torch.Tensor) -> torch.Tensor:
+    """``w[k, m] = 1 + softmax_m(-|D[k, m]|)`` over the 20 finger columns, 1 for anchors (``D`` in palm
+    lengths, as `semantic_matrix` gives it).
 
     Near joints count more (a touching pair dominates its row). Masked cells get weight 0 and are
     left out of the softmax.
     """
     valid = valid_mask(d_source)
     finger = slice(0, topo.N_FINGER_JOINTS)
-    logits = -(d_source[..., finger, :].norm(dim=-1) / hand_length)
+    logits = -d_source[..., finger, :].norm(dim=-1)
     logits = logits.masked_fill(~valid[..., finger], float("-inf"))
     weights = torch.ones_like(valid, dtype=d_source.dtype)
     weights[..., finger] += torch.softmax(logits, dim=-1)
     return weights * valid
 
 
-def semantic_similarity(d_source: torch.Tensor, d_target: torch.Tensor, source_length: float) -> torch.Tensor:
+def semantic_similarity(d_source: torch.Tensor, d_target: torch.Tensor) -> torch.Tensor:
     """L_sem: the weighted mean cosine between source and target ASMs, averaged over frames (scalar)."""
     cos, valid = masked_cosine(d_source, d_target)
-    w = semantic_weights(d_source, source_length) * valid
+    w = semantic_weights(d_source) * valid
     per_frame = (w * cos).sum(dim=(-1, -2)) / w.sum(dim=(-1, -2)).clamp_min(_EPS)
     return per_frame.mean()

@@ -1,4 +1,5 @@
-"""Training data: random gesture scripts performed by each training hand, cut into 8-frame windows.
+"""Training data: random gesture scripts performed by each training hand, cut into windows of
+``TrainConfig.window`` frames.
 
 Pairs are drawn per batch: one target hand B; with probability ``p_same`` every window comes from B
 itself (the supervised case, A = B), otherwise from the other training hands.

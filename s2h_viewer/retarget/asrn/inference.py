@@ -81,7 +81,8 @@ def load_network(path: str) -> tuple[RetargetNet, TrainConfig]:
 
 def _retarget_with(kind: str, motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
     model, config = load_network(str(MODELS_DIR / f"{kind}.pt"))
-    q = run_network(model, kind, source_hand, motion.q_tbs, target_hand, window=config.window)
+    q = run_network(model, kind, source_hand, motion.q_tbs, target_hand, window=config.window,
+                    overlap=config.window // 4)
     return on_target(motion, target_hand, q, kind)
 
 

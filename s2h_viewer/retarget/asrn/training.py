@@ -38,8 +38,8 @@ DM_LOSS_SCALE = 10.0  # brings the distance-matrix MSE to the size of the ASM si
 class TrainConfig:
     kind: str = "asrn"
     steps: int = 4000
-    batch_size: int = 32
-    window: int = 8
+    batch_size: int = 8
+    window: int = 32  # about a second at 30 fps (the official net sees 8 frames at 5 fps)
     learning_rate: float = 1e-3
     p_same: float = 0.25
     semantic_weight: float = 1.0
@@ -68,10 +68,10 @@ def batch_loss(model: RetargetNet, data: TrainingSet, batch: Batch, config: Trai
     q_pred = apply_residual(batch.q_source, model(batch.features, shape, frames))
     pose = forward_kinematics(hand, q_pred.reshape(-1, 15, 4))
     source_sem = batch.features[..., :SEMANTIC_SIZE[config.kind]].reshape(-1, SEMANTIC_SIZE[config.kind])
-    target_sem = semantic_features(config.kind, pose, hand.hand_length)
+    target_sem = semantic_features(config.kind, pose)
     if config.kind == "asrn":
         shape3 = (-1, 20, 29, 3)
-        semantic = -semantic_similarity(source_sem.reshape(shape3), target_sem.reshape(shape3), 1.0)
+        semantic = -semantic_similarity(source_sem.reshape(shape3), target_sem.reshape(shape3))
     else:
         semantic = DM_LOSS_SCALE * (source_sem - target_sem).square().mean()
     mse = (q_pred - batch.q_source).square().mean() if batch.same else q_pred.new_zeros(())
