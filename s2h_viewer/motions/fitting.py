@@ -15,22 +15,16 @@ from s2h_viewer.hand.kinematics import forward_kinematics
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.rotations import tbs_euler_to_quat
 from s2h_viewer.motions.gestures import Gesture
-from s2h_viewer.semantics.anatomy import BEND_HIGH, BEND_LOW, SPLAY_LIMIT
+from s2h_viewer.semantics.anatomy import SPLAY_LIMIT, clamp_bends
 from s2h_viewer.semantics.contacts import CONTACT_PAIRS, CONTACT_TOLERANCE, contact_gaps, pair_index
-
-
-#: authored poses stay this far inside the 90 deg bend limit, where the XYZ Euler angles lock
-SYNTHESIS_BEND_MARGIN = np.radians(1.0)
 
 
 def clamp_to_limits(angles: torch.Tensor) -> torch.Tensor:
     """(..., 15, 3) radians (twist, bend, splay) with twist zeroed and bend and splay clamped into the
-    anatomical limits (non-knuckle splay to 0)."""
-    dtype = angles.dtype
-    bend = angles[..., 1].clamp(BEND_LOW.to(dtype), BEND_HIGH.to(dtype) - SYNTHESIS_BEND_MARGIN)
-    limit = SPLAY_LIMIT.to(dtype)
+    anatomical limits (non-knuckle splay to 0; bends 1 deg inside 90, where the XYZ angles lock)."""
+    limit = SPLAY_LIMIT.to(angles.dtype)
     splay = torch.maximum(torch.minimum(angles[..., 2], limit), -limit)
-    return torch.stack([torch.zeros_like(bend), bend, splay], -1)
+    return torch.stack([torch.zeros_like(splay), clamp_bends(angles)[..., 1], splay], -1)
 
 
 THUMB_STARTS_DEG = (0.0, 15.0, -10.0)  # offsets of the thumb's bends: one batched multi-start

@@ -6,7 +6,8 @@ so the warm start's detail is kept and the loss is evaluated on the keyframes on
 work at the default step). Loss: -L_sem (match the source's ASM) + L_ana (stay anatomical) +
 temporal smoothness of the correction + a contact term that goes beyond the paper: pairs touching in
 the source are pulled to touch on the target and pairs apart are kept apart, gaps measured in each
-hand's own length. No training.
+hand's own length. The anatomy term is taken on the angles themselves (smooth past a 90 deg bend)
+and the result's bends are clamped into their limits. No training.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.hand.rotations import quat_to_tbs_euler, tbs_euler_to_quat
 from s2h_viewer.retarget.methods import on_target, register
-from s2h_viewer.semantics.anatomy import anatomical_loss
+from s2h_viewer.semantics.anatomy import angle_excess, clamp_bends
 from s2h_viewer.semantics.asm import semantic_matrix
 from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, contact_gaps
 from s2h_viewer.semantics.similarity import semantic_similarity
@@ -71,21 +72,23 @@ def optimise_asm(source_q: np.ndarray, source_hand: HandModel, target_hand: Hand
     optimiser = torch.optim.Adam([correction], lr=config.learning_rate)
     tol = CONTACT_TOLERANCE
     for _ in range(config.steps):
-        q = tbs_euler_to_quat(start[keys] + correction)
+        angles = start[keys] + correction
+        q = tbs_euler_to_quat(angles)
         pose = forward_kinematics(target_hand, q)
         sem = semantic_similarity(d_source, semantic_matrix(pose))
         gaps = contact_gaps(target_hand, pose) / target_hand.hand_length
         contact = torch.where(touching, torch.relu(gaps - 0.5 * tol), torch.relu(1.2 * tol - gaps)).square()
         smooth = (correction[2:] - 2 * correction[1:-1] + correction[:-2]).square().sum((-1, -2)).mean() \
             if len(keys) > 2 else correction.new_zeros(())
-        loss = (-config.semantic_weight * sem + config.anatomy_weight * anatomical_loss(q)
+        anatomy = angle_excess(angles).square().sum((-1, -2)).mean()
+        loss = (-config.semantic_weight * sem + config.anatomy_weight * anatomy
                 + config.smoothness_weight * smooth + config.contact_weight * contact.sum(-1).mean()
                 + config.prior_weight * correction.square().sum((-1, -2)).mean())
         optimiser.zero_grad()
         loss.backward()
         optimiser.step()
     with torch.no_grad():
-        return tbs_euler_to_quat(start + interpolate_keys(correction, keys, n_frames)).numpy()
+        return tbs_euler_to_quat(clamp_bends(start + interpolate_keys(correction, keys, n_frames))).numpy()
 
 
 @register("asm_opt", "ASM-Opt", "optimise the target pose per clip to match the source's semantics (no training)")

@@ -40,11 +40,25 @@ SPLAY_LIMIT, BEND_LOW, BEND_HIGH = _limits()
 
 def anatomical_excess(q_tbs: torch.Tensor) -> torch.Tensor:
     """(..., 15, 3) how far (radians, >= 0) each joint's twist, bend and splay lie outside their limits."""
-    twist, bend, splay = quat_to_tbs_euler(q_tbs).unbind(-1)
+    return angle_excess(quat_to_tbs_euler(q_tbs))
+
+
+def angle_excess(angles: torch.Tensor) -> torch.Tensor:
+    """`anatomical_excess` of (..., 15, 3) Euler angles (twist, bend, splay) given directly: smooth in
+    them also past a 90 deg bend, where decomposing a rotation again would flip twist and splay."""
+    twist, bend, splay = angles.unbind(-1)
     dtype = twist.dtype
     splay_excess = torch.relu(splay.abs() - SPLAY_LIMIT.to(dtype))
     bend_excess = torch.relu(bend - BEND_HIGH.to(dtype)) + torch.relu(BEND_LOW.to(dtype) - bend)
     return torch.stack([twist.abs(), bend_excess, splay_excess], -1)
+
+
+def clamp_bends(angles: torch.Tensor, margin: float = math.radians(1.0)) -> torch.Tensor:
+    """(..., 15, 3) Euler angles with each bend clamped into its limits, ``margin`` inside the 90 deg one
+    (where the XYZ angles lock), twist and splay left alone."""
+    dtype = angles.dtype
+    bend = angles[..., 1].clamp(BEND_LOW.to(dtype), BEND_HIGH.to(dtype) - margin)
+    return torch.stack([angles[..., 0], bend, angles[..., 2]], -1)
 
 
 def anatomical_loss(q_tbs: torch.Tensor) -> torch.Tensor:

@@ -73,9 +73,7 @@ class AnnotationView(QWidget):
         hand = display_hand(session.hand)
         if hand.mesh is not None:
             plotter.add_mesh(surface(hand, to_view(hand, hand.mesh.vertices)), color=SKIN_COLOUR, opacity=0.3)
-        rest = np.zeros((1, topo.N_ARTICULATED, 4))
-        rest[..., 0] = 1.0
-        plotter.add_mesh(skeleton(hand, pose_frame(hand, rest[0])), color=BONE_COLOUR, line_width=3)
+        plotter.add_mesh(skeleton(hand, pose_frame(hand, hand.rest_tbs)), color=BONE_COLOUR, line_width=3)
         self._arrow_meshes = [_arrows(session, axis, self.selected) for axis in range(3)]
         for mesh, colour in zip(self._arrow_meshes, AXIS_COLOURS):
             plotter.add_mesh(mesh, color=colour)
