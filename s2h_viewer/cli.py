@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import traceback
 from pathlib import Path
 
 from s2h_viewer.errors import S2HError
@@ -187,8 +188,14 @@ def _cmd_gestures(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_debug(parser: argparse.ArgumentParser, default=False) -> None:
+    parser.add_argument("--debug", action="store_true", default=default,
+                        help="on an error, also print the traceback of what went wrong underneath")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="s2h", description="Transfer hand motion semantics between avatars.")
+    _add_debug(parser)
     sub = parser.add_subparsers(dest="command", required=True)
 
     ev = sub.add_parser("evaluate", help="retarget sample motions onto held-out hands and score each method")
@@ -259,6 +266,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     gs = sub.add_parser("gestures", help="list the gesture library with its contact labels")
     gs.set_defaults(func=_cmd_gestures)
+    for subparser in sub.choices.values():
+        _add_debug(subparser, default=argparse.SUPPRESS)
     return parser
 
 
@@ -269,6 +278,9 @@ def main(argv: list[str] | None = None) -> int:
     except (S2HError, KeyError) as exc:
         message = exc.args[0] if isinstance(exc, KeyError) and exc.args else str(exc)
         print(f"s2h: error: {message}", file=sys.stderr)
+        if args.debug:
+            original = exc.__cause__ or exc.__context__
+            traceback.print_exception(original or exc, file=sys.stderr)
         return 2
 
 
