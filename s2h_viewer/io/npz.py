@@ -82,8 +82,9 @@ def _check_field(path: Path, key: str, field: Field, shape: tuple, dtype: np.dty
     if field.kind == "text" and dtype.itemsize // 4 > MAX_TEXT_CHARS:
         raise InputFileError(path, f"field {key} is longer than {MAX_TEXT_CHARS} characters")
     expected = tuple(sizes.get(d, d) for d in field.shape)
+    described = "(" + ", ".join(map(str, field.shape)) + ("," if len(field.shape) == 1 else "") + ")"
     if len(shape) != len(expected):
-        raise InputFileError(path, f"field {key} has shape {shape}, expected {field.shape}")
+        raise InputFileError(path, f"field {key} has shape {shape}, expected {described}")
     for actual, want in zip(shape, expected):
         if isinstance(want, str):
             low, high, what = _SIZE_LIMITS[want]
@@ -91,7 +92,7 @@ def _check_field(path: Path, key: str, field: Field, shape: tuple, dtype: np.dty
                 raise InputFileError(path, f"field {key} has {actual} {what}; this program reads {low} to {high}")
             sizes[want] = actual
         elif actual != want:
-            raise InputFileError(path, f"field {key} has shape {shape}, expected {field.shape}")
+            raise InputFileError(path, f"field {key} has shape {shape}, expected {described}")
 
 
 def _open(path: Path, schema: str, fields: dict[str, Field]) -> dict[str, np.ndarray]:
@@ -124,6 +125,10 @@ def _open(path: Path, schema: str, fields: dict[str, Field]) -> dict[str, np.nda
                                    f"({SCHEMA_VERSION})")
     for key, value in arrays.items():
         if value.dtype.kind == "f" and not np.isfinite(value).all():
+            if fields[key].shape[:1] == ("T",):
+                bad = ~np.isfinite(value.reshape(len(value), -1)).all(axis=1)
+                raise InputFileError(path, f"field {key} has NaN or infinite values in {int(bad.sum())} frames "
+                                           f"(first at frame {int(np.flatnonzero(bad)[0])})")
             raise InputFileError(path, f"field {key} contains NaN or infinite values")
     return arrays
 
