@@ -101,9 +101,14 @@ def _open(path: Path, schema: str, fields: dict[str, Field]) -> dict[str, np.nda
     try:
         with zipfile.ZipFile(path) as archive:
             members = {m[:-4]: m for m in archive.namelist() if m.endswith(".npy")}
-            missing = [k for k, f in fields.items() if f.required and k not in members]
-            if "schema" in missing:
+            if "schema" not in members:
                 raise InputFileError(path, f"not an {schema} file (schema missing)")
+            _check_field(path, "schema", fields["schema"], *_header(path, archive, members["schema"]), {})
+            with archive.open(members["schema"]) as fh:
+                found = str(np.lib.format.read_array(fh, allow_pickle=False))
+            if found != schema:
+                raise InputFileError(path, f"not an {schema} file (schema {found or 'missing'})")
+            missing = [k for k, f in fields.items() if f.required and k not in members]
             if missing:
                 raise InputFileError(path, f"missing field(s): {', '.join(missing)}")
             sizes: dict[str, int] = {}
@@ -116,9 +121,6 @@ def _open(path: Path, schema: str, fields: dict[str, Field]) -> dict[str, np.nda
         raise
     except Exception as exc:  # zipfile, zlib, the npy header parser: many types on damaged input
         raise InputFileError(path, f"not a readable npz file ({type(exc).__name__}: {exc})") from exc
-    found = str(arrays["schema"])
-    if found != schema:
-        raise InputFileError(path, f"not an {schema} file (schema {found or 'missing'})")
     version = int(arrays.get("schema_version", 0))
     if version > SCHEMA_VERSION:
         raise InputFileError(path, f"{schema} schema version {version} is newer than this program reads "
