@@ -99,6 +99,7 @@ def build_hand(source: str | Path, skeleton: RigSkeleton, mapping: RigMapping, m
 
     skinned = None
     if mesh is not None:
+        _check_mesh(mesh, skeleton, source)
         skinned = _hand_mesh(mesh, skeleton, mapping, index, wrist_rot, wrist_origin, to_metres, source)
     try:
         hand = HandModel(name=name or source.stem, offsets=offsets, rest_frames=palm_plane_frames(positions),
@@ -112,6 +113,16 @@ def build_hand(source: str | Path, skeleton: RigSkeleton, mapping: RigMapping, m
         return annotate(hand, source)
     except InvalidHandError as exc:
         raise InputFileError(source, str(exc)) from None
+
+
+def _check_mesh(mesh: RigMesh, skeleton: RigSkeleton, source: Path) -> None:
+    """Refuse a mesh with non-finite values or indices past its tables (before anything indexes them)."""
+    if not (np.isfinite(mesh.vertices).all() and np.isfinite(mesh.bone_weight).all()):
+        raise InputFileError(source, "mesh vertices or skin weights contain NaN or infinite values")
+    if len(mesh.faces) and (mesh.faces.min() < 0 or mesh.faces.max() >= len(mesh.vertices)):
+        raise InputFileError(source, f"a mesh triangle uses a vertex past the {len(mesh.vertices)} there are")
+    if mesh.bone_index.size and (mesh.bone_index.min() < 0 or mesh.bone_index.max() >= len(skeleton.names)):
+        raise InputFileError(source, f"mesh is skinned to a bone past the {len(skeleton.names)} there are")
 
 
 def annotate(hand: HandModel, source: Path) -> HandModel:
