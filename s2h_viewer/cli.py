@@ -139,6 +139,8 @@ def _cmd_annotate(args: argparse.Namespace) -> int:
 
 
 def _cmd_retarget(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
     from s2h_viewer.io.files import load_hand_file, load_motion_file, save_motion_file
     from s2h_viewer.retarget import retarget
 
@@ -149,7 +151,9 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
         from s2h_viewer.samples import load_sample_hand
         source = load_sample_hand(motion.hand_name)
     target = load_hand_file(args.target, options)
-    result = retarget(motion, source, target, args.method)
+    with tqdm(total=motion.n_frames, desc=f"retarget ({args.method})", unit="frame", unit_scale=True,
+              file=sys.stderr, disable=args.quiet or None) as bar:  # None: no bar when not on a terminal
+        result = retarget(motion, source, target, args.method, progress=lambda done, total: bar.update(done - bar.n))
     path = save_motion_file(args.out, result, target)
     print(f"{motion.name}: {motion.n_frames} frames, {source.name} -> {target.name} ({args.method}) -> {path}")
     return 0
@@ -248,6 +252,7 @@ def build_parser() -> argparse.ArgumentParser:
     rt.add_argument("--target", required=True, help="target hand file or sample name")
     rt.add_argument("--method", default="asrn", help="copy, tbs_copy, dm, asrn or asm_opt")
     rt.add_argument("--out", required=True, help="output file: .glb (on the target rig), .bvh or .npz")
+    rt.add_argument("--quiet", action="store_true", help="no progress bar")
     _add_rig_options(rt)
     rt.set_defaults(func=_cmd_retarget)
 
