@@ -27,7 +27,9 @@ from s2h_viewer.hand.model import HandModel, SkinnedMesh
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.io.atomic import atomic_path
 
-SCHEMA_VERSION = 1
+HAND_SCHEMA_VERSION = 1
+MOTION_SCHEMA_VERSION = 1
+_SCHEMA_VERSIONS = {"s2h-hand": HAND_SCHEMA_VERSION, "s2h-motion": MOTION_SCHEMA_VERSION}
 #: longest motion read (about 46 hours at 30 fps): a clip's arrays stay a few GiB at most
 MAX_CLIP_FRAMES = 5_000_000
 #: shortest motion read: one frame is a pose, not a motion
@@ -122,9 +124,10 @@ def _open(path: Path, schema: str, fields: dict[str, Field]) -> dict[str, np.nda
     except Exception as exc:  # zipfile, zlib, the npy header parser: many types on damaged input
         raise InputFileError(path, f"not a readable npz file ({type(exc).__name__}: {exc})") from exc
     version = int(arrays.get("schema_version", 0))
-    if version > SCHEMA_VERSION:
+    current = _SCHEMA_VERSIONS[schema]
+    if version > current:
         raise InputFileError(path, f"{schema} schema version {version} is newer than this program reads "
-                                   f"({SCHEMA_VERSION})")
+                                   f"({current})")
     for key, value in arrays.items():
         if value.dtype.kind == "f" and not np.isfinite(value).all():
             if fields[key].shape[:1] == ("T",):
@@ -165,7 +168,7 @@ def save_motion(motion: Motion, path: str | Path) -> Path:
     """Write a motion npz atomically."""
     path = Path(path)
     with atomic_path(path) as tmp, open(tmp, "wb") as fh:
-        np.savez_compressed(fh, schema="s2h-motion", schema_version=SCHEMA_VERSION, q_tbs=motion.q_tbs,
+        np.savez_compressed(fh, schema="s2h-motion", schema_version=MOTION_SCHEMA_VERSION, q_tbs=motion.q_tbs,
                             fps=np.float64(motion.fps), name=motion.name, hand_name=motion.hand_name,
                             labels=motion.labels.astype(str), meta_json=json.dumps(motion.meta))
     return path
@@ -190,7 +193,7 @@ def load_motion(path: str | Path) -> Motion:
 def save_hand(hand: HandModel, path: str | Path) -> Path:
     """Write a hand npz atomically (mesh included when present)."""
     path = Path(path)
-    fields = dict(schema="s2h-hand", schema_version=SCHEMA_VERSION, name=hand.name, offsets=hand.offsets,
+    fields = dict(schema="s2h-hand", schema_version=HAND_SCHEMA_VERSION, name=hand.name, offsets=hand.offsets,
                   rest_frames=hand.rest_frames, rig_frames=hand.rig_frames, radii=hand.radii, source=hand.source,
                   meta_json=json.dumps(hand.meta))
     if hand.mesh is not None:
