@@ -21,6 +21,7 @@ import io
 import json
 import os
 import signal
+import struct
 import zipfile
 from collections import Counter
 from collections.abc import Callable, Iterator
@@ -165,7 +166,13 @@ def mutate_npz(data: bytes, rng: np.random.Generator) -> tuple[str, bytes]:
 # ---------------------------------------------------------------- glTF / GLB
 
 def _glb_bytes(gltf: pygltflib.GLTF2) -> bytes:
-    return b"".join(gltf.save_to_bytes())
+    """A GLB of ``gltf``'s JSON and binary blob as they are (even where they lie about each other)."""
+    text = gltf.to_json(separators=(",", ":")).encode()
+    text += b" " * (-len(text) % 4)
+    blob = gltf.binary_blob() or b""
+    blob += b"\0" * (-len(blob) % 4)
+    chunks = (struct.pack("<I4s", len(text), b"JSON") + text + struct.pack("<I4s", len(blob), b"BIN\0") + blob)
+    return struct.pack("<4sII", b"glTF", 2, 12 + len(chunks)) + chunks
 
 
 def _accessor_region(gltf: pygltflib.GLTF2, index: int) -> tuple[int, int]:

@@ -93,6 +93,8 @@ def _fuzz_readers(originals: dict[str, Path], folder: Path, seed: int, scale: in
                 damaged = folder / f"map_{case}.json"
                 damaged.write_bytes(data)
                 outcome, detail = classify(lambda: load_hand_file(WEBXR, RigOptions(joint_map=damaged)), damaged)
+                if outcome == "unclear" and "\n" not in detail and detail.startswith(str(WEBXR)):
+                    outcome = "clean"  # a map that does not fit the rig: the line names the rig file
             else:
                 mutate, load, suffix = READERS[reader]
                 what, data = mutate(source, rng)

@@ -28,6 +28,8 @@ from s2h_viewer.io.annotation import load_annotation
 
 #: a tip missing from the rig is put this far beyond its DIP, as a fraction of the DIP bone
 TIP_EXTRAPOLATION = 0.8
+#: the farthest a hand's skin may be from its wrist, in metres (beyond is damage, not a hand)
+MAX_VERTEX_DISTANCE = 2.0
 MIRROR_NORMAL = (0.0, 1.0, 0.0)  # a left hand is reflected across its wrist frame's x-z plane
 
 
@@ -169,6 +171,10 @@ def _hand_mesh(mesh: RigMesh, skeleton: RigSkeleton, mapping: RigMapping, index:
     new_index = np.cumsum(keep) - 1
     weights = weights[keep] / weights[keep].sum(axis=1, keepdims=True)
     vertices = (mesh.vertices[keep] - wrist_origin) @ wrist_rot * to_metres
+    farthest = float(np.linalg.norm(vertices, axis=1).max(initial=0.0))
+    if not farthest <= MAX_VERTEX_DISTANCE:
+        raise InputFileError(source, f"hand mesh vertices lie up to {farthest:.3g} m from the wrist, over the "
+                                     f"{MAX_VERTEX_DISTANCE} m a hand can span")
     return SkinnedMesh(vertices.astype(np.float32), new_index[faces].astype(np.int32), weights.astype(np.float32))
 
 
