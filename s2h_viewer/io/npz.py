@@ -69,7 +69,7 @@ HAND_FIELDS = {**_COMMON_FIELDS, "name": Field("text", required=True), "offsets"
 _MESH_KEYS = ("mesh_vertices", "mesh_faces", "mesh_weights")
 
 
-def _header(path: Path, archive: zipfile.ZipFile, member: str) -> tuple[tuple, np.dtype]:
+def _header(archive: zipfile.ZipFile, member: str) -> tuple[tuple, np.dtype]:
     """Shape and dtype an npy member declares, read without decompressing the array."""
     with archive.open(member) as fh:
         version = np.lib.format.read_magic(fh)
@@ -105,7 +105,7 @@ def _open(path: Path, schema: str, fields: dict[str, Field]) -> dict[str, np.nda
             members = {m[:-4]: m for m in archive.namelist() if m.endswith(".npy")}
             if "schema" not in members:
                 raise InputFileError(path, f"not an {schema} file (schema missing)")
-            _check_field(path, "schema", fields["schema"], *_header(path, archive, members["schema"]), {})
+            _check_field(path, "schema", fields["schema"], *_header(archive, members["schema"]), {})
             with archive.open(members["schema"]) as fh:
                 found = str(np.lib.format.read_array(fh, allow_pickle=False))
             if found != schema:
@@ -116,7 +116,7 @@ def _open(path: Path, schema: str, fields: dict[str, Field]) -> dict[str, np.nda
             sizes: dict[str, int] = {}
             for key, field in fields.items():
                 if key in members:
-                    _check_field(path, key, field, *_header(path, archive, members[key]), sizes)
+                    _check_field(path, key, field, *_header(archive, members[key]), sizes)
             with np.load(path, allow_pickle=False) as data:
                 arrays = {k: data[k] for k in fields if k in members}
     except InputFileError:
