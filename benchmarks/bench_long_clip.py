@@ -33,15 +33,16 @@ def make_clip(n_frames: int, folder: Path) -> Path:
     return path
 
 
-def measure(clip: Path, method: str, out: Path) -> tuple[float, float]:
-    """(peak resident MiB, wall seconds) of one CLI retarget."""
+def measure(clip: Path, method: str, out: Path) -> tuple[float, float, float]:
+    """(peak resident MiB, wall seconds, CPU seconds) of one CLI retarget."""
     done = subprocess.run(["/usr/bin/time", "-v", sys.executable, "-m", "s2h_viewer.cli", "retarget", "--quiet",
                            "--motion", str(clip), "--target", "juniper", "--method", method, "--out", str(out)],
                           capture_output=True, text=True, check=True)
     peak_kib = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", done.stderr).group(1))
     wall = re.search(r"Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): (\S+)", done.stderr).group(1)
     seconds = sum(float(part) * 60 ** k for k, part in enumerate(reversed(wall.split(":"))))
-    return peak_kib / 1024, seconds
+    cpu = sum(float(re.search(rf"{kind} time \(seconds\): (\S+)", done.stderr).group(1)) for kind in ("User", "System"))
+    return peak_kib / 1024, seconds, cpu
 
 
 def main() -> None:
@@ -52,14 +53,15 @@ def main() -> None:
     args = parser.parse_args()
     folder = Path(args.dir)
     folder.mkdir(parents=True, exist_ok=True)
-    print(f"| frames | peak RSS (MiB) | clip arrays in+out (MiB) | peak - arrays (MiB) | time (s) | us/frame |")
-    print("|---:|---:|---:|---:|---:|---:|")
+    print("| frames | peak RSS (MiB) | rotations in+out (MiB) | peak - rotations (MiB) | wall (s) | CPU (s) | "
+          "CPU us/frame |")
+    print("|---:|---:|---:|---:|---:|---:|---:|")
     for n_frames in (int(f) for f in args.frames.split(",")):
         clip = make_clip(n_frames, folder)
-        peak, seconds = measure(clip, args.method, folder / f"out_{n_frames}.npz")
+        peak, seconds, cpu = measure(clip, args.method, folder / f"out_{n_frames}.npz")
         arrays = 2 * n_frames * 15 * 4 * 4 / 1024 ** 2
-        print(f"| {n_frames:,} | {peak:,.0f} | {arrays:,.0f} | {peak - arrays:,.0f} | {seconds:.1f} | "
-              f"{1e6 * seconds / n_frames:.1f} |", flush=True)
+        print(f"| {n_frames:,} | {peak:,.0f} | {arrays:,.0f} | {peak - arrays:,.0f} | {seconds:.1f} | {cpu:.1f} | "
+              f"{1e6 * cpu / n_frames:.1f} |", flush=True)
 
 
 if __name__ == "__main__":
