@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import traceback
 from pathlib import Path
 
 from s2h_viewer.errors import S2HError
@@ -138,6 +139,8 @@ def _cmd_annotate(args: argparse.Namespace) -> int:
 
 
 def _cmd_retarget(args: argparse.Namespace) -> int:
+    from tqdm import tqdm
+
     from s2h_viewer.io.files import load_hand_file, load_motion_file, save_motion_file
     from s2h_viewer.retarget import retarget
 
@@ -148,7 +151,9 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
         from s2h_viewer.samples import load_sample_hand
         source = load_sample_hand(motion.hand_name)
     target = load_hand_file(args.target, options)
-    result = retarget(motion, source, target, args.method)
+    with tqdm(total=motion.n_frames, desc=f"retarget ({args.method})", unit="frame", unit_scale=True,
+              file=sys.stderr, disable=args.quiet or None) as bar:  # None: no bar when not on a terminal
+        result = retarget(motion, source, target, args.method, progress=lambda done, total: bar.update(done - bar.n))
     path = save_motion_file(args.out, result, target)
     print(f"{motion.name}: {motion.n_frames} frames, {source.name} -> {target.name} ({args.method}) -> {path}")
     return 0
@@ -187,8 +192,14 @@ def _cmd_gestures(args: argparse.Namespace) -> int:
     return 0
 
 
+def _add_debug(parser: argparse.ArgumentParser, default=False) -> None:
+    parser.add_argument("--debug", action="store_true", default=default,
+                        help="on an error, also print the traceback of what went wrong underneath")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="s2h", description="Transfer hand motion semantics between avatars.")
+    _add_debug(parser)
     sub = parser.add_subparsers(dest="command", required=True)
 
     ev = sub.add_parser("evaluate", help="retarget sample motions onto held-out hands and score each method")
@@ -241,6 +252,7 @@ def build_parser() -> argparse.ArgumentParser:
     rt.add_argument("--target", required=True, help="target hand file or sample name")
     rt.add_argument("--method", default="asrn", help="copy, tbs_copy, dm, asrn or asm_opt")
     rt.add_argument("--out", required=True, help="output file: .glb (on the target rig), .bvh or .npz")
+    rt.add_argument("--quiet", action="store_true", help="no progress bar")
     _add_rig_options(rt)
     rt.set_defaults(func=_cmd_retarget)
 
@@ -259,6 +271,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     gs = sub.add_parser("gestures", help="list the gesture library with its contact labels")
     gs.set_defaults(func=_cmd_gestures)
+    for subparser in sub.choices.values():
+        _add_debug(subparser, default=argparse.SUPPRESS)
     return parser
 
 
@@ -269,6 +283,9 @@ def main(argv: list[str] | None = None) -> int:
     except (S2HError, KeyError) as exc:
         message = exc.args[0] if isinstance(exc, KeyError) and exc.args else str(exc)
         print(f"s2h: error: {message}", file=sys.stderr)
+        if args.debug:
+            original = exc.__cause__ or exc.__context__
+            traceback.print_exception(original or exc, file=sys.stderr)
         return 2
 
 

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The README's test command (`make test` calls it): the whole suite but benchmarks. The desktop
+# The README's test command (`make test` calls it): the whole suite but benchmarks and the long fuzz
+# run. The desktop
 # window's tests need an X display; without one this starts Xvfb, installing it and the Qt xcb
 # libraries from Debian first when they are missing and we are root (as on CI).
 set -euo pipefail
@@ -17,7 +18,7 @@ if [ -z "${DISPLAY:-}" ]; then
     fi
   fi
   if command -v xvfb-run >/dev/null; then
-    exec xvfb-run -a -s "-screen 0 1600x1000x24" "$PY" -m pytest -q -m "not benchmark"
+    exec xvfb-run -a -s "-screen 0 1600x1000x24" "$PY" -m pytest -q -m "not benchmark and not fuzz_long"
   fi
 fi
-exec "$PY" -m pytest -q -m "not benchmark"
+exec "$PY" -m pytest -q -m "not benchmark and not fuzz_long"

@@ -12,8 +12,8 @@ from s2h_viewer.motions.synthesis import synthesize
 from s2h_viewer.retarget import METHODS, retarget
 from s2h_viewer.samples import hand_names
 from s2h_viewer.retarget.asrn.dataset import build_training_set, sample_batch
-from s2h_viewer.retarget.asrn.inference import (MODELS_DIR, blend_weights, load_network, run_network,
-                                                window_starts)
+from s2h_viewer.retarget.asrn.inference import MODELS_DIR, load_network, run_network
+from s2h_viewer.retarget.windows import blend_weights, window_starts
 from s2h_viewer.retarget.asrn.training import TrainConfig, batch_loss, build_model, load_checkpoint, train
 from s2h_viewer.semantics.metrics import score_retarget
 

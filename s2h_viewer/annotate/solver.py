@@ -144,7 +144,7 @@ def solve_tbs_frames(hand: HandModel, n_angles: int = N_ANGLES) -> TbsSolution:
     confidence = np.zeros(n_joints)
     thickness = np.full(n_joints, np.nan)
     width = np.full(n_joints, np.nan)
-    fallback = ~hit.any(axis=1)
+    fallback = ~np.isfinite(loss).any(axis=1)  # no direction whose whole smoothing window hit
     diagnostics = []
     back = back_directions(positions)
     guess = palm_plane_frames(positions)

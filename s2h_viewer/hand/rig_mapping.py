@@ -16,10 +16,11 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from s2h_viewer.errors import InputFileError
+from s2h_viewer.errors import InputFileError, require_readable_file
 from s2h_viewer.hand import topology as topo
 
 SIDES = ("right", "left")
+MAX_JOINT_MAP_BYTES = 1024 ** 2
 _MIXAMO_FINGERS = {"thumb": "Thumb", "index": "Index", "middle": "Middle", "ring": "Ring", "pinky": "Pinky"}
 _XR_FINGERS = {"thumb": "THUMB", "index": "INDEX", "middle": "MIDDLE", "ring": "RING", "pinky": "LITTLE"}
 _WEBXR_LEVELS = {"thumb": ("metacarpal", "phalanx-proximal", "phalanx-distal", "tip"),
@@ -133,10 +134,13 @@ def _describe_missing(missing: list[str]) -> str:
 def load_user_mapping(path: str | Path) -> dict[str, str]:
     """A JSON object canonical joint name -> rig bone name; an `InputFileError` naming the file if malformed."""
     path = Path(path)
+    if not path.exists():
+        raise InputFileError(path, "joint map not found")
+    require_readable_file(path, MAX_JOINT_MAP_BYTES)
     try:
         document = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise InputFileError(path, "joint map not found") from None
+    except RecursionError:
+        raise InputFileError(path, "joint map is nested too deeply") from None
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise InputFileError(path, f"joint map is not valid JSON ({exc})") from None
     if not isinstance(document, dict) or not all(isinstance(v, str) for v in document.values()):

@@ -22,13 +22,14 @@ from pathlib import Path
 
 import numpy as np
 
-from s2h_viewer.errors import InputFileError
+from s2h_viewer.errors import InputFileError, reading, require_readable_file
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.io.atomic import atomic_path
 
 SCHEMA = "s2h-tbs-annotation"
 VERSION = 1
 SET_BY = ("solver", "manual")
+MAX_SIDECAR_BYTES = 16 * 1024 ** 2
 
 
 @dataclass
@@ -64,14 +65,40 @@ def save_annotation(annotation: Annotation, hand_file: str | Path) -> Path:
     return path
 
 
+def _joint_entry(path: Path, name: str, entry) -> tuple[np.ndarray, str, float]:
+    """One joint's (frame, set_by, confidence), each checked for type and range."""
+    if not isinstance(entry, dict):
+        raise InputFileError(path, f"joint {name}: expected an object, found a JSON {type(entry).__name__}")
+    frame = entry.get("frame")
+    if (not isinstance(frame, list) or len(frame) != 3
+            or not all(isinstance(row, list) and len(row) == 3 for row in frame)
+            or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for row in frame for v in row)):
+        raise InputFileError(path, f"joint {name}: frame must be 3 rows of 3 numbers")
+    set_by = entry.get("set_by", "solver")
+    if set_by not in SET_BY:
+        raise InputFileError(path, f"joint {name}: unknown set_by value {set_by!r}; expected solver or manual")
+    confidence = entry.get("confidence", 1.0)
+    if isinstance(confidence, bool) or not isinstance(confidence, (int, float)) or not 0 <= confidence <= 1:
+        raise InputFileError(path, f"joint {name}: confidence {confidence!r} is not a number from 0 to 1")
+    return np.array(frame, dtype=np.float64), set_by, float(confidence)
+
+
 def load_annotation(hand_file: str | Path) -> Annotation | None:
     """The sidecar of ``hand_file``, None if there is none; an `InputFileError` naming the sidecar if it
     is damaged, of another schema or version, or made for a different version of the hand file."""
     path = sidecar_path(hand_file)
     if not path.exists():
         return None
+    with reading(path, "a TBS annotation sidecar"):
+        return _read_annotation(path, Path(hand_file))
+
+
+def _read_annotation(path: Path, hand_file: Path) -> Annotation:
+    require_readable_file(path, MAX_SIDECAR_BYTES)
     try:
         document = json.loads(path.read_text())
+    except RecursionError:
+        raise InputFileError(path, "not a TBS annotation (JSON nested too deeply)") from None
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise InputFileError(path, f"not valid JSON ({exc})") from None
     if not isinstance(document, dict) or document.get("schema") != SCHEMA:
@@ -80,24 +107,24 @@ def load_annotation(hand_file: str | Path) -> Annotation | None:
         raise InputFileError(path, f"annotation version {document.get('version')!r} is not supported "
                                    f"(this s2h reads version {VERSION})")
     if document.get("hand_sha256") != file_sha256(hand_file):
-        raise InputFileError(path, f"was made for a different version of {Path(hand_file).name} (its hash "
+        raise InputFileError(path, f"was made for a different version of {hand_file.name} (its hash "
                                    f"differs); re-run `s2h annotate --save` or delete the sidecar")
-    joints = document.get("joints", {})
+    joints = document.get("joints")
+    if not isinstance(joints, dict):
+        raise InputFileError(path, "joints must be an object of joint name -> entry")
     missing = [n for n in topo.ARTICULATED_NAMES if n not in joints]
     if missing:
         raise InputFileError(path, f"no frame for {', '.join(missing)}")
-    try:
-        frames = np.array([joints[n]["frame"] for n in topo.ARTICULATED_NAMES], dtype=np.float64)
-        set_by = [str(joints[n].get("set_by", "solver")) for n in topo.ARTICULATED_NAMES]
-        confidence = np.array([float(joints[n].get("confidence", 1.0)) for n in topo.ARTICULATED_NAMES])
-    except (TypeError, ValueError, KeyError) as exc:
-        raise InputFileError(path, f"malformed joint entry ({exc})") from None
-    if frames.shape != (topo.N_ARTICULATED, 3, 3) or not np.isfinite(frames).all():
+    entries = [_joint_entry(path, n, joints[n]) for n in topo.ARTICULATED_NAMES]
+    frames = np.stack([e[0] for e in entries])
+    set_by = [e[1] for e in entries]
+    confidence = np.array([e[2] for e in entries])
+    if not np.isfinite(frames).all():
         raise InputFileError(path, "frames must be finite 3 x 3 matrices")
     error = np.abs(frames.transpose(0, 2, 1) @ frames - np.eye(3)).max()
     if error > 1e-4 or np.any(np.linalg.det(frames) < 0):
         raise InputFileError(path, f"frames are not right-handed rotations (orthonormality error {error:.2g})")
-    bad = sorted(set(set_by) - set(SET_BY))
-    if bad:
-        raise InputFileError(path, f"unknown set_by value(s) {', '.join(bad)}; expected solver or manual")
-    return Annotation(frames, set_by, confidence, list(document.get("diagnostics", [])))
+    diagnostics = document.get("diagnostics", [])
+    if not isinstance(diagnostics, list) or not all(isinstance(d, str) for d in diagnostics):
+        raise InputFileError(path, "diagnostics must be a list of strings")
+    return Annotation(frames, set_by, confidence, diagnostics)

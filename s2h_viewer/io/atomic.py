@@ -1,12 +1,44 @@
-"""Atomic file writes: write beside the target, then rename, so no reader ever sees half a file."""
+"""Atomic file writes: write beside the target, then rename, so no reader ever sees half a file.
+
+Temporary files are named ``.<stem>.s2h-<pid>-<random><suffix>``: a write killed before its rename
+leaves one behind, and the next write to the same place removes those whose process is gone.
+"""
 
 from __future__ import annotations
 
 import contextlib
+import glob
 import os
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
+
+
+def _temp_prefix(path: Path) -> str:
+    return f".{path.stem}.s2h-"
+
+
+def _process_alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # someone else's process
+        return True
+    return True
+
+
+def remove_stale_temps(path: str | Path) -> list[Path]:
+    """Delete the temporary files that killed writes to ``path`` left behind (their process is gone)."""
+    path = Path(path)
+    pattern = glob.escape(str(path.parent / _temp_prefix(path))) + "*-*" + glob.escape(path.suffix)
+    removed = []
+    for name in glob.glob(pattern):
+        pid_text = Path(name).name[len(_temp_prefix(path)):].split("-", 1)[0]
+        if pid_text.isdigit() and int(pid_text) != os.getpid() and not _process_alive(int(pid_text)):
+            Path(name).unlink(missing_ok=True)
+            removed.append(Path(name))
+    return removed
 
 
 @contextlib.contextmanager
@@ -17,7 +49,8 @@ def atomic_path(path: str | Path) -> Iterator[Path]:
     """
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.stem}.", suffix=path.suffix, dir=path.parent)
+    remove_stale_temps(path)
+    fd, tmp = tempfile.mkstemp(prefix=f"{_temp_prefix(path)}{os.getpid()}-", suffix=path.suffix, dir=path.parent)
     os.close(fd)
     umask = os.umask(0)
     os.umask(umask)

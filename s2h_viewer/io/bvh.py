@@ -9,13 +9,14 @@ the order Blender and MotionBuilder expect, and the project's joint names.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from s2h_viewer.errors import InputFileError
+from s2h_viewer.errors import InputFileError, reading, require_readable_file
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
@@ -40,71 +41,111 @@ class BvhClip:
     frame_time: float
 
 
-def _tokens(path: Path) -> list[str]:
+#: bounds a BVH file must stay within (checked before its motion data is parsed)
+MAX_BVH_BYTES = 1024 ** 3
+MAX_JOINTS = 10_000
+MAX_FRAMES = 5_000_000
+MAX_VALUE = 1e6  # degrees or file units (centimetres): anything larger is damage, not motion
+MAX_FPS = 1000.0
+_CHANNELS = {f"{a}{k}" for a in "XYZ" for k in ("position", "rotation")}
+
+
+def _text(path: Path) -> str:
+    require_readable_file(path, MAX_BVH_BYTES)
     try:
-        return path.read_text(errors="strict").split()
-    except FileNotFoundError:
-        raise InputFileError(path, "file not found") from None
+        return path.read_text(errors="strict")
     except UnicodeDecodeError:
         raise InputFileError(path, "not a BVH file (binary data)") from None
+
+
+def _hierarchy(path: Path, tokens: list[str]) -> tuple[list[str], list[int], list[np.ndarray], list[list[str]]]:
+    """Joint names, parents, offsets and channels of the HIERARCHY section's tokens."""
+    names, parents, offsets, channels = [], [], [], []
+    stack: list[int] = []
+    i = 1
+    while i < len(tokens):
+        token = tokens[i]
+        if token in ("ROOT", "JOINT", "End"):
+            if token != "ROOT" and not stack:
+                raise ValueError(f"{token} outside any joint")
+            name = tokens[i + 1] if token != "End" else f"{names[stack[-1]]}_end"
+            names.append(name)
+            parents.append(stack[-1] if stack else -1)
+            offsets.append(np.zeros(3))
+            channels.append([])
+            if len(names) > MAX_JOINTS:
+                raise InputFileError(path, f"more than {MAX_JOINTS} joints")
+            i += 2
+        elif token == "{":
+            if not names:
+                raise ValueError("'{' before any joint")
+            stack.append(len(names) - 1)
+            i += 1
+        elif token == "}":
+            stack.pop()
+            i += 1
+        elif token == "OFFSET":
+            offset = np.array(tokens[i + 1:i + 4], dtype=np.float64)
+            if offset.shape != (3,) or not np.all(np.abs(offset) <= MAX_VALUE):
+                raise ValueError(f"OFFSET of {names[stack[-1]] if stack else '?'} is not 3 finite numbers")
+            offsets[-1 if not stack else stack[-1]] = offset
+            i += 4
+        elif token == "CHANNELS":
+            n = int(tokens[i + 1])
+            if not 0 <= n <= 6 or not stack:
+                raise ValueError(f"CHANNELS {n}")
+            chans = tokens[i + 2:i + 2 + n]
+            unknown = set(chans) - _CHANNELS
+            if unknown or len(chans) != n:
+                raise InputFileError(path, f"unknown channels {', '.join(sorted(unknown)) or '(too few)'}")
+            channels[stack[-1]] = chans
+            i += 2 + n
+        else:
+            raise ValueError(f"unexpected token {token!r}")
+    if stack or not names:
+        raise InputFileError(path, "malformed BVH (unbalanced braces in the hierarchy)")
+    return names, parents, offsets, channels
 
 
 def read_bvh(path: str | Path) -> BvhClip:
     """Parse a BVH file; an `InputFileError` naming the file and what is wrong with it."""
     path = Path(path)
-    tokens = _tokens(path)
+    text = _text(path)
+    head, marker, motion = text.partition("MOTION")
+    tokens = head.split()
     if not tokens or tokens[0] != "HIERARCHY":
         raise InputFileError(path, "not a BVH file (no HIERARCHY header)")
-    names, parents, offsets, channels = [], [], [], []
-    stack: list[int] = []
-    i = 1
+    if not marker:
+        raise InputFileError(path, "malformed BVH (no MOTION section)")
     try:
-        while tokens[i] != "MOTION":
-            token = tokens[i]
-            if token in ("ROOT", "JOINT", "End"):
-                name = tokens[i + 1] if token != "End" else f"{names[stack[-1]]}_end"
-                names.append(name)
-                parents.append(stack[-1] if stack else -1)
-                offsets.append(np.zeros(3))
-                channels.append([])
-                i += 2
-            elif token == "{":
-                stack.append(len(names) - 1)
-                i += 1
-            elif token == "}":
-                stack.pop()
-                i += 1
-            elif token == "OFFSET":
-                offsets[-1 if not stack else stack[-1]] = np.array(tokens[i + 1:i + 4], dtype=np.float64)
-                i += 4
-            elif token == "CHANNELS":
-                n = int(tokens[i + 1])
-                channels[stack[-1]] = tokens[i + 2:i + 2 + n]
-                i += 2 + n
-            else:
-                raise ValueError(f"unexpected token {token!r}")
-        n_frames = int(tokens[tokens.index("Frames:", i) + 1])
-        frame_time = float(tokens[tokens.index("Time:", i) + 1])
-        start = tokens.index("Time:", i) + 2
-        values = np.array(tokens[start:], dtype=np.float64)
+        names, parents, offsets, channels = _hierarchy(path, tokens)
+        frames_line, time_line, numbers = (motion.lstrip().split("\n", 2) + ["", ""])[:3]
+        frames_key, n_frames = frames_line.split(":")
+        time_key, frame_time = time_line.split(":")
+        if frames_key.strip() != "Frames" or time_key.strip() != "Frame Time":
+            raise ValueError("MOTION must start with 'Frames:' and 'Frame Time:' lines")
+        n_frames, frame_time = int(n_frames), float(frame_time)
     except (IndexError, ValueError) as exc:
         raise InputFileError(path, f"malformed BVH ({exc})") from None
     width = sum(len(c) for c in channels)
-    if stack or not names:
-        raise InputFileError(path, "malformed BVH (unbalanced braces in the hierarchy)")
-    if width == 0 or len(values) != n_frames * width:
+    if not 1 <= n_frames <= MAX_FRAMES:
+        raise InputFileError(path, f"declares {n_frames} frames; this program reads 1 to {MAX_FRAMES}")
+    if not np.isfinite(frame_time) or not 1.0 / MAX_FPS <= frame_time:
+        raise InputFileError(path, f"frame time {frame_time} is not a positive number of at least {1 / MAX_FPS} s")
+    if width == 0 or len(numbers) < n_frames * width:  # each number takes at least one character
+        raise InputFileError(path, f"MOTION is too short for {n_frames} frames x {width} channels")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)  # text-mode fromstring: the parse is checked below
+        values = np.fromstring(numbers, dtype=np.float64, sep=" ")
+    if len(values) != n_frames * width:
         raise InputFileError(path, f"MOTION holds {len(values)} numbers, expected {n_frames} frames x {width} "
                                    f"channels")
-    if frame_time <= 0:
-        raise InputFileError(path, f"frame time {frame_time} is not positive")
-    bad = set(sum(channels, [])) - {f"{a}{k}" for a in "XYZ" for k in ("position", "rotation")}
-    if bad:
-        raise InputFileError(path, f"unknown channels {', '.join(sorted(bad))}")
     frames = values.reshape(n_frames, width)
-    if not np.isfinite(frames).all():
-        bad_frames = ~np.isfinite(frames).all(axis=1)
-        raise InputFileError(path, f"NaN or infinite values in {int(bad_frames.sum())} frames "
-                                   f"(first at frame {int(np.flatnonzero(bad_frames)[0])})")
+    for problem, bad_frames in (("NaN or infinite", ~np.isfinite(frames).all(axis=1)),
+                                (f"absurd (beyond {MAX_VALUE:g})", ~(np.abs(frames) <= MAX_VALUE).all(axis=1))):
+        if bad_frames.any():
+            raise InputFileError(path, f"{problem} values in {int(bad_frames.sum())} frames "
+                                       f"(first at frame {int(np.flatnonzero(bad_frames)[0])})")
     return BvhClip(names, np.array(parents), np.array(offsets), channels, frames, frame_time)
 
 
@@ -137,7 +178,12 @@ def load_bvh(path: str | Path, side: str = "right", scheme: str | None = None,
              joint_map: dict[str, str] | None = None, name: str | None = None) -> tuple[HandModel, Motion]:
     """The hand skeleton of a BVH file and its finger motion (a hand alone or one hand of a body)."""
     path = Path(path)
-    clip = read_bvh(path)
+    with reading(path, "a BVH rig and motion"):
+        return _load_bvh(path, read_bvh(path), side, scheme, joint_map, name)
+
+
+def _load_bvh(path: Path, clip: BvhClip, side: str, scheme: str | None, joint_map: dict[str, str] | None,
+              name: str | None) -> tuple[HandModel, Motion]:
     mapping = map_rig(clip.names, path, side, scheme, joint_map)
     for tip in mapping.missing_tips:  # a finger's End Site is its tip
         end_site = f"{mapping.joints[topo.JOINT_NAMES[topo.joint_index(tip) - 1]]}_end"

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from s2h_viewer.errors import InputFileError
+from s2h_viewer.errors import InputFileError, reading, require_readable_file
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
@@ -27,12 +27,14 @@ READ_TIMEOUT_S = 300
 def _read(path: Path, fps: float = 30.0) -> tuple[RigSkeleton, RigMesh | None, list[tuple[str, np.ndarray]]]:
     """Skeleton, skinned mesh and takes (name, (T, N, 3, 3) world rotations) of an FBX file, read by
     `fbx_scene` in a child process (see there why)."""
-    if not path.exists():
-        raise InputFileError(path, "file not found")
+    require_readable_file(path)
     with tempfile.TemporaryDirectory(prefix="s2h-fbx-") as tmp:
         out = Path(tmp) / "scene.npz"
-        done = subprocess.run([sys.executable, "-m", "s2h_viewer.io.fbx_scene", str(path), str(out), str(fps)],
-                              capture_output=True, text=True, timeout=READ_TIMEOUT_S)
+        try:
+            done = subprocess.run([sys.executable, "-m", "s2h_viewer.io.fbx_scene", str(path), str(out), str(fps)],
+                                  capture_output=True, text=True, timeout=READ_TIMEOUT_S)
+        except subprocess.TimeoutExpired:
+            raise InputFileError(path, f"reading it took over {READ_TIMEOUT_S} s; gave up") from None
         if done.returncode != 0 or not out.exists():
             why = done.stderr.strip().splitlines()[-1] if done.stderr.strip() else f"exit status {done.returncode}"
             if done.returncode < 0:
@@ -41,6 +43,8 @@ def _read(path: Path, fps: float = 30.0) -> tuple[RigSkeleton, RigMesh | None, l
         with np.load(out) as arrays:
             data = {k: arrays[k] for k in arrays.files}
     names = json.loads(str(data["names_json"]))
+    if not np.isfinite(data["world"]).all():
+        raise InputFileError(path, "bone transforms contain NaN or infinite values")
     skeleton = RigSkeleton(names, data["world"], data["parents"])
     mesh = None
     if "mesh_vertices" in data:
@@ -53,16 +57,22 @@ def load_fbx_hand(path: str | Path, side: str = "right", scheme: str | None = No
                   joint_map: dict[str, str] | None = None, name: str | None = None) -> HandModel:
     """The hand of an FBX file (a lone hand or one hand of a character), annotated, as a right hand."""
     path = Path(path)
-    skeleton, mesh, _ = _read(path)
-    if not skeleton.names:
-        raise InputFileError(path, "has no nodes (no skeleton)")
-    mapping = map_rig(skeleton.names, path, side, scheme, joint_map)
-    return build_hand(path, skeleton, mapping, mesh, side, name)
+    with reading(path, "an FBX hand"):
+        skeleton, mesh, _ = _read(path)
+        if not skeleton.names:
+            raise InputFileError(path, "has no nodes (no skeleton)")
+        mapping = map_rig(skeleton.names, path, side, scheme, joint_map)
+        return build_hand(path, skeleton, mapping, mesh, side, name)
 
 
 def load_fbx_motion(path: str | Path, hand: HandModel, take: int = 0, fps: float = 30.0) -> Motion:
     """Take ``take`` of the file, sampled at ``fps``, as finger rotations on ``hand``."""
     path = Path(path)
+    with reading(path, "an FBX take"):
+        return _take_motion(path, hand, take, fps)
+
+
+def _take_motion(path: Path, hand: HandModel, take: int, fps: float) -> Motion:
     skeleton, _, takes = _read(path, fps)
     if not takes:
         raise InputFileError(path, "has no animation takes")

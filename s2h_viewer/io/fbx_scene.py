@@ -16,6 +16,9 @@ import numpy as np
 import ufbx
 from scipy.spatial.transform import Rotation
 
+#: frames x bones evaluated for one take (each a ufbx call): bounds the read's time and memory
+MAX_TAKE_SAMPLES = 5_000_000
+
 
 def _matrix(m) -> np.ndarray:
     out = np.eye(4)
@@ -82,7 +85,11 @@ def _takes(scene, nodes: list, parents: np.ndarray, fps: float, keep: list
     for stack in stacks:
         anim = stack.anim
         keep.append(anim)
-        n_frames = int(round((stack.time_end - stack.time_begin) * fps)) + 1
+        duration = stack.time_end - stack.time_begin
+        if not np.isfinite(duration) or duration * fps * len(nodes) > MAX_TAKE_SAMPLES:
+            raise ValueError(f"take {stack.name!r} lasts {duration:.4g} s: over the limit of {MAX_TAKE_SAMPLES} "
+                             f"bone-frames ({len(nodes)} bones at {fps:g} fps)")
+        n_frames = int(round(duration * fps)) + 1
         if n_frames < 2:
             continue
         local = np.empty((n_frames, len(nodes), 3, 3))

@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from s2h_viewer.errors import InputFileError
+from s2h_viewer.errors import InputFileError, reading, require_readable_file
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.hand.rig_mapping import load_user_mapping
@@ -46,7 +46,12 @@ def load_hand_file(path: str | Path, options: RigOptions = RigOptions()) -> Hand
     if path.suffix == "" and not path.exists():
         from s2h_viewer.samples import load_sample_hand
         return load_sample_hand(str(path))
-    suffix = _suffix(path, HAND_SUFFIXES, "hand")
+    suffix = _suffix(require_readable_file(path), HAND_SUFFIXES, "hand")
+    with reading(path, "a hand"):
+        return _load_hand(path, suffix, options)
+
+
+def _load_hand(path: Path, suffix: str, options: RigOptions) -> HandModel:
     if suffix == ".npz":
         from s2h_viewer.io.npz import load_hand
         return load_hand(path)
@@ -65,7 +70,13 @@ def load_motion_file(path: str | Path, hand: HandModel | None = None, options: R
     """A motion and the hand it is performed on: the file's own rig for BVH/glTF/FBX (``hand`` may be
     given to skip re-reading it), None for an npz (its ``hand_name`` names a sample hand)."""
     path = Path(path)
-    suffix = _suffix(path, MOTION_SUFFIXES, "motion")
+    suffix = _suffix(require_readable_file(path), MOTION_SUFFIXES, "motion")
+    with reading(path, "a motion"):
+        return _load_motion(path, suffix, hand, options)
+
+
+def _load_motion(path: Path, suffix: str, hand: HandModel | None, options: RigOptions
+                 ) -> tuple[Motion, HandModel | None]:
     if suffix == ".npz":
         from s2h_viewer.io.npz import load_motion
         return load_motion(path), hand
@@ -73,7 +84,7 @@ def load_motion_file(path: str | Path, hand: HandModel | None = None, options: R
         from s2h_viewer.io.bvh import load_bvh
         rig, motion = load_bvh(path, options.side, options.scheme, options.mapping())
         return motion, rig
-    rig = hand or load_hand_file(path, options)
+    rig = hand or _load_hand(path, suffix, options)
     if suffix in (".glb", ".gltf"):
         from s2h_viewer.io.gltf import load_gltf_motion
         return load_gltf_motion(path, rig), rig

@@ -16,7 +16,7 @@ import pygltflib
 import trimesh
 from scipy.spatial.transform import Rotation, Slerp
 
-from s2h_viewer.errors import InputFileError
+from s2h_viewer.errors import InputFileError, reading, require_readable_file
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
@@ -30,11 +30,38 @@ _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}
 GLTF_SUFFIXES = (".glb", ".gltf")
 
 
+#: bounds on what a file may declare, checked before anything is allocated
+MAX_NODES = 100_000
+MAX_ACCESSOR_ELEMENTS = 20_000_000
+MAX_MESH_VERTICES = 2_000_000
+#: frames x animated nodes resampled from one animation (float64 3 x 3 each: about 1.4 GiB)
+MAX_ANIMATION_SAMPLES = 20_000_000
+
+
+def _index(path: Path, value, table: list | None, what: str) -> int:
+    """``value`` as an index into ``table``, or an `InputFileError` naming ``what``."""
+    size = len(table or [])
+    if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value < size:
+        raise InputFileError(path, f"{what} refers to entry {value!r} of {size}")
+    return value
+
+
+def _numbers(path: Path, value, length: int, what: str) -> np.ndarray:
+    """``value`` as ``length`` finite floats, or an `InputFileError` naming ``what``."""
+    try:
+        array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InputFileError(path, f"{what} is not a list of numbers") from None
+    if array.shape != (length,) or not np.isfinite(array).all():
+        raise InputFileError(path, f"{what} must be {length} finite numbers")
+    return array
+
+
 class _Document:
     """A parsed glTF with its binary data in one blob, and the scene graph at rest."""
 
     def __init__(self, path: Path):
-        self.path = path
+        self.path = require_readable_file(path)
         try:
             self.gltf = pygltflib.GLTF2().load(str(path))
             if self.gltf is None:
@@ -45,93 +72,156 @@ class _Document:
         except Exception as exc:  # pygltflib raises many types on damaged input
             raise InputFileError(path, f"not a readable glTF/GLB file ({type(exc).__name__}: {exc})") from None
         self.blob = self.gltf.binary_blob() or b""
-        nodes = self.gltf.nodes
-        self.names = [n.name or f"node{i}" for i, n in enumerate(nodes)]
+        nodes = self.gltf.nodes or []
+        if len(nodes) > MAX_NODES:
+            raise InputFileError(path, f"has {len(nodes)} nodes, over the limit of {MAX_NODES}")
+        self.names = [str(n.name) if n.name else f"node{i}" for i, n in enumerate(nodes)]
         self.parents = np.full(len(nodes), -1)
         for i, node in enumerate(nodes):
             for child in node.children or []:
+                child = _index(path, child, nodes, f"node {i}'s child")
+                if self.parents[child] >= 0 or child == i:
+                    raise InputFileError(path, f"node {child} has more than one parent (not a tree)")
                 self.parents[child] = i
         self.order = self._parents_first()
-        self.local = np.stack([_local_matrix(n) for n in nodes]) if nodes else np.zeros((0, 4, 4))
+        self.local = (np.stack([_local_matrix(path, i, n) for i, n in enumerate(nodes)]) if nodes
+                      else np.zeros((0, 4, 4)))
         self.world = self.local.copy()
         for i in self.order:
             if self.parents[i] >= 0:
                 self.world[i] = self.world[self.parents[i]] @ self.local[i]
 
     def _parents_first(self) -> list[int]:
-        order, seen = [], set()
+        """Nodes ordered parents first; an `InputFileError` if the hierarchy has a cycle."""
+        depth = np.full(len(self.parents), -1)
         for start in range(len(self.parents)):
-            chain = []
-            node = start
-            while node >= 0 and node not in seen:
+            chain, node = [], start
+            while node >= 0 and depth[node] < 0:
+                if len(chain) > len(self.parents):
+                    raise InputFileError(self.path, f"node hierarchy has a cycle through node {start}")
                 chain.append(node)
-                seen.add(node)
                 node = self.parents[node]
-            order.extend(reversed(chain))
-        return order
+            base = depth[node] if node >= 0 else -1
+            for k, n in enumerate(reversed(chain)):
+                depth[n] = base + 1 + k
+        return [int(i) for i in np.argsort(depth, kind="stable")]
 
-    def accessor(self, index: int) -> np.ndarray:
+    def accessor(self, index, what: str = "accessor") -> np.ndarray:
+        """(count, width) data of accessor ``index``, checked against the bytes really there first."""
+        path = self.path
+        index = _index(path, index, self.gltf.accessors, what)
         acc = self.gltf.accessors[index]
+        label = f"accessor {index} ({what})"
+        if acc.componentType not in _DTYPES or acc.type not in _WIDTH:
+            raise InputFileError(path, f"{label} has unknown type {acc.type!r}/{acc.componentType!r}")
         dtype = np.dtype(_DTYPES[acc.componentType])
         width = _WIDTH[acc.type]
+        count = acc.count
+        if isinstance(count, bool) or not isinstance(count, int) or not 0 < count <= MAX_ACCESSOR_ELEMENTS:
+            raise InputFileError(path, f"{label} declares {count!r} elements; this program reads 1 to "
+                                       f"{MAX_ACCESSOR_ELEMENTS}")
         if acc.bufferView is None:
-            return np.zeros((acc.count, width), dtype=np.float64)
-        view = self.gltf.bufferViews[acc.bufferView]
-        start = (view.byteOffset or 0) + (acc.byteOffset or 0)
-        stride = view.byteStride or dtype.itemsize * width
-        try:
-            raw = np.frombuffer(self.blob, dtype=np.uint8, count=stride * (acc.count - 1) + dtype.itemsize * width,
-                                offset=start)
-        except ValueError:
-            raise InputFileError(self.path, f"accessor {index} reaches past the end of the binary data") from None
-        rows = np.lib.stride_tricks.as_strided(raw, (acc.count, dtype.itemsize * width), (stride, 1))
-        data = rows.copy().view(dtype).reshape(acc.count, width)
+            return np.zeros((count, width), dtype=np.float64)
+        view = self.gltf.bufferViews[_index(path, acc.bufferView, self.gltf.bufferViews, f"{label}'s bufferView")]
+        element = dtype.itemsize * width
+        view_start, view_length = view.byteOffset or 0, view.byteLength
+        start = acc.byteOffset or 0
+        stride = view.byteStride or element
+        if not all(isinstance(v, int) and not isinstance(v, bool) and v >= 0
+                   for v in (view_start, view_length, start, stride)):
+            raise InputFileError(path, f"{label}: byte offsets, lengths and strides must be non-negative integers")
+        if stride < element:
+            raise InputFileError(path, f"{label}: byte stride {stride} is smaller than its {element}-byte element")
+        if view_start + view_length > len(self.blob):
+            raise InputFileError(path, f"bufferView {acc.bufferView} ends at byte {view_start + view_length}, past "
+                                       f"the {len(self.blob)} bytes of binary data")
+        needed = start + stride * (count - 1) + element
+        if needed > view_length:
+            raise InputFileError(path, f"{label} needs {needed} bytes of its {view_length}-byte bufferView "
+                                       f"({count} elements)")
+        raw = np.frombuffer(self.blob, dtype=np.uint8, count=needed - start, offset=view_start + start)
+        rows = np.lib.stride_tricks.as_strided(raw, (count, element), (stride, 1))
+        data = rows.copy().view(dtype).reshape(count, width)
+        if dtype.kind == "f" and not np.isfinite(data).all():
+            raise InputFileError(path, f"{label} contains NaN or infinite values")
         if acc.normalized and dtype.kind in "iu":
             data = data.astype(np.float64) / np.iinfo(dtype).max
         return data
 
 
-def _local_matrix(node: pygltflib.Node) -> np.ndarray:
+def _local_matrix(path: Path, index: int, node: pygltflib.Node) -> np.ndarray:
+    what = f"node {index}"
     if node.matrix:
-        return np.array(node.matrix, dtype=np.float64).reshape(4, 4).T  # column-major in the file
+        return _numbers(path, node.matrix, 16, f"{what}'s matrix").reshape(4, 4).T  # column-major in the file
     m = np.eye(4)
     if node.rotation:
-        m[:3, :3] = Rotation.from_quat(node.rotation).as_matrix()  # glTF stores (x, y, z, w)
+        xyzw = _numbers(path, node.rotation, 4, f"{what}'s rotation")
+        if np.linalg.norm(xyzw) < 1e-6:
+            raise InputFileError(path, f"{what}'s rotation is a zero quaternion")
+        m[:3, :3] = Rotation.from_quat(xyzw).as_matrix()  # glTF stores (x, y, z, w)
     if node.scale:
-        m[:3, :3] = m[:3, :3] * np.asarray(node.scale)
+        m[:3, :3] = m[:3, :3] * _numbers(path, node.scale, 3, f"{what}'s scale")
     if node.translation:
-        m[:3, 3] = node.translation
+        m[:3, 3] = _numbers(path, node.translation, 3, f"{what}'s translation")
     return m
 
 
 def _skinned_mesh(doc: _Document) -> RigMesh | None:
     """All skinned triangle primitives of the file, posed at rest, as one mesh."""
-    parts = []
-    for node in doc.gltf.nodes:
+    parts, n_vertices = [], 0
+    path, gltf = doc.path, doc.gltf
+    for index, node in enumerate(gltf.nodes):
         if node.mesh is None or node.skin is None:
             continue
-        skin = doc.gltf.skins[node.skin]
-        joints = np.asarray(skin.joints)
+        skin = gltf.skins[_index(path, node.skin, gltf.skins, f"node {index}'s skin")]
+        mesh = gltf.meshes[_index(path, node.mesh, gltf.meshes, f"node {index}'s mesh")]
+        if not skin.joints:
+            raise InputFileError(path, f"skin {node.skin} has no joints")
+        joints = np.array([_index(path, j, gltf.nodes, f"skin {node.skin}'s joint") for j in skin.joints])
         if skin.inverseBindMatrices is not None:
-            inverse_bind = doc.accessor(skin.inverseBindMatrices).reshape(-1, 4, 4).transpose(0, 2, 1)
+            inverse_bind = doc.accessor(skin.inverseBindMatrices, f"skin {node.skin}'s inverse bind matrices")
+            if inverse_bind.shape != (len(joints), 16):
+                raise InputFileError(path, f"skin {node.skin} has {len(joints)} joints and {len(inverse_bind)} "
+                                           f"inverse bind matrices of {inverse_bind.shape[1]} values")
+            inverse_bind = inverse_bind.astype(np.float64).reshape(-1, 4, 4).transpose(0, 2, 1)
         else:
             inverse_bind = np.broadcast_to(np.eye(4), (len(joints), 4, 4))
         skinning = doc.world[joints] @ inverse_bind  # (J, 4, 4)
-        for prim in doc.gltf.meshes[node.mesh].primitives:
+        for p, prim in enumerate(mesh.primitives or []):
             if prim.mode not in (None, 4) or prim.attributes.JOINTS_0 is None:
                 continue
-            v = doc.accessor(prim.attributes.POSITION).astype(np.float64)
-            j = doc.accessor(prim.attributes.JOINTS_0).astype(np.int64)
-            w = doc.accessor(prim.attributes.WEIGHTS_0).astype(np.float64)
-            if j.max(initial=0) >= len(joints):
+            what = f"mesh {node.mesh} primitive {p}"
+            if prim.attributes.POSITION is None or prim.attributes.WEIGHTS_0 is None:
+                raise InputFileError(path, f"{what} has joints but no positions or weights")
+            v = doc.accessor(prim.attributes.POSITION, f"{what} positions").astype(np.float64)
+            j = doc.accessor(prim.attributes.JOINTS_0, f"{what} joints").astype(np.int64)
+            w = doc.accessor(prim.attributes.WEIGHTS_0, f"{what} weights").astype(np.float64)
+            if v.shape[1] != 3 or j.shape != w.shape or len(j) != len(v):
+                raise InputFileError(path, f"{what}: {len(v)} positions of {v.shape[1]} values, {len(j)} joint and "
+                                           f"{len(w)} weight entries")
+            n_vertices += len(v)
+            if n_vertices > MAX_MESH_VERTICES:
+                raise InputFileError(path, f"skinned meshes have more than {MAX_MESH_VERTICES} vertices")
+            if j.min(initial=0) < 0 or j.max(initial=0) >= len(joints):
                 raise InputFileError(doc.path, f"mesh {node.mesh} skins vertices to joint {j.max()} of a "
                                                f"{len(joints)}-joint skin")
-            faces = (doc.accessor(prim.indices).reshape(-1, 3) if prim.indices is not None
-                     else np.arange(len(v)).reshape(-1, 3))
+            if np.any(w < 0):
+                raise InputFileError(path, f"{what} has negative skin weights")
+            if prim.indices is not None:
+                faces = doc.accessor(prim.indices, f"{what} indices")
+                if faces.shape[1] != 1 or faces.dtype.kind not in "iu" or len(faces) % 3:
+                    raise InputFileError(path, f"{what}: indices must be integers, three per triangle")
+                faces = faces.reshape(-1, 3).astype(np.int64)
+            elif len(v) % 3:
+                raise InputFileError(path, f"{what}: {len(v)} vertices without indices is not a triangle list")
+            else:
+                faces = np.arange(len(v)).reshape(-1, 3)
+            if faces.max(initial=0) >= len(v):
+                raise InputFileError(path, f"{what}: a triangle uses vertex {int(faces.max())} of {len(v)}")
             w = w / np.maximum(w.sum(axis=1, keepdims=True), 1e-12)
             blend = np.einsum("vk,vkab->vab", w, skinning[j])
             posed = np.einsum("vab,vb->va", blend[:, :3, :3], v) + blend[:, :3, 3]
-            parts.append((posed, faces.astype(np.int64), joints[j], w))
+            parts.append((posed, faces, joints[j], w))
     if not parts:
         return None
     offsets = np.cumsum([0] + [len(p[0]) for p in parts[:-1]])
@@ -148,16 +238,42 @@ def _map(doc: _Document, side: str, scheme: str | None, joint_map: dict[str, str
 def load_gltf_hand(path: str | Path, side: str = "right", scheme: str | None = None,
                    joint_map: dict[str, str] | None = None, name: str | None = None) -> HandModel:
     """The hand of a glTF/GLB file (a lone hand or one hand of a character), annotated, as a right hand."""
-    doc = _Document(Path(path))
-    mapping = _map(doc, side, scheme, joint_map)
-    skeleton = RigSkeleton(doc.names, doc.world, doc.parents)
-    return build_hand(doc.path, skeleton, mapping, _skinned_mesh(doc), side, name)
+    with reading(path, "a glTF hand"):
+        doc = _Document(Path(path))
+        mapping = _map(doc, side, scheme, joint_map)
+        skeleton = RigSkeleton(doc.names, doc.world, doc.parents)
+        return build_hand(doc.path, skeleton, mapping, _skinned_mesh(doc), side, name)
+
+
+def _rotation_track(doc: _Document, anim, channel, label: str) -> tuple[np.ndarray, np.ndarray]:
+    """(times, xyzw) of a rotation channel: times finite and strictly increasing, quaternions non-zero."""
+    path = doc.path
+    sampler = anim.samplers[_index(path, channel.sampler, anim.samplers, f"{label}'s sampler")]
+    times = doc.accessor(sampler.input, f"{label} times")
+    values = doc.accessor(sampler.output, f"{label} rotations")
+    if times.shape[1] != 1 or values.shape[1] != 4:
+        raise InputFileError(path, f"{label}: times must be scalars and rotations 4-vectors")
+    times, values = times[:, 0].astype(np.float64), values.astype(np.float64)
+    per_key = 3 if sampler.interpolation == "CUBICSPLINE" else 1
+    if len(values) != per_key * len(times):
+        raise InputFileError(path, f"{label}: sampler has {len(times)} times and {len(values)} rotations")
+    if per_key == 3:
+        values = values.reshape(len(times), 3, 4)[:, 1]
+    if np.any(times < 0) or np.any(np.diff(times) <= 0):
+        raise InputFileError(path, f"{label}: key times must be non-negative and strictly increasing")
+    if np.any(np.linalg.norm(values, axis=1) < 1e-6):
+        raise InputFileError(path, f"{label}: zero quaternion among its rotations")
+    return times, values
 
 
 def load_gltf_motion(path: str | Path, hand: HandModel, animation: int = 0, fps: float = 30.0) -> Motion:
     """Animation ``animation`` of the file, resampled at ``fps``, as finger rotations on ``hand``
     (a hand loaded from the same rig, or any rig with the same bone names)."""
-    doc = _Document(Path(path))
+    with reading(path, "a glTF animation"):
+        return _load_motion(_Document(Path(path)), hand, animation, fps)
+
+
+def _load_motion(doc: _Document, hand: HandModel, animation: int, fps: float) -> Motion:
     animations = doc.gltf.animations or []
     if not animations:
         raise InputFileError(doc.path, "has no animations")
@@ -165,44 +281,48 @@ def load_gltf_motion(path: str | Path, hand: HandModel, animation: int = 0, fps:
         raise InputFileError(doc.path, f"has {len(animations)} animations; no animation {animation}")
     anim = animations[animation]
     mapping = _map(doc, hand.meta.get("side", "right"), hand.meta.get("rig_scheme"), None)
-    tracks = {}
-    end = 0.0
-    for channel in anim.channels:
-        if channel.target.path != "rotation" or channel.target.node is None:
-            continue
-        sampler = anim.samplers[channel.sampler]
-        times = doc.accessor(sampler.input)[:, 0].astype(np.float64)
-        values = doc.accessor(sampler.output).astype(np.float64)
-        if sampler.interpolation == "CUBICSPLINE":
-            values = values.reshape(len(times), 3, 4)[:, 1]
-        if len(times) == 0 or len(values) != len(times):
-            raise InputFileError(doc.path, f"animation {animation}: sampler {channel.sampler} has "
-                                           f"{len(times)} times and {len(values)} rotations")
-        if not np.isfinite(values).all():
-            raise InputFileError(doc.path, f"animation {animation}: NaN or infinite rotations on node "
-                                           f"{doc.names[channel.target.node]!r}")
-        tracks[channel.target.node] = (times, values)
-        end = max(end, float(times[-1]))
-    n_frames = int(round(end * fps)) + 1
-    t = np.arange(n_frames) / fps
-    local_rot = np.broadcast_to(rotation_part(doc.local), (n_frames, len(doc.names), 3, 3)).copy()
-    for node, (times, values) in tracks.items():
-        local_rot[:, node] = _sample_rotations(times, values, t)
-    world_rot = local_rot.copy()
-    for i in doc.order:
-        if doc.parents[i] >= 0:
-            world_rot[:, i] = world_rot[:, doc.parents[i]] @ local_rot[:, i]
     lookup = {n: i for i, n in enumerate(doc.names)}
     rotating = [lookup[mapping.joints[topo.JOINT_NAMES[j]]] for j in topo.ROTATING_JOINTS]
+    needed = sorted({a for r in rotating for a in _ancestors(doc, r)})  # the bones whose rotations matter
+    tracks = {}
+    end = 0.0
+    for c, channel in enumerate(anim.channels or []):
+        if channel.target is None or channel.target.path != "rotation" or channel.target.node is None:
+            continue
+        node = _index(doc.path, channel.target.node, doc.names, f"animation {animation} channel {c}'s node")
+        if node in needed:
+            tracks[node] = _rotation_track(doc, anim, channel, f"animation {animation} channel {c}")
+            end = max(end, float(tracks[node][0][-1]))
+    n_frames = int(round(end * fps)) + 1
+    if n_frames * len(needed) > MAX_ANIMATION_SAMPLES:
+        raise InputFileError(doc.path, f"animation {animation} lasts {end:.4g} s: {n_frames} frames x {len(needed)} "
+                                       f"bones is over the limit of {MAX_ANIMATION_SAMPLES} bone-frames")
+    t = np.arange(n_frames) / fps
+    local_rest = rotation_part(doc.local)
+    world_rot: dict[int, np.ndarray] = {}
+    needed_set = set(needed)
+    for i in doc.order:  # parents first
+        if i in needed_set:
+            local = (_sample_rotations(*tracks[i], t) if i in tracks
+                     else np.broadcast_to(local_rest[i], (n_frames, 3, 3)))
+            parent = doc.parents[i]
+            world_rot[i] = local if parent < 0 else world_rot[parent] @ local
     name = anim.name or f"{doc.path.stem}_{animation}"
-    return motion_from_world_rotations(hand, world_rot[:, rotating], fps, doc.path, name)
+    return motion_from_world_rotations(hand, np.stack([world_rot[r] for r in rotating], axis=1), fps, doc.path,
+                                       str(name))
+
+
+def _ancestors(doc: _Document, node: int) -> list[int]:
+    """``node`` and every node above it."""
+    chain = []
+    while node >= 0:
+        chain.append(node)
+        node = doc.parents[node]
+    return chain
 
 
 def _sample_rotations(times: np.ndarray, xyzw: np.ndarray, t: np.ndarray) -> np.ndarray:
-    norms = np.linalg.norm(xyzw, axis=1, keepdims=True)
-    if np.any(norms < 1e-6):
-        raise ValueError("zero quaternion in an animation")
-    rotations = Rotation.from_quat(xyzw / norms)
+    rotations = Rotation.from_quat(xyzw / np.linalg.norm(xyzw, axis=1, keepdims=True))
     if len(times) == 1:
         return np.broadcast_to(rotations.as_matrix(), (len(t), 3, 3))
     return Slerp(times, rotations)(np.clip(t, times[0], times[-1])).as_matrix()

@@ -9,17 +9,22 @@ from the hand's canonical pose (schema 1 measured them from the rig's rest pose:
 Hand npz (schema 1): ``name``, ``offsets`` (21, 3), ``rest_frames`` (15, 3, 3), ``rig_frames``
 (16, 3, 3), ``radii`` (21,), optional ``mesh_vertices`` (V, 3), ``mesh_faces`` (F, 3),
 ``mesh_weights`` (V, 16), ``source``, ``meta_json``, ``schema`` = "s2h-hand", ``schema_version`` = 1.
+
+Reading checks every member against a table (`MOTION_FIELDS`, `HAND_FIELDS`: kind, shape, required)
+from the npy headers, before any array is decompressed, so a file that lies about its sizes costs
+nothing; a new field is one line in the table.
 """
 
 from __future__ import annotations
 
 import json
 import zipfile
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from s2h_viewer.errors import InputFileError, S2HError
+from s2h_viewer.errors import InputFileError, S2HError, reading, require_readable_file
 from s2h_viewer.hand.model import HandModel, SkinnedMesh
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.io.atomic import atomic_path
@@ -28,19 +33,99 @@ HAND_SCHEMA_VERSION = 1
 #: 2: TBS rotations measured from the canonical pose (DESIGN.md section 2); 1 (rest pose) is refused
 MOTION_SCHEMA_VERSION = 2
 _SCHEMA_VERSIONS = {"s2h-hand": HAND_SCHEMA_VERSION, "s2h-motion": MOTION_SCHEMA_VERSION}
+#: longest motion read (about 46 hours at 30 fps): a clip's arrays stay a few GiB at most
+MAX_CLIP_FRAMES = 5_000_000
+#: shortest motion read: one frame is a pose, not a motion
+MIN_CLIP_FRAMES = 2
+#: largest hand mesh read
+MAX_MESH_VERTICES = 2_000_000
+MAX_MESH_FACES = 4_000_000
+#: longest string field (names, provenance JSON)
+MAX_TEXT_CHARS = 1_000_000
+#: deepest nesting accepted in ``meta_json``
+MAX_JSON_DEPTH = 32
 
 
-def _open(path: Path, schema: str) -> dict[str, np.ndarray]:
-    if not path.exists():
-        raise InputFileError(path, "file not found")
+@dataclass(frozen=True)
+class Field:
+    """One npz member: its kind ("float", "int", "text"), shape (ints fixed, letters shared sizes such as
+    the frame count T; () a scalar) and whether it must be there."""
+
+    kind: str
+    shape: tuple = ()
+    required: bool = False
+
+
+_KINDS = {"float": "fiu", "int": "iu", "text": "U"}
+#: bounds on the shared sizes named in shapes
+_SIZE_LIMITS = {"T": (MIN_CLIP_FRAMES, MAX_CLIP_FRAMES, "frames"), "V": (3, MAX_MESH_VERTICES, "mesh vertices"),
+                "F": (1, MAX_MESH_FACES, "mesh faces")}
+
+_COMMON_FIELDS = {"schema": Field("text", required=True), "schema_version": Field("int"), "name": Field("text"),
+                  "meta_json": Field("text")}
+MOTION_FIELDS = {**_COMMON_FIELDS, "q_tbs": Field("float", ("T", 15, 4), True), "fps": Field("float", (), True),
+                 "hand_name": Field("text"), "labels": Field("text", ("T",))}
+HAND_FIELDS = {**_COMMON_FIELDS, "name": Field("text", required=True), "offsets": Field("float", (21, 3), True),
+               "rest_frames": Field("float", (15, 3, 3), True), "rig_frames": Field("float", (16, 3, 3), True),
+               "radii": Field("float", (21,), True), "mesh_vertices": Field("float", ("V", 3)),
+               "mesh_faces": Field("int", ("F", 3)), "mesh_weights": Field("float", ("V", 16)), "source": Field("text")}
+_MESH_KEYS = ("mesh_vertices", "mesh_faces", "mesh_weights")
+
+
+def _header(archive: zipfile.ZipFile, member: str) -> tuple[tuple, np.dtype]:
+    """Shape and dtype an npy member declares, read without decompressing the array."""
+    with archive.open(member) as fh:
+        version = np.lib.format.read_magic(fh)
+        shape, _, dtype = (np.lib.format.read_array_header_1_0(fh) if version == (1, 0)
+                           else np.lib.format.read_array_header_2_0(fh))
+    return shape, dtype
+
+
+def _check_field(path: Path, key: str, field: Field, shape: tuple, dtype: np.dtype, sizes: dict[str, int]) -> None:
+    if dtype.kind not in _KINDS[field.kind] or dtype.hasobject:
+        raise InputFileError(path, f"field {key} holds {dtype} values, expected {field.kind}")
+    if field.kind == "text" and dtype.itemsize // 4 > MAX_TEXT_CHARS:
+        raise InputFileError(path, f"field {key} is longer than {MAX_TEXT_CHARS} characters")
+    expected = tuple(sizes.get(d, d) for d in field.shape)
+    described = "(" + ", ".join(map(str, field.shape)) + ("," if len(field.shape) == 1 else "") + ")"
+    if len(shape) != len(expected):
+        raise InputFileError(path, f"field {key} has shape {shape}, expected {described}")
+    for actual, want in zip(shape, expected):
+        if isinstance(want, str):
+            low, high, what = _SIZE_LIMITS[want]
+            if not low <= actual <= high:
+                raise InputFileError(path, f"field {key} has {actual} {what}; this program reads {low} to {high}")
+            sizes[want] = actual
+        elif actual != want:
+            raise InputFileError(path, f"field {key} has shape {shape}, expected {described}")
+
+
+def _open(path: Path, schema: str, fields: dict[str, Field]) -> dict[str, np.ndarray]:
+    """The members of ``path`` named in ``fields``, each checked against its entry before it is read."""
+    require_readable_file(path)
     try:
-        with np.load(path, allow_pickle=False) as data:
-            arrays = {k: data[k] for k in data.files}
-    except (zipfile.BadZipFile, ValueError, OSError, EOFError) as exc:
-        raise InputFileError(path, f"not a readable npz file ({exc})") from None
-    found = str(arrays.get("schema", ""))
-    if found != schema:
-        raise InputFileError(path, f"not an {schema} file (schema {found or 'missing'})")
+        with zipfile.ZipFile(path) as archive:
+            members = {m[:-4]: m for m in archive.namelist() if m.endswith(".npy")}
+            if "schema" not in members:
+                raise InputFileError(path, f"not an {schema} file (schema missing)")
+            _check_field(path, "schema", fields["schema"], *_header(archive, members["schema"]), {})
+            with archive.open(members["schema"]) as fh:
+                found = str(np.lib.format.read_array(fh, allow_pickle=False))
+            if found != schema:
+                raise InputFileError(path, f"not an {schema} file (schema {found or 'missing'})")
+            missing = [k for k, f in fields.items() if f.required and k not in members]
+            if missing:
+                raise InputFileError(path, f"missing field(s): {', '.join(missing)}")
+            sizes: dict[str, int] = {}
+            for key, field in fields.items():
+                if key in members:
+                    _check_field(path, key, field, *_header(archive, members[key]), sizes)
+            with np.load(path, allow_pickle=False) as data:
+                arrays = {k: data[k] for k in fields if k in members}
+    except InputFileError:
+        raise
+    except Exception as exc:  # zipfile, zlib, the npy header parser: many types on damaged input
+        raise InputFileError(path, f"not a readable npz file ({type(exc).__name__}: {exc})") from exc
     version = int(arrays.get("schema_version", 0))
     current = _SCHEMA_VERSIONS[schema]
     if version > current:
@@ -50,13 +135,40 @@ def _open(path: Path, schema: str) -> dict[str, np.ndarray]:
         raise InputFileError(path, f"motion saved with schema {version}, whose TBS rotations were measured "
                                    f"from the rig's rest pose, not the canonical pose; re-export it from its "
                                    f"source file (BVH, glTF, FBX) or regenerate it (`make assets`)")
+    for key, value in arrays.items():
+        if value.dtype.kind == "f" and not np.isfinite(value).all():
+            if fields[key].shape[:1] == ("T",):
+                bad = ~np.isfinite(value.reshape(len(value), -1)).all(axis=1)
+                raise InputFileError(path, f"field {key} has NaN or infinite values in {int(bad.sum())} frames "
+                                           f"(first at frame {int(np.flatnonzero(bad)[0])})")
+            raise InputFileError(path, f"field {key} contains NaN or infinite values")
     return arrays
 
 
-def _require(path: Path, arrays: dict[str, np.ndarray], *keys: str) -> None:
-    missing = [k for k in keys if k not in arrays]
-    if missing:
-        raise InputFileError(path, f"missing field(s): {', '.join(missing)}")
+def _meta(path: Path, arrays: dict[str, np.ndarray]) -> dict:
+    """``meta_json`` as a dict (an object in JSON), at most `MAX_JSON_DEPTH` deep."""
+    text = str(arrays.get("meta_json", "{}"))
+    if _bracket_depth(text) > MAX_JSON_DEPTH:
+        raise InputFileError(path, f"meta_json is nested deeper than {MAX_JSON_DEPTH} levels")
+    try:
+        meta = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InputFileError(path, f"meta_json is not valid JSON ({exc})") from None
+    if not isinstance(meta, dict):
+        raise InputFileError(path, f"meta_json holds a JSON {type(meta).__name__}, expected an object")
+    return meta
+
+
+def _bracket_depth(text: str) -> int:
+    """Deepest bracket nesting in ``text`` (strings included: only an upper bound, cheap and recursion-free)."""
+    depth = deepest = 0
+    for char in text:
+        if char in "[{":
+            depth += 1
+            deepest = max(deepest, depth)
+        elif char in "]}":
+            depth -= 1
+    return deepest
 
 
 def save_motion(motion: Motion, path: str | Path) -> Path:
@@ -72,15 +184,17 @@ def save_motion(motion: Motion, path: str | Path) -> Path:
 def load_motion(path: str | Path) -> Motion:
     """Read a motion npz; any problem is an `InputFileError` naming the file."""
     path = Path(path)
-    arrays = _open(path, "s2h-motion")
-    _require(path, arrays, "q_tbs", "fps")
-    try:
-        return Motion(q_tbs=arrays["q_tbs"], fps=float(arrays["fps"]), name=str(arrays.get("name", path.stem)),
-                      hand_name=str(arrays.get("hand_name", "")),
-                      labels=arrays["labels"].astype(object) if "labels" in arrays else None,
-                      meta=json.loads(str(arrays.get("meta_json", "{}"))))
-    except (S2HError, json.JSONDecodeError) as exc:
-        raise InputFileError(path, str(exc)) from None
+    with reading(path, "an s2h motion"):
+        arrays = _open(path, "s2h-motion", MOTION_FIELDS)
+        if float(arrays["fps"]) <= 0:
+            raise InputFileError(path, f"frame rate {float(arrays['fps'])} is not positive")
+        try:
+            return Motion(q_tbs=arrays["q_tbs"], fps=float(arrays["fps"]), name=str(arrays.get("name", path.stem)),
+                          hand_name=str(arrays.get("hand_name", "")),
+                          labels=arrays["labels"].astype(object) if "labels" in arrays else None,
+                          meta=_meta(path, arrays))
+        except S2HError as exc:
+            raise InputFileError(path, str(exc)) from None
 
 
 def save_hand(hand: HandModel, path: str | Path) -> Path:
@@ -99,17 +213,21 @@ def save_hand(hand: HandModel, path: str | Path) -> Path:
 def load_hand(path: str | Path) -> HandModel:
     """Read a hand npz; any problem is an `InputFileError` naming the file."""
     path = Path(path)
-    arrays = _open(path, "s2h-hand")
-    _require(path, arrays, "name", "offsets", "rest_frames", "rig_frames", "radii")
-    mesh = None
-    if "mesh_vertices" in arrays:
-        _require(path, arrays, "mesh_faces", "mesh_weights")
-        mesh = SkinnedMesh(vertices=arrays["mesh_vertices"].astype(np.float32),
-                           faces=arrays["mesh_faces"].astype(np.int32),
-                           weights=arrays["mesh_weights"].astype(np.float32))
-    try:
-        return HandModel(name=str(arrays["name"]), offsets=arrays["offsets"], rest_frames=arrays["rest_frames"],
-                         rig_frames=arrays["rig_frames"], radii=arrays["radii"], mesh=mesh,
-                         source=str(arrays.get("source", path)), meta=json.loads(str(arrays.get("meta_json", "{}"))))
-    except (S2HError, json.JSONDecodeError) as exc:
-        raise InputFileError(path, str(exc)) from None
+    with reading(path, "an s2h hand"):
+        arrays = _open(path, "s2h-hand", HAND_FIELDS)
+        mesh = None
+        present = [k for k in _MESH_KEYS if k in arrays]
+        if present and len(present) < len(_MESH_KEYS):
+            raise InputFileError(path, f"missing field(s): {', '.join(k for k in _MESH_KEYS if k not in arrays)}")
+        if present:
+            mesh = SkinnedMesh(vertices=arrays["mesh_vertices"].astype(np.float32),
+                               faces=arrays["mesh_faces"].astype(np.int32),
+                               weights=arrays["mesh_weights"].astype(np.float32))
+        if np.any(arrays["radii"] <= 0):
+            raise InputFileError(path, "radii must be positive")
+        try:
+            return HandModel(name=str(arrays["name"]), offsets=arrays["offsets"], rest_frames=arrays["rest_frames"],
+                             rig_frames=arrays["rig_frames"], radii=arrays["radii"], mesh=mesh,
+                             source=str(arrays.get("source", path)), meta=_meta(path, arrays))
+        except S2HError as exc:
+            raise InputFileError(path, str(exc)) from None

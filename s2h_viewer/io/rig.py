@@ -28,6 +28,8 @@ from s2h_viewer.io.annotation import load_annotation
 
 #: a tip missing from the rig is put this far beyond its DIP, as a fraction of the DIP bone
 TIP_EXTRAPOLATION = 0.8
+#: the farthest a hand's skin may be from its wrist, in metres (beyond is damage, not a hand)
+MAX_VERTEX_DISTANCE = 2.0
 MIRROR_NORMAL = (0.0, 1.0, 0.0)  # a left hand is reflected across its wrist frame's x-z plane
 
 
@@ -99,6 +101,7 @@ def build_hand(source: str | Path, skeleton: RigSkeleton, mapping: RigMapping, m
 
     skinned = None
     if mesh is not None:
+        _check_mesh(mesh, skeleton, source)
         skinned = _hand_mesh(mesh, skeleton, mapping, index, wrist_rot, wrist_origin, to_metres, source)
     try:
         hand = HandModel(name=name or source.stem, offsets=offsets, rest_frames=palm_plane_frames(positions),
@@ -112,6 +115,16 @@ def build_hand(source: str | Path, skeleton: RigSkeleton, mapping: RigMapping, m
         return annotate(hand, source)
     except InvalidHandError as exc:
         raise InputFileError(source, str(exc)) from None
+
+
+def _check_mesh(mesh: RigMesh, skeleton: RigSkeleton, source: Path) -> None:
+    """Refuse a mesh with non-finite values or indices past its tables (before anything indexes them)."""
+    if not (np.isfinite(mesh.vertices).all() and np.isfinite(mesh.bone_weight).all()):
+        raise InputFileError(source, "mesh vertices or skin weights contain NaN or infinite values")
+    if len(mesh.faces) and (mesh.faces.min() < 0 or mesh.faces.max() >= len(mesh.vertices)):
+        raise InputFileError(source, f"a mesh triangle uses a vertex past the {len(mesh.vertices)} there are")
+    if mesh.bone_index.size and (mesh.bone_index.min() < 0 or mesh.bone_index.max() >= len(skeleton.names)):
+        raise InputFileError(source, f"mesh is skinned to a bone past the {len(skeleton.names)} there are")
 
 
 def annotate(hand: HandModel, source: Path) -> HandModel:
@@ -158,6 +171,10 @@ def _hand_mesh(mesh: RigMesh, skeleton: RigSkeleton, mapping: RigMapping, index:
     new_index = np.cumsum(keep) - 1
     weights = weights[keep] / weights[keep].sum(axis=1, keepdims=True)
     vertices = (mesh.vertices[keep] - wrist_origin) @ wrist_rot * to_metres
+    farthest = float(np.linalg.norm(vertices, axis=1).max(initial=0.0))
+    if not farthest <= MAX_VERTEX_DISTANCE:
+        raise InputFileError(source, f"hand mesh vertices lie up to {farthest:.3g} m from the wrist, over the "
+                                     f"{MAX_VERTEX_DISTANCE} m a hand can span")
     return SkinnedMesh(vertices.astype(np.float32), new_index[faces].astype(np.int32), weights.astype(np.float32))
 
 

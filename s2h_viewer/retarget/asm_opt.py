@@ -7,7 +7,8 @@ work at the default step). Loss: -L_sem (match the source's ASM) + L_ana (stay a
 temporal smoothness of the correction + a contact term that goes beyond the paper: pairs touching in
 the source are pulled to touch on the target and pairs apart are kept apart, gaps measured in each
 hand's own length. The anatomy term is taken on the angles themselves (smooth past a 90 deg bend)
-and the result's bends are clamped into their limits. No training.
+and the result's bends are clamped into their limits. Long clips go in overlapping chunks,
+cross-faded at the seams (`retarget.windows`). No training.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.hand.rotations import quat_to_tbs_euler, tbs_euler_to_quat
 from s2h_viewer.retarget.methods import on_target, register
+from s2h_viewer.retarget.windows import Progress, stream_windows
 from s2h_viewer.semantics.anatomy import angle_excess, clamp_bends
 from s2h_viewer.semantics.asm import semantic_matrix
 from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, contact_gaps
@@ -38,6 +40,8 @@ class AsmOptConfig:
     smoothness_weight: float = 20.0
     contact_weight: float = 2e3
     prior_weight: float = 0.01  # pull toward the warm start (TBS Copy), keeps the unconstrained DOF put
+    chunk: int = 512  # frames optimised together; a longer clip goes in chunks (memory of one chunk)
+    chunk_overlap: int = 64  # frames two chunks share, cross-faded so there is no seam
 
 
 def keyframes(n_frames: int, step: int) -> np.ndarray:
@@ -58,8 +62,33 @@ def interpolate_keys(values: torch.Tensor, keys: np.ndarray, n_frames: int) -> t
 
 
 def optimise_asm(source_q: np.ndarray, source_hand: HandModel, target_hand: HandModel,
-                 initial_q: np.ndarray | None = None, config: AsmOptConfig = AsmOptConfig()) -> np.ndarray:
-    """(T, 15, 4) target TBS rotations whose ASM matches the source's; batched over the keyframes."""
+                 initial_q: np.ndarray | None = None, config: AsmOptConfig = AsmOptConfig(),
+                 progress: Progress | None = None) -> np.ndarray:
+    """(T, 15, 4) target TBS rotations whose ASM matches the source's: each chunk of `AsmOptConfig.chunk`
+    frames optimised on its own (batched over its frames), chunks cross-faded over ``chunk_overlap``
+    frames, so memory stays that of one chunk however long the clip."""
+    source_q = np.asarray(source_q, dtype=np.float32)
+    initial_q = source_q if initial_q is None else np.asarray(initial_q, dtype=np.float32)
+    n_frames = len(source_q)
+    chunk = min(config.chunk, n_frames)
+    out = np.empty_like(source_q)
+
+    def run(starts: list[int], first: int, end: int) -> np.ndarray:
+        return np.stack([_optimise_chunk(source_q[s:s + chunk], source_hand, target_hand, initial_q[s:s + chunk],
+                                         config) for s in starts])
+
+    def finish(first: int, end: int, angles: np.ndarray) -> None:
+        out[first:end] = tbs_euler_to_quat(torch.as_tensor(angles, dtype=torch.float32)).numpy()
+
+    stream_windows(n_frames, chunk, min(config.chunk_overlap, chunk - 1), run, finish, windows_per_batch=1,
+                   progress=progress)
+    return out
+
+
+def _optimise_chunk(source_q: np.ndarray, source_hand: HandModel, target_hand: HandModel, initial_q: np.ndarray,
+                    config: AsmOptConfig) -> np.ndarray:
+    """(T, 15, 3) optimised TBS Euler angles of one chunk, warm-started from ``initial_q``; batched over
+    its keyframes."""
     n_frames = len(source_q)
     keys = keyframes(n_frames, config.keyframe_step)
     with torch.no_grad():
@@ -67,7 +96,7 @@ def optimise_asm(source_q: np.ndarray, source_hand: HandModel, target_hand: Hand
         d_source = semantic_matrix(src_pose)
         src_gaps = contact_gaps(source_hand, src_pose) / source_hand.hand_length
         touching = src_gaps < CONTACT_TOLERANCE
-        start = quat_to_tbs_euler(torch.as_tensor(source_q if initial_q is None else initial_q, dtype=torch.float32))
+        start = quat_to_tbs_euler(torch.as_tensor(initial_q, dtype=torch.float32))
     correction = torch.zeros(len(keys), *start.shape[1:], requires_grad=True)
     optimiser = torch.optim.Adam([correction], lr=config.learning_rate)
     tol = CONTACT_TOLERANCE
@@ -88,9 +117,11 @@ def optimise_asm(source_q: np.ndarray, source_hand: HandModel, target_hand: Hand
         loss.backward()
         optimiser.step()
     with torch.no_grad():
-        return tbs_euler_to_quat(clamp_bends(start + interpolate_keys(correction, keys, n_frames))).numpy()
+        return clamp_bends(start + interpolate_keys(correction, keys, n_frames)).numpy()
 
 
 @register("asm_opt", "ASM-Opt", "optimise the target pose per clip to match the source's semantics (no training)")
-def retarget_asm_opt(motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
-    return on_target(motion, target_hand, optimise_asm(motion.q_tbs, source_hand, target_hand), "asm_opt")
+def retarget_asm_opt(motion: Motion, source_hand: HandModel, target_hand: HandModel,
+                     progress: Progress | None = None) -> Motion:
+    q = optimise_asm(motion.q_tbs, source_hand, target_hand, progress=progress)
+    return on_target(motion, target_hand, q, "asm_opt")

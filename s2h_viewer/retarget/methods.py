@@ -13,8 +13,10 @@ from dataclasses import dataclass
 from s2h_viewer.hand.kinematics import rig_local_to_tbs, tbs_to_rig_local
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
+from s2h_viewer.retarget.windows import Progress
 
-RetargetFn = Callable[[Motion, HandModel, HandModel], Motion]
+#: fn(motion, source hand, target hand, progress=None): long methods report frames done through progress
+RetargetFn = Callable[..., Motion]
 
 
 @dataclass(frozen=True)
@@ -36,13 +38,15 @@ def register(name: str, label: str, description: str) -> Callable[[RetargetFn], 
     return wrap
 
 
-def retarget(motion: Motion, source_hand: HandModel, target_hand: HandModel, method: str = "tbs_copy") -> Motion:
-    """Retarget ``motion`` (posed on ``source_hand``) onto ``target_hand`` with a registered method."""
+def retarget(motion: Motion, source_hand: HandModel, target_hand: HandModel, method: str = "tbs_copy",
+             progress: Progress | None = None) -> Motion:
+    """Retarget ``motion`` (posed on ``source_hand``) onto ``target_hand`` with a registered method;
+    ``progress(frames done, frames)`` hears how far it is."""
     try:
         chosen = METHODS[method]
     except KeyError:
         raise KeyError(f"unknown retargeting method {method!r}; available: {', '.join(METHODS)}") from None
-    return chosen.run(motion, source_hand, target_hand)
+    return chosen.run(motion, source_hand, target_hand, progress=progress)
 
 
 def on_target(motion: Motion, target_hand: HandModel, q_tbs, method: str) -> Motion:
@@ -52,11 +56,18 @@ def on_target(motion: Motion, target_hand: HandModel, q_tbs, method: str) -> Mot
 
 
 @register("copy", "Copy", "copy the rig's local joint rotations (what most tools do)")
-def retarget_copy(motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
+def retarget_copy(motion: Motion, source_hand: HandModel, target_hand: HandModel,
+                  progress: Progress | None = None) -> Motion:
     q_local = tbs_to_rig_local(source_hand, motion.q_tbs)
-    return on_target(motion, target_hand, rig_local_to_tbs(target_hand, q_local).numpy(), "copy")
+    result = on_target(motion, target_hand, rig_local_to_tbs(target_hand, q_local).numpy(), "copy")
+    if progress is not None:
+        progress(motion.n_frames, motion.n_frames)
+    return result
 
 
 @register("tbs_copy", "TBS Copy", "copy twist-bend-splay rotations, so a bend stays a bend on any rig")
-def retarget_tbs_copy(motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
+def retarget_tbs_copy(motion: Motion, source_hand: HandModel, target_hand: HandModel,
+                      progress: Progress | None = None) -> Motion:
+    if progress is not None:
+        progress(motion.n_frames, motion.n_frames)
     return on_target(motion, target_hand, motion.q_tbs.copy(), "tbs_copy")

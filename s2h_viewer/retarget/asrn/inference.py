@@ -1,8 +1,7 @@
-"""Run a trained network on a clip of any length: sliding windows, cross-faded where they overlap.
-
-Windows of ``window`` frames start every ``window - overlap`` frames (the last one is aligned to the
-clip's end). Frames covered by one window take that window's output unchanged; in an overlap the
-two windows' residual rotations are cross-faded linearly, so there is no seam at window borders.
+"""Run a trained network on a clip of any length: sliding windows, cross-faded where they overlap
+(`retarget.windows`), streamed a batch of windows at a time so a long clip needs no more working
+memory than a short one: the features of one batch are made, run and blended, and the finished frames
+written into the output before the next batch starts. Window length and overlap are the model's.
 """
 
 from __future__ import annotations
@@ -19,54 +18,40 @@ from s2h_viewer.retarget.asrn.features import source_features, target_static
 from s2h_viewer.retarget.asrn.model import RetargetNet, apply_residual
 from s2h_viewer.retarget.asrn.training import TrainConfig, build_model, load_checkpoint
 from s2h_viewer.retarget.methods import on_target, register
+from s2h_viewer.retarget.windows import Progress, stream_windows
 
 MODELS_DIR = Path(__file__).resolve().parents[3] / "assets" / "models"
-
-
-def window_starts(n_frames: int, window: int, overlap: int) -> list[int]:
-    """Start frames of the sliding windows covering ``n_frames`` (at least one window)."""
-    if n_frames <= window:
-        return [0]
-    starts = list(range(0, n_frames - window + 1, window - overlap))
-    if starts[-1] + window < n_frames:
-        starts.append(n_frames - window)
-    return starts
-
-
-def blend_weights(starts: list[int], window: int) -> np.ndarray:
-    """(n_windows, window) cross-fade weights; at every frame the covering windows' weights sum to 1."""
-    weights = np.ones((len(starts), window))
-    for i, start in enumerate(starts):
-        ramp_in = starts[i - 1] + window - start if i > 0 else 0
-        ramp_out = start + window - starts[i + 1] if i + 1 < len(starts) else 0
-        pos = np.arange(window)
-        if ramp_in > 0:
-            weights[i] = np.minimum(weights[i], np.where(pos < ramp_in, (pos + 1) / (ramp_in + 1), 1.0))
-        if ramp_out > 0:
-            weights[i] = np.minimum(weights[i], np.where(pos >= window - ramp_out,
-                                                         (window - pos) / (ramp_out + 1), 1.0))
-    return weights
+#: source frames whose features are made and run at once: sets the working memory, not the result
+FRAMES_PER_BATCH = 2048
 
 
 def run_network(model: RetargetNet, kind: str, source_hand: HandModel, source_q: np.ndarray,
-                target_hand: HandModel, window: int = 8, overlap: int = 2) -> np.ndarray:
-    """(T, 15, 4) target TBS rotations for a whole clip."""
-    q = torch.as_tensor(np.asarray(source_q), dtype=torch.float32)
+                target_hand: HandModel, window: int = 8, overlap: int = 2, progress: Progress | None = None
+                ) -> np.ndarray:
+    """(T, 15, 4) target TBS rotations for a whole clip (a clip shorter than ``window`` is padded by
+    holding its last frame)."""
+    q = np.asarray(source_q, dtype=np.float32)
     n_frames = len(q)
-    features = source_features(kind, source_hand, q)
-    if n_frames < window:  # pad by holding the last frame
-        pad = window - n_frames
-        features = torch.cat([features, features[-1:].expand(pad, -1)])
-    starts = window_starts(len(features), window, overlap)
-    windows = torch.stack([features[s:s + window] for s in starts])
-    shape, frames = (s.expand(len(starts), *s.shape) for s in target_static(target_hand))
-    with torch.no_grad():
-        rotvec = model(windows, shape, frames).numpy()
-    weights = blend_weights(starts, window)
-    blended = np.zeros((len(features), *rotvec.shape[2:]))
-    for start, w, r in zip(starts, weights, rotvec):
-        blended[start:start + window] += w[:, None, None] * r
-    return apply_residual(q, torch.as_tensor(blended[:n_frames], dtype=torch.float32)).numpy()
+    out = np.empty_like(q)
+    shape, frames = target_static(target_hand)
+
+    def run(starts: list[int], first: int, end: int) -> np.ndarray:
+        held = np.minimum(np.arange(first, end), n_frames - 1)  # frames past the clip hold its last
+        features = source_features(kind, source_hand, q[held])
+        windows = torch.stack([features[s - first:s - first + window] for s in starts])
+        with torch.no_grad():
+            return model(windows, shape.expand(len(starts), *shape.shape),
+                         frames.expand(len(starts), *frames.shape)).numpy()
+
+    def finish(first: int, end: int, rotvec: np.ndarray) -> None:
+        end = min(end, n_frames)
+        if end > first:
+            out[first:end] = apply_residual(torch.as_tensor(q[first:end]),
+                                            torch.as_tensor(rotvec[:end - first], dtype=torch.float32)).numpy()
+
+    stream_windows(max(n_frames, window), window, overlap, run, finish,
+                   windows_per_batch=max(1, FRAMES_PER_BATCH // max(window - overlap, 1)), progress=progress)
+    return out
 
 
 @lru_cache(maxsize=4)
@@ -79,18 +64,21 @@ def load_network(path: str) -> tuple[RetargetNet, TrainConfig]:
     return model.eval(), config
 
 
-def _retarget_with(kind: str, motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
+def _retarget_with(kind: str, motion: Motion, source_hand: HandModel, target_hand: HandModel,
+                   progress: Progress | None) -> Motion:
     model, config = load_network(str(MODELS_DIR / f"{kind}.pt"))
     q = run_network(model, kind, source_hand, motion.q_tbs, target_hand, window=config.window,
-                    overlap=config.window // 4)
+                    overlap=config.window // 4, progress=progress)
     return on_target(motion, target_hand, q, kind)
 
 
 @register("dm", "DM", "the network on distance matrices (Zhang et al. 2023) instead of the ASM")
-def retarget_dm(motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
-    return _retarget_with("dm", motion, source_hand, target_hand)
+def retarget_dm(motion: Motion, source_hand: HandModel, target_hand: HandModel,
+                progress: Progress | None = None) -> Motion:
+    return _retarget_with("dm", motion, source_hand, target_hand, progress)
 
 
 @register("asrn", "ASRN", "the anatomy-based semantic retargeting network (trained, shipped)")
-def retarget_asrn(motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
-    return _retarget_with("asrn", motion, source_hand, target_hand)
+def retarget_asrn(motion: Motion, source_hand: HandModel, target_hand: HandModel,
+                  progress: Progress | None = None) -> Motion:
+    return _retarget_with("asrn", motion, source_hand, target_hand, progress)
