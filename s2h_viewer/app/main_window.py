@@ -22,6 +22,8 @@ __all__ = ["CompareSetup", "MainWindow", "default_setup", "run"]
 
 RECENT_FILES = 8
 SHORTCUTS = (("Space", "play / pause"), ("Left / Right", "previous / next frame"), ("Home / End", "first / last frame"),
+             ("double-click a hand / Ctrl+M", "show it alone / the grid again"), ("Ctrl+K / Ctrl+J", "skeleton / "
+             "contact overlay"), ("Ctrl+1 / 2 / 3 / 0", "camera: palm / back / side / reset"),
              ("Ctrl+O", "open a motion"), ("Ctrl+T", "add a target hand"), ("Ctrl+S", "export a screenshot"),
              ("Ctrl+E", "export a video"), ("Ctrl+Shift+O", "open a hand to annotate"), ("Ctrl+R", "run the TBS solver"),
              ("Ctrl+Shift+S", "save the annotation sidecar"), ("Ctrl+Z / Ctrl+Shift+Z", "undo / redo a frame turn"),
@@ -37,10 +39,12 @@ class MainWindow(QMainWindow):
         self.setWindowTitle("s2h-viewer")
         self.settings = settings or QSettings("s2h-viewer", "s2h-viewer")
         self.runner = TaskRunner(self, self.error, self.statusBar().showMessage)
-        self.compare = CompareMode(setup, self.runner, lambda text: self.statusBar().showMessage(text, 5000))
+        self.compare = CompareMode(setup, self.error, lambda text: self.statusBar().showMessage(text, 5000))
+        self.video_export: exports.VideoExport | None = None
         self.annotate = AnnotateMode(self.runner, self.error, lambda text: self.statusBar().showMessage(text, 5000),
                                      self)
         self.compare.comparison_ready.connect(self.comparison_ready)
+        self.compare.state_changed.connect(self._state_changed)
         self.annotate.annotation_ready.connect(self.annotation_ready)
         self.tabs = QTabWidget()
         self.tabs.addTab(self.compare, "Compare")
@@ -125,16 +129,27 @@ class MainWindow(QMainWindow):
         methods_menu = bar.addMenu("&Methods")
         chosen = self.settings.value("compare/methods", self.setup.methods)
         chosen = [m for m in (chosen if isinstance(chosen, list) else [chosen]) if m in METHODS] or self.setup.methods
-        self.compare.setup.methods = chosen
+        self.compare.state.methods = chosen
         self.method_actions = {}
         for name, method in METHODS.items():
             action = self._action(methods_menu, method.label, self._methods_changed, checkable=True)
             action.setChecked(name in chosen)
             action.setToolTip(method.description)
             self.method_actions[name] = action
+        self.targets_menu = bar.addMenu("&Targets")
+        self.compare.fill_targets_menu(self.targets_menu)
         view_menu = bar.addMenu("&View")
         self.see_through = self._action(view_menu, "Semi-transparent skin", self.compare.set_see_through, "Ctrl+H",
                                         checkable=True)
+        self.skeleton_overlay = self._action(view_menu, "Skeleton overlay", lambda on: self.view.set_options(
+            skeleton=on), "Ctrl+K", checkable=True)
+        self.contact_overlay = self._action(view_menu, "Contact overlay (lost contacts in red)", lambda on: (
+            self.view.set_options(contacts=on)), "Ctrl+J", checkable=True)
+        view_menu.addSeparator()
+        for preset, text, key in (("palm", "Camera: palm", "Ctrl+1"), ("back", "Camera: back", "Ctrl+2"),
+                                  ("side", "Camera: side", "Ctrl+3"), ("default", "Camera: reset", "Ctrl+0")):
+            self._action(view_menu, text, lambda _=False, p=preset: self.view.set_options(camera=p), key)
+        self._action(view_menu, "Solo the selected retarget / back to the grid", self._toggle_solo, "Ctrl+M")
         play = bar.addMenu("&Playback")
         timeline = self.timeline
         self._action(play, "Play / pause", timeline.toggle, "Space")
@@ -160,9 +175,26 @@ class MainWindow(QMainWindow):
         methods = [name for name, action in self.method_actions.items() if action.isChecked()]
         if not methods:
             self.error("Choose at least one retargeting method.")
+            self._state_changed()
             return
         self.settings.setValue("compare/methods", methods)
-        self.compare.change_setup(methods=methods)
+        self.compare.set_methods(methods)
+
+    def _state_changed(self) -> None:
+        """The menus (and the remembered methods) say what the compare state holds, after a cancel too."""
+        self.settings.setValue("compare/methods", list(self.setup.methods))
+        for name, action in self.method_actions.items():
+            action.blockSignals(True)
+            action.setChecked(name in self.setup.methods)
+            action.blockSignals(False)
+        self.compare.fill_targets_menu(self.targets_menu)
+
+    def _toggle_solo(self) -> None:
+        """Ctrl+M: the selected retarget alone in the view, or the grid again (double-click does it too)."""
+        if self.view.solo >= 0 or self.comparison is None:
+            self.view.set_solo(-1)
+            return
+        self.view.set_solo(1 + self.comparison.results.index(self.compare.selected_result()))
 
     # --- files ---
     def _last_dir(self) -> str:
@@ -220,7 +252,7 @@ class MainWindow(QMainWindow):
             self.error(str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc))
             return
         self._remember(path, "motion")
-        self.compare.change_setup(motion=motion, source=source)
+        self.compare.load(motion, source)
 
     def add_target(self) -> None:
         self._ask_to_open("Add target hand", "Hands (*.glb *.gltf *.fbx *.npz *.bvh)", self.add_target_file)
@@ -229,7 +261,7 @@ class MainWindow(QMainWindow):
         hand = self._load_hand(path, "target")
         if hand is None:
             return
-        self.compare.change_setup(targets=[*self.setup.targets, hand])
+        self.compare.add_target(hand)
 
     # --- exports ---
     def _ask_to_save(self, title: str, file_filter: str, path: str | None) -> str | None:
@@ -247,19 +279,26 @@ class MainWindow(QMainWindow):
         path = self._ask_to_save("Export screenshot", "PNG (*.png)", path)
         return self._wrote(exports.export_screenshot(self.compare, path)) if path else None
 
-    def export_video(self, path: str | None = None) -> Path | None:
+    def export_video(self, path: str | None = None) -> exports.VideoExport | None:
+        """Start rendering the clip to a video in the background; the job's signals say how it ended."""
+        if self.video_export is not None:
+            self.error("A video export is running; wait for it or cancel it first.")
+            return None
         path = self._ask_to_save("Export video", "Video (*.mp4 *.gif)", path)
         if not path:
             return None
-        try:
-            written = exports.export_video(self.compare, path, self)
-        except exports.Cancelled:
-            self.statusBar().showMessage("video export cancelled; nothing written", 5000)
-            return None
-        except (OSError, ValueError) as exc:
-            self.error(f"{path}: could not write the video ({exc})")
-            return None
-        return self._wrote(written, f" ({self.comparison.n_frames} frames)")
+        job = exports.VideoExport(self.compare, path, self)
+        n = self.comparison.n_frames
+        job.written.connect(lambda written: self._wrote(written, f" ({n} frames)"))
+        job.cancelled.connect(lambda: self.statusBar().showMessage("video export cancelled; nothing written", 5000))
+        job.failed.connect(self.error)
+        for signal in (job.written, job.cancelled, job.failed):
+            signal.connect(self._video_export_ended)
+        self.video_export = job
+        return job.start()
+
+    def _video_export_ended(self, *_) -> None:
+        self.video_export = None
 
     def export_motion(self, path: str | None = None) -> Path | None:
         if self.comparison is None:
@@ -309,6 +348,10 @@ class MainWindow(QMainWindow):
     def closeEvent(self, event) -> None:
         self.settings.setValue("window/geometry", self.saveGeometry())
         self.runner.finish()
+        self.compare.shutdown()
+        if self.video_export is not None:
+            self.video_export.cancel()
+            self.video_export.thread.join()
         super().closeEvent(event)
 
 

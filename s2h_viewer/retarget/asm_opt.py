@@ -18,6 +18,7 @@ from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.hand.rotations import quat_to_tbs_euler, tbs_euler_to_quat
 from s2h_viewer.retarget.methods import on_target, register
+from s2h_viewer.retarget.progress import report
 from s2h_viewer.semantics.anatomy import anatomical_loss
 from s2h_viewer.semantics.asm import semantic_matrix
 from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, contact_gaps
@@ -47,7 +48,8 @@ def optimise_asm(source_q: np.ndarray, source_hand: HandModel, target_hand: Hand
     angles = start.clone().requires_grad_(True)
     optimiser = torch.optim.Adam([angles], lr=config.learning_rate)
     tol = CONTACT_TOLERANCE
-    for _ in range(config.steps):
+    for step in range(config.steps):
+        report(step / config.steps)  # progress, and where a cancel stops the optimisation
         q = tbs_euler_to_quat(angles)
         pose = forward_kinematics(target_hand, q)
         sem = semantic_similarity(d_source, semantic_matrix(pose), source_hand.hand_length)

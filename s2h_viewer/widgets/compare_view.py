@@ -2,20 +2,28 @@
 linked cameras, no multisampling (software OpenGL pays 3-4x for it), redrawn on ``show_frame``.
 
 The widget renders the scene in its own paint, so a new frame asks for a repaint (``update``)
-rather than rendering too (that drew every frame twice); exports render synchronously."""
+rather than rendering too; exports render synchronously. A double-click on a hand shows its
+viewport alone (solo), a second one brings the grid back. ``drawn`` fires after every render, so
+the timeline can show the frames actually drawn per second."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 from pyvistaqt import QtInteractor
+from PySide6.QtCore import QEvent, QObject, Signal
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
-from s2h_viewer.render.compare_scene import PosedHand, grid_layout, populate
+from s2h_viewer.render.compare_scene import PosedHand, ViewOptions, apply_options, grid_layout, populate
 from s2h_viewer.retarget.comparison import Comparison
 
 
 class CompareView(QWidget):
     """Source + targets x methods, synchronised on ``show_frame``."""
+
+    drawn = Signal()
+    solo_changed = Signal(int)  # the hand shown alone (index into the grid's hands), -1 for the grid
 
     def __init__(self, parent: QWidget | None = None):
         super().__init__(parent)
@@ -24,31 +32,78 @@ class CompareView(QWidget):
         self.interactor: QtInteractor | None = None
         self.comparison: Comparison | None = None
         self._hands: list[PosedHand] = []
-        self.opacity = 1.0
+        self.options = ViewOptions()
+        self.solo = -1
+        self._viewports: list[tuple[float, ...]] = []
+        self.frame = 0
+
+    @property
+    def opacity(self) -> float:
+        return self.options.opacity
 
     def set_comparison(self, comparison: Comparison) -> None:
-        """Lay out one subplot per hand: the source once, then a row per target, a column per method."""
+        """Lay out one subplot per hand: the source, then a row per target, a column per method."""
         self.comparison = comparison
         if self.interactor is not None:  # pyvista fixes the subplot layout at construction: start afresh
             self._layout.removeWidget(self.interactor)
             self.interactor.close()
             self.interactor.deleteLater()
         self.interactor = QtInteractor(self, multi_samples=0, auto_update=False, **grid_layout(comparison))
+        self.interactor.installEventFilter(self)
+        self.interactor.render_window.AddObserver("EndEvent", lambda *_: self.drawn.emit())
         self._layout.addWidget(self.interactor)
-        self._hands = populate(self.interactor, comparison, self.opacity)
-        self.show_frame(0)
+        self._hands = populate(self.interactor, comparison, self.options.opacity)
+        self._viewports = [tuple(r.GetViewport()) for r in self.interactor.renderers]
+        self.solo = -1
+        apply_options(self.interactor, self._hands, self.options)
+        self.show_frame(min(self.frame, comparison.n_frames - 1))
+
     def show_frame(self, frame: int) -> None:
+        self.frame = frame
         for hand in self._hands:
             hand.show(frame)
         if self.interactor is not None:
             self.interactor.update()
 
-    def set_mesh_opacity(self, opacity: float) -> None:
-        self.opacity = opacity
-        for hand in self._hands:
-            hand.set_opacity(opacity)
+    def set_options(self, **changes) -> None:
+        """Change the camera preset, overlays or opacity (``ViewOptions`` fields) and redraw."""
+        self.options = dataclasses.replace(self.options, **changes)
         if self.interactor is not None:
-            self.interactor.update()
+            apply_options(self.interactor, self._hands, self.options)
+            self.show_frame(self.frame)
+
+    def set_mesh_opacity(self, opacity: float) -> None:
+        self.set_options(opacity=opacity)
+
+    def hand_at(self, x: int, y: int) -> int:
+        """The index of the hand whose viewport holds widget pixel (x, y), or -1."""
+        w, h = max(1, self.interactor.width()), max(1, self.interactor.height())
+        u, v = x / w, 1.0 - y / h
+        for index, viewport in enumerate(self._viewports[:len(self._hands)]):
+            if viewport[0] <= u < viewport[2] and viewport[1] <= v < viewport[3]:
+                return index
+        return -1
+
+    def set_solo(self, index: int) -> None:
+        """Show hand ``index``'s viewport alone over the whole view; -1 restores the grid."""
+        self.solo = index
+        renderers = self.interactor.renderers
+        for i, renderer in enumerate(renderers):
+            if index < 0:
+                renderer.SetViewport(*self._viewports[i])
+                renderer.SetDraw(True)
+            else:
+                renderer.SetViewport(*((0.0, 0.0, 1.0, 1.0) if i == index else self._viewports[i]))
+                renderer.SetDraw(i == index)
+        self.solo_changed.emit(index)
+        self.interactor.update()
+
+    def eventFilter(self, watched: QObject, event: QEvent) -> bool:
+        if watched is self.interactor and event.type() == QEvent.Type.MouseButtonDblClick:
+            self.set_solo(-1 if self.solo >= 0 else self.hand_at(int(event.position().x()),
+                                                                 int(event.position().y())))
+            return True
+        return False
 
     def grab_rgb(self) -> np.ndarray:
         """The current view as an (H, W, 3) uint8 image (what screenshot and video export save)."""
