@@ -216,11 +216,11 @@ def test_double_click_solos_a_viewport_and_back(window, qtbot):
     assert view.hand_at(centre.x(), centre.y()) == hand
     qtbot.mouseDClick(view.interactor, Qt.MouseButton.LeftButton, pos=centre)
     assert view.solo == hand
-    drawn = [bool(r.GetDraw()) for r in view.interactor.renderers]
+    drawn = [bool(r.GetDraw()) for r in view.plotter.renderers]
     assert drawn[hand] and sum(drawn) == 1
-    assert tuple(view.interactor.renderers[hand].GetViewport()) == (0.0, 0.0, 1.0, 1.0)
+    assert tuple(view.plotter.renderers[hand].GetViewport()) == (0.0, 0.0, 1.0, 1.0)
     qtbot.mouseDClick(view.interactor, Qt.MouseButton.LeftButton, pos=centre)
-    assert view.solo == -1 and all(r.GetDraw() for r in view.interactor.renderers)
+    assert view.solo == -1 and all(r.GetDraw() for r in view.plotter.renderers)
 
 
 def test_every_hand_has_a_viewport_of_the_same_size_and_the_colour_bar_its_own(window):

@@ -298,5 +298,7 @@ class CompareMode(QWidget):
         menu.setEnabled(bool(self.state.targets))
 
     def shutdown(self) -> None:
+        """Stop the retargets and free the render window (the window is closing)."""
         self.queue.cancel_all()
         self.queue.wait()
+        self.view.close_grid()

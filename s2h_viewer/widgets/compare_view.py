@@ -1,8 +1,10 @@
-"""Compare mode's viewport: the compare grid (`render.compare_scene`) in one `QtInteractor` with
+"""Compare mode's viewport: the compare grid (`render.compare_scene`) in one render window with
 linked cameras, no multisampling (software OpenGL pays 3-4x for it), redrawn on ``show_frame``.
 
-The widget renders the scene in its own paint, so a new frame asks for a repaint (``update``)
-rather than rendering too; exports render synchronously. A double-click on a hand shows its
+The render window draws straight into a native widget (VTK's own ``QVTKRenderWindowInteractor``)
+rather than into pyvistaqt's ``QOpenGLWidget``, whose frame Qt copies and composes into the window
+on every paint: measured with `benchmarks/bench_window_playback.py`, the native widget draws as fast
+as off screen. The widget renders in its own paint, so a new frame asks for a repaint (``update``). A double-click on a hand shows its
 viewport alone (solo), a second one brings the grid back. ``drawn`` fires after every render, so
 the timeline can show the frames actually drawn per second."""
 
@@ -11,12 +13,30 @@ from __future__ import annotations
 import dataclasses
 
 import numpy as np
-from pyvistaqt import QtInteractor
+import pyvista as pv
 from PySide6.QtCore import QEvent, QObject, Signal
+from vtkmodules.qt.QVTKRenderWindowInteractor import QVTKRenderWindowInteractor
+from vtkmodules.vtkInteractionStyle import vtkInteractorStyleTrackballCamera
+from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
 from s2h_viewer.render.compare_scene import PosedHand, ViewOptions, apply_options, grid_layout, populate
 from s2h_viewer.retarget.comparison import Comparison
+
+
+class _GridWidget(QVTKRenderWindowInteractor):
+    """VTK's native-window widget that stops painting once its render window is finalized (a paint
+    already queued when the grid is replaced would otherwise render into a freed window)."""
+
+    alive = True
+
+    def paintEvent(self, event) -> None:
+        if self.alive:
+            super().paintEvent(event)
+
+    def resizeEvent(self, event) -> None:
+        if self.alive:
+            super().resizeEvent(event)
 
 
 class CompareView(QWidget):
@@ -29,7 +49,8 @@ class CompareView(QWidget):
         super().__init__(parent)
         self._layout = QVBoxLayout(self)
         self._layout.setContentsMargins(0, 0, 0, 0)
-        self.interactor: QtInteractor | None = None
+        self.interactor: _GridWidget | None = None
+        self.plotter: pv.Plotter | None = None
         self.comparison: Comparison | None = None
         self._hands: list[PosedHand] = []
         self.options = ViewOptions()
@@ -44,18 +65,19 @@ class CompareView(QWidget):
     def set_comparison(self, comparison: Comparison) -> None:
         """Lay out one subplot per hand: the source, then a row per target, a column per method."""
         self.comparison = comparison
-        if self.interactor is not None:  # pyvista fixes the subplot layout at construction: start afresh
-            self._layout.removeWidget(self.interactor)
-            self.interactor.close()
-            self.interactor.deleteLater()
-        self.interactor = QtInteractor(self, multi_samples=0, auto_update=False, **grid_layout(comparison))
+        self.close_grid()  # pyvista fixes the subplot layout at construction: start afresh
+        self.plotter = pv.Plotter(off_screen=False, **grid_layout(comparison))
+        self.plotter.render_window.SetMultiSamples(0)
+        self.interactor = _GridWidget(self, rw=self.plotter.render_window)
+        self.interactor.GetRenderWindow().GetInteractor().SetInteractorStyle(vtkInteractorStyleTrackballCamera())
         self.interactor.installEventFilter(self)
-        self.interactor.render_window.AddObserver("EndEvent", lambda *_: self.drawn.emit())
+        self.plotter.render_window.AddObserver("EndEvent", lambda *_: self.drawn.emit())
         self._layout.addWidget(self.interactor)
-        self._hands = populate(self.interactor, comparison, self.options.opacity)
-        self._viewports = [tuple(r.GetViewport()) for r in self.interactor.renderers]
+        self.interactor.Initialize()
+        self._hands = populate(self.plotter, comparison, self.options.opacity)
+        self._viewports = [tuple(r.GetViewport()) for r in self.plotter.renderers]
         self.solo = -1
-        apply_options(self.interactor, self._hands, self.options)
+        apply_options(self.plotter, self._hands, self.options)
         self.show_frame(min(self.frame, comparison.n_frames - 1))
 
     def show_frame(self, frame: int) -> None:
@@ -69,7 +91,7 @@ class CompareView(QWidget):
         """Change the camera preset, overlays or opacity (``ViewOptions`` fields) and redraw."""
         self.options = dataclasses.replace(self.options, **changes)
         if self.interactor is not None:
-            apply_options(self.interactor, self._hands, self.options)
+            apply_options(self.plotter, self._hands, self.options)
             self.show_frame(self.frame)
 
     def set_mesh_opacity(self, opacity: float) -> None:
@@ -87,7 +109,7 @@ class CompareView(QWidget):
     def set_solo(self, index: int) -> None:
         """Show hand ``index``'s viewport alone over the whole view; -1 restores the grid."""
         self.solo = index
-        renderers = self.interactor.renderers
+        renderers = self.plotter.renderers
         for i, renderer in enumerate(renderers):
             if index < 0:
                 renderer.SetViewport(*self._viewports[i])
@@ -107,5 +129,29 @@ class CompareView(QWidget):
 
     def grab_rgb(self) -> np.ndarray:
         """The current view as an (H, W, 3) uint8 image (what screenshot and video export save)."""
-        self.interactor.render()
-        return np.asarray(self.interactor.screenshot(return_img=True))[..., :3]
+        window = self.plotter.render_window
+        window.Render()
+        grab = vtkWindowToImageFilter()
+        grab.SetInput(window)
+        grab.SetInputBufferTypeToRGB()
+        grab.ReadFrontBufferOff()
+        grab.Update()
+        image = pv.wrap(grab.GetOutput())
+        width, height, _ = image.dimensions
+        return np.asarray(image.point_data.active_scalars).reshape(height, width, -1)[::-1, :, :3].copy()
+
+    def close_grid(self) -> None:
+        """Free the render window and its widget (a new grid, or the window closing)."""
+        if self.interactor is not None:
+            self.interactor.alive = False
+            self.interactor.hide()
+            self._layout.removeWidget(self.interactor)
+            self.interactor.Finalize()
+            self.plotter.close()
+            self.interactor.deleteLater()
+            self.interactor = self.plotter = None
+            self._hands = []
+
+    def closeEvent(self, event) -> None:
+        self.close_grid()
+        super().closeEvent(event)
