@@ -9,6 +9,7 @@ asks for is computed; Cancel goes back to what the grid showed, and the menus fo
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -28,6 +29,7 @@ from s2h_viewer.widgets.scores_table import ScoresTable
 from s2h_viewer.widgets.timeline import Timeline
 
 PROGRESS_STEPS = 1000
+HEATMAP_PERIOD_PLAYING = 0.25  # seconds: Qt repaints the labelled matrix in software, so not every frame
 
 
 @dataclass
@@ -69,6 +71,7 @@ class CompareMode(QWidget):
         self.queue = RetargetQueue(self)
         self._done_in_batch = 0
         self._progress: QProgressDialog | None = None
+        self._heatmap_at = 0.0
         self.view = CompareView()
         self.timeline = Timeline()
         self.curve = ErrorCurve()
@@ -92,6 +95,7 @@ class CompareMode(QWidget):
         layout.addWidget(self.curve)
         self.timeline.frame_changed.connect(self.show_frame)
         self.view.drawn.connect(self.timeline.note_drawn)
+        self.timeline.play_button.toggled.connect(lambda playing: playing or self.show_frame(self.timeline.frame))
         self.curve.frame_clicked.connect(self.timeline.set_frame)
         self.heatmap_choice.currentIndexChanged.connect(self._choice_changed)
         self.scores.currentCellChanged.connect(lambda row, *_: self._select_row(row))
@@ -283,8 +287,11 @@ class CompareMode(QWidget):
             return
         self.view.show_frame(frame)
         self.curve.set_frame(frame)
-        result = self.selected_result()
-        self.heatmap.show_matrix(result.cell_error[frame], f"ASM error, {label(result)}, frame {frame}")
+        now = time.perf_counter()
+        if not self.timeline.playing or now - self._heatmap_at >= HEATMAP_PERIOD_PLAYING:
+            self._heatmap_at = now  # while playing, the heatmap follows at a few frames a second
+            result = self.selected_result()
+            self.heatmap.show_matrix(result.cell_error[frame], f"ASM error, {label(result)}, frame {frame}")
 
     def set_see_through(self, checked: bool) -> None:
         self.view.set_options(opacity=0.4 if checked else 1.0)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 from PySide6.QtCore import QPointF, Qt, Signal
-from PySide6.QtGui import QColor, QPainter, QPen, QPolygonF
+from PySide6.QtGui import QColor, QPainter, QPen, QPixmap, QPolygonF
 from PySide6.QtWidgets import QWidget
 
 WORST = 5  # frames marked
@@ -37,17 +37,25 @@ class ErrorCurve(QWidget):
         self.worst = np.zeros(0, dtype=int)
         self.frame = 0
         self.title = ""
+        self._curve: QPixmap | None = None  # the curve and its marks, drawn once per curve and size
 
     def set_curve(self, error: np.ndarray, title: str) -> None:
         self.error, self.title = np.asarray(error, dtype=float), title
         self.worst = worst_frames(self.error)
+        self._curve = None
         self.setToolTip(f"{title}: mean ASM error per frame; worst frames (red): "
                         f"{', '.join(str(f) for f in self.worst)}. Click to jump.")
         self.update()
 
     def set_frame(self, frame: int) -> None:
+        """Move the cursor: only the strips under the old and the new cursor are repainted."""
+        for x in (self._x(self.frame), self._x(frame)):
+            self.update(int(x) - 2, 0, 5, self.height())
         self.frame = frame
-        self.update()
+
+    def resizeEvent(self, event) -> None:
+        self._curve = None
+        super().resizeEvent(event)
 
     def frame_at(self, x: float) -> int:
         width = max(1, self.width() - 2 * MARGIN)
@@ -63,9 +71,10 @@ class ErrorCurve(QWidget):
     def mousePressEvent(self, event) -> None:
         self.frame_clicked.emit(self.frame_at(event.position().x()))
 
-    def paintEvent(self, event) -> None:
-        painter = QPainter(self)
-        painter.fillRect(self.rect(), QColor("white"))
+    def _draw_curve(self) -> QPixmap:
+        pixmap = QPixmap(self.size())
+        pixmap.fill(QColor("white"))
+        painter = QPainter(pixmap)
         painter.setRenderHint(QPainter.RenderHint.Antialiasing)
         step = max(1, len(self.error) // max(1, self.width()))  # at most one point per pixel
         points = [QPointF(self._x(f), self._y(self.error[f])) for f in range(0, len(self.error), step)]
@@ -77,6 +86,15 @@ class ErrorCurve(QWidget):
             painter.drawLine(QPointF(x, MARGIN), QPointF(x, MARGIN + 8))
             painter.drawEllipse(QPointF(x, self._y(self.error[frame])), 3, 3)
         painter.setPen(QPen(QColor("black"), 1))
+        painter.drawText(MARGIN + 2, self.height() - 4, f"ASM error per frame ({self.title})   max {self.error.max():.3f}")
+        painter.end()
+        return pixmap
+
+    def paintEvent(self, event) -> None:
+        if self._curve is None or self._curve.size() != self.size():
+            self._curve = self._draw_curve()
+        painter = QPainter(self)
+        painter.drawPixmap(event.rect(), self._curve, event.rect())
+        painter.setPen(QPen(QColor("black"), 1))
         x = self._x(self.frame)
         painter.drawLine(QPointF(x, 0), QPointF(x, self.height()))
-        painter.drawText(MARGIN + 2, self.height() - 4, f"ASM error per frame ({self.title})   max {self.error.max():.3f}")

@@ -14,6 +14,7 @@ from PySide6.QtCore import QEvent, QObject, Qt, QTimer, Signal
 from PySide6.QtWidgets import QCheckBox, QComboBox, QHBoxLayout, QLabel, QPushButton, QSlider, QSpinBox, QWidget
 
 SPEEDS = (0.25, 0.5, 1.0, 2.0, 4.0)
+MAX_DRAW_WAIT = 0.2  # seconds a tick waits for the view to draw the frame asked before asking anew
 PASSED_KEYS = (Qt.Key.Key_Space, Qt.Key.Key_Left, Qt.Key.Key_Right, Qt.Key.Key_Home, Qt.Key.Key_End)
 
 
@@ -58,6 +59,7 @@ class Timeline(QWidget):
         self._timer.timeout.connect(self._tick)
         self._anchor = (0.0, 0)  # (clock, frame) when playback started or last changed speed / was scrubbed
         self._drawn: list[float] = []
+        self._asked_at: float | None = None  # when playback asked for a frame the view has not drawn yet
         self.play_button.toggled.connect(self.set_playing)
         self.slider.valueChanged.connect(self._set_from_widget)
         self.spin.valueChanged.connect(self._set_from_widget)
@@ -108,6 +110,7 @@ class Timeline(QWidget):
 
     def note_drawn(self) -> None:
         """The view drew a frame: while playing, the label shows the frames drawn in the last second."""
+        self._asked_at = None
         if not self.playing:
             return
         now = time.perf_counter()
@@ -133,6 +136,8 @@ class Timeline(QWidget):
         self.frame_changed.emit(frame)
 
     def _tick(self) -> None:
+        if self._asked_at is not None and time.perf_counter() - self._asked_at < MAX_DRAW_WAIT:
+            return  # the last frame is not drawn yet: a new one now would be skinned and never shown
         started, first = self._anchor
         speed = SPEEDS[self.speed.currentIndex()]
         due = first + int((time.perf_counter() - started) * self.clip_fps * speed)
@@ -146,4 +151,5 @@ class Timeline(QWidget):
             self.slider.blockSignals(True)  # the clock moves the frame: keep the anchor
             self.slider.setValue(due)
             self.slider.blockSignals(False)
+            self._asked_at = time.perf_counter()
             self._set_from_widget(due)
