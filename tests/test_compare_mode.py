@@ -207,9 +207,11 @@ def test_playback_keys_reach_the_shortcuts_with_the_frame_box_focused(window, qt
 
 
 def test_double_click_solos_a_viewport_and_back(window, qtbot):
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.add_target_file(str(ASSETS_DIR / "hands" / "laurel.npz"))  # two rows: cells != renderers
     view = window.view
-    viewports = view._viewports
-    hand = 2  # ASRN -> iris
+    viewports = view.hand_viewports()
+    hand = 4  # ASRN -> laurel, in the second row
     x0, y0, x1, y1 = viewports[hand]
     w, h = view.interactor.width(), view.interactor.height()
     centre = QPoint(int((x0 + x1) / 2 * w), int((1 - (y0 + y1) / 2) * h))
@@ -217,15 +219,15 @@ def test_double_click_solos_a_viewport_and_back(window, qtbot):
     qtbot.mouseDClick(view.interactor, Qt.MouseButton.LeftButton, pos=centre)
     assert view.solo == hand
     drawn = [bool(r.GetDraw()) for r in view.plotter.renderers]
-    assert drawn[hand] and sum(drawn) == 1
-    assert tuple(view.plotter.renderers[hand].GetViewport()) == (0.0, 0.0, 1.0, 1.0)
+    assert view._hands[hand].renderer.GetDraw() and sum(drawn) == 1
+    assert tuple(view._hands[hand].renderer.GetViewport()) == (0.0, 0.0, 1.0, 1.0)
     qtbot.mouseDClick(view.interactor, Qt.MouseButton.LeftButton, pos=centre)
     assert view.solo == -1 and all(r.GetDraw() for r in view.plotter.renderers)
 
 
 def test_every_hand_has_a_viewport_of_the_same_size_and_the_colour_bar_its_own(window):
     viewports = np.array(window.view._viewports)
-    hands = viewports[:len(window.view._hands)]
+    hands = np.array(window.view.hand_viewports())
     sizes = np.column_stack([hands[:, 2] - hands[:, 0], hands[:, 3] - hands[:, 1]])
     assert np.abs(sizes - sizes[0]).max() < 1e-6
     bar = viewports[-1]  # the colour bar's column: right of every hand

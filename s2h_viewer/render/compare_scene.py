@@ -43,6 +43,7 @@ class PosedHand:
         self.hand, self.pose, self.joint_error = hand, pose, joint_error
         self.error_actor = self.mesh = None
         self.overlay: Overlays | None = None
+        self.renderer = plotter.renderer  # the subplot it is drawn in
         if hand.mesh is not None:
             self.mesh = surface(hand, to_view(hand, skin_vertices(hand, pose, 0)))
             self.closed = is_closed_outward(self.mesh)
@@ -130,6 +131,7 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
         plotter.renderer.add_light(pv.Light(light_type="headlight"))  # shading cost of pyvista's five-light kit
         posed = PosedHand(plotter, hand, pose, error, opacity)
         posed.overlay = Overlays(plotter, hand, pose, expected)
+        posed.renderer = plotter.renderer
         hands.append(posed)
         plotter.add_text(label, font_size=9, color="black", position="upper_left")
     below = source_cell_below(comparison)

@@ -101,22 +101,23 @@ class CompareView(QWidget):
         """The index of the hand whose viewport holds widget pixel (x, y), or -1."""
         w, h = max(1, self.interactor.width()), max(1, self.interactor.height())
         u, v = x / w, 1.0 - y / h
-        for index, viewport in enumerate(self._viewports[:len(self._hands)]):
+        for index, viewport in enumerate(self.hand_viewports()):
             if viewport[0] <= u < viewport[2] and viewport[1] <= v < viewport[3]:
                 return index
         return -1
 
+    def hand_viewports(self) -> list[tuple[float, ...]]:
+        """Each hand's viewport in the grid (x0, y0, x1, y1 as fractions, y up), in ``_hands`` order."""
+        renderers = list(self.plotter.renderers)
+        return [self._viewports[renderers.index(hand.renderer)] for hand in self._hands]
+
     def set_solo(self, index: int) -> None:
         """Show hand ``index``'s viewport alone over the whole view; -1 restores the grid."""
         self.solo = index
-        renderers = self.plotter.renderers
-        for i, renderer in enumerate(renderers):
-            if index < 0:
-                renderer.SetViewport(*self._viewports[i])
-                renderer.SetDraw(True)
-            else:
-                renderer.SetViewport(*((0.0, 0.0, 1.0, 1.0) if i == index else self._viewports[i]))
-                renderer.SetDraw(i == index)
+        solo = self._hands[index].renderer if index >= 0 else None
+        for renderer, viewport in zip(self.plotter.renderers, self._viewports):
+            renderer.SetViewport(*((0.0, 0.0, 1.0, 1.0) if renderer is solo else viewport))
+            renderer.SetDraw(solo is None or renderer is solo)
         self.solo_changed.emit(index)
         self.interactor.update()
 
