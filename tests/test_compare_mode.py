@@ -266,3 +266,19 @@ def test_heatmap_tooltip_names_the_joint_pair(window):
     value = heatmap.current[row, column]
     assert text.startswith("index_tip to palm anchor 3") and (f"{value:.3f}" in text or "masked" in text)
     assert heatmap.cell_text(2, 2) == ""
+
+
+def test_camera_presets_turn_the_one_shared_camera(window):
+    from s2h_viewer.render.compare_scene import CAMERA_PRESETS
+    view_menu = next(a.menu() for a in window.menuBar().actions() if a.text() == "&View")
+    presets = {a.text(): a for a in view_menu.actions() if a.text().startswith("Camera: ")}
+    assert sorted(presets) == ["Camera: back", "Camera: palm", "Camera: reset", "Camera: side"]
+    for text, preset in (("Camera: palm", "palm"), ("Camera: side", "side"), ("Camera: reset", "default")):
+        presets[text].trigger()
+        camera = window.view.plotter.camera
+        direction = np.subtract(camera.position, camera.focal_point)
+        expected = np.asarray(CAMERA_PRESETS[preset][0])
+        np.testing.assert_allclose(direction / np.linalg.norm(direction), expected / np.linalg.norm(expected),
+                                   atol=1e-9)
+        cameras = {id(h.renderer.GetActiveCamera()) for h in window.view._hands}
+        assert len(cameras) == 1  # every hand seen through the same camera: one scale

@@ -28,7 +28,7 @@ from s2h_viewer.semantics.contacts import CONTACT_PAIRS, SITES, detect_contacts,
 ERROR_RANGE = (0.0, 0.1)  # 1 - cosine; 0.1 is already a clearly different pose
 ERROR_COLOURMAP = "plasma"
 DISPLAY_FACES = 10_000
-COLOUR_BAR_WEIGHT = 0.16  # the colour bar's column, against 1 for a hand's
+COLOUR_BAR_SHARE = 0.065  # of the grid's width: the colour bar's column, however many hand columns
 CONTACT_COLOUR = "#1a9850"
 LOST_COLOUR = "#ff1f1f"
 #: each contact pair (``semantics.contacts.CONTACT_PAIRS``) as two indices into ``contact_sites``.
@@ -94,7 +94,7 @@ def grid_layout(comparison: Comparison) -> dict:
     columns = 1 + len(comparison.results) // rows
     groups = [(np.s_[:], columns)] + ([(np.s_[1:], 0)] if rows > 2 else [])
     return {"shape": (rows, columns + 1), "groups": groups, "border": False,
-            "col_weights": [1.0] * columns + [COLOUR_BAR_WEIGHT]}
+            "col_weights": [1.0] * columns + [columns * COLOUR_BAR_SHARE / (1.0 - COLOUR_BAR_SHARE)]}
 
 
 def source_cell_below(comparison: Comparison) -> tuple[int, int] | None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 from matplotlib import colormaps
-from PySide6.QtCore import QPoint, Qt
+from PySide6.QtCore import Qt
 from PySide6.QtGui import QColor, QFont, QImage, QPainter, QPixmap
 from PySide6.QtWidgets import QLabel, QToolTip, QVBoxLayout, QWidget
 
