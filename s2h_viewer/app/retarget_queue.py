@@ -96,12 +96,13 @@ class RetargetQueue(QObject):
                     result = compute_result(motion, source, self._semantics[semantics_key][1], target, key.method)
                     hook(1.0)
                 self.computed.append(key)
-                self.result_ready.emit(key, result)
+                outcome = (self.result_ready, key, result)
             except Cancelled:
-                self.job_cancelled.emit(key)
-            except (S2HError, KeyError, ValueError, OSError) as exc:
-                self.failed.emit(key, str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc))
-            finally:
-                with self._lock:
-                    self._current = None
+                outcome = (self.job_cancelled, key)
+            except (S2HError, KeyError, ValueError, OSError, RuntimeError) as exc:  # RuntimeError: torch's
+                outcome = (self.failed, key, str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc))
+            with self._lock:  # the job is over before anyone hears how it ended
+                self._current = None
+            signal, *args = outcome
+            signal.emit(*args)
         self.idle.emit()
