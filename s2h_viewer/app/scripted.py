@@ -24,6 +24,22 @@ def wait_for(signal=None, seconds: float = 300.0) -> None:
     loop.exec()
 
 
+def settle() -> None:
+    """Let Qt lay out and paint (the 3D view renders in its paint) before a grab."""
+    for _ in range(20):
+        QApplication.processEvents()
+
+
+def screen_image(window, path: str | Path) -> None:
+    """Save what the X server shows of ``window`` (the 3D view is a native GL window: Qt's own
+    ``grab`` would leave it black)."""
+    from PIL import ImageGrab
+    settle()
+    top_left = window.mapToGlobal(window.rect().topLeft())
+    ImageGrab.grab(bbox=(top_left.x(), top_left.y(), top_left.x() + window.width(),
+                         top_left.y() + window.height())).save(str(path))
+
+
 @contextmanager
 def scripted_window(size: tuple[int, int] = (1400, 900)) -> Iterator[MainWindow]:
     """The main window on the shipped samples, shown, its comparison ready; the user's settings untouched."""

@@ -9,6 +9,7 @@ draws triangles slowly). Every camera is linked.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -22,10 +23,16 @@ from s2h_viewer.hand.skinning import skin_vertices
 from s2h_viewer.render.scene import BONE_COLOUR, SKIN_COLOUR, display_hand, skeleton, surface, to_view
 from s2h_viewer.retarget.comparison import Comparison
 from s2h_viewer.retarget.methods import METHODS
+from s2h_viewer.semantics.contacts import CONTACT_PAIRS, SITES, detect_contacts, pad_centres
 
 ERROR_RANGE = (0.0, 0.1)  # 1 - cosine; 0.1 is already a clearly different pose
 ERROR_COLOURMAP = "plasma"
 DISPLAY_FACES = 10_000
+COLOUR_BAR_SHARE = 0.065  # of the grid's width: the colour bar's column, however many hand columns
+CONTACT_COLOUR = "#1a9850"
+LOST_COLOUR = "#ff1f1f"
+#: each contact pair (``semantics.contacts.CONTACT_PAIRS``) as two indices into ``contact_sites``.
+PAIR_SITES = np.array([[SITES.index(a), SITES.index(b)] for a, b in CONTACT_PAIRS], dtype=np.int64)
 
 
 class PosedHand:
@@ -35,6 +42,8 @@ class PosedHand:
                  opacity: float):
         self.hand, self.pose, self.joint_error = hand, pose, joint_error
         self.error_actor = self.mesh = None
+        self.overlay: Overlays | None = None
+        self.renderer = plotter.renderer  # the subplot it is drawn in
         if hand.mesh is not None:
             self.mesh = surface(hand, to_view(hand, skin_vertices(hand, pose, 0)))
             self.closed = is_closed_outward(self.mesh)
@@ -51,6 +60,8 @@ class PosedHand:
             plotter.add_mesh(self.bones, color=BONE_COLOUR, line_width=4, reset_camera=False)
 
     def show(self, frame: int) -> None:
+        if self.overlay is not None:
+            self.overlay.show(frame)
         if self.mesh is None:
             self.bones.points = to_view(self.hand, self.pose.positions[frame].numpy().astype(np.float64))
             return
@@ -76,11 +87,20 @@ def is_closed_outward(mesh: pv.PolyData) -> bool:
 
 
 def grid_layout(comparison: Comparison) -> dict:
-    """Plotter keywords for the grid: a row per target, a column per method after the source's column,
-    which is merged over all rows (the source is drawn once)."""
+    """Plotter keywords for the grid: a row per target, a column per method after the source's column
+    (the source drawn once, top left, in a cell the size of the others so every hand has the same
+    scale), and a narrow last column, merged over the rows, for the colour bar (it covers no hand)."""
     rows = len(dict.fromkeys(id(r.target) for r in comparison.results)) or 1
-    shape = (rows, 1 + len(comparison.results) // rows)
-    return {"shape": shape, "groups": [(np.s_[:], 0)] if rows > 1 else None, "border": False}
+    columns = 1 + len(comparison.results) // rows
+    groups = [(np.s_[:], columns)] + ([(np.s_[1:], 0)] if rows > 2 else [])
+    return {"shape": (rows, columns + 1), "groups": groups, "border": False,
+            "col_weights": [1.0] * columns + [columns * COLOUR_BAR_SHARE / (1.0 - COLOUR_BAR_SHARE)]}
+
+
+def source_cell_below(comparison: Comparison) -> tuple[int, int] | None:
+    """The empty cell under the source (with two or more targets), where the clip's legend goes."""
+    rows = len(dict.fromkeys(id(r.target) for r in comparison.results))
+    return (1, 0) if rows > 1 else None
 
 
 def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
@@ -95,53 +115,163 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
             displayed[id(hand)] = display_hand(hand, display_faces)
         return displayed[id(hand)]
 
-    panels = [((0, 0), shown(comparison.source), comparison.source_pose, None, f"source: {comparison.source.name}")]
+    source_contacts = detect_contacts(comparison.source, comparison.source_pose)
+    panels = [((0, 0), shown(comparison.source), comparison.source_pose, None, None,
+               f"source: {comparison.source.name}")]
     for row, target in enumerate(dict.fromkeys(id(r.target) for r in comparison.results)):
         results = [r for r in comparison.results if id(r.target) == target]
-        panels += [((row, 1 + k), shown(r.target), r.pose, r.joint_error,
+        panels += [((row, 1 + k), shown(r.target), r.pose, r.joint_error, source_contacts,
                     f"{METHODS[r.method].label} -> {r.target.name}\nS_palm {r.scores.s_palm:.3f}  "
                     f"S_finger {r.scores.s_finger:.3f}") for k, r in enumerate(results)]
     hands = []
-    for cell, hand, pose, error, label in panels:
+    for cell, hand, pose, error, expected, label in panels:
         plotter.subplot(*cell)
         plotter.set_background("white")
         plotter.renderer.remove_all_lights()  # one light that follows the camera: a quarter of the
         plotter.renderer.add_light(pv.Light(light_type="headlight"))  # shading cost of pyvista's five-light kit
-        hands.append(PosedHand(plotter, hand, pose, error, opacity))
+        posed = PosedHand(plotter, hand, pose, error, opacity)
+        posed.overlay = Overlays(plotter, hand, pose, expected)
+        posed.renderer = plotter.renderer
+        hands.append(posed)
         plotter.add_text(label, font_size=9, color="black", position="upper_left")
-        plotter.view_vector((0.15, 0.45, -0.85), viewup=(1.0, 0.0, 0.0))
-        plotter.reset_camera()
-        plotter.camera.zoom(0.8)  # room for a moving hand and the label
+    below = source_cell_below(comparison)
+    if below is not None:
+        plotter.subplot(*below)
+        plotter.set_background("white")
+        plotter.add_text(f"clip: {comparison.motion.name}\n{comparison.n_frames} frames at {comparison.motion.fps:g} fps",
+                         font_size=9, color="black", position="upper_left")
     coloured = next((h.error_actor for h in hands if h.error_actor is not None), None)
+    plotter.subplot(0, plotter.shape[1] - 1)
+    plotter.set_background("white")
     if coloured is not None:
-        plotter.subplot(*panels[-1][0])
-        plotter.add_scalar_bar("ASM error (1 - cos)", mapper=coloured.mapper, vertical=True, position_x=0.76,
-                               position_y=0.08, height=0.55, width=0.1, title_font_size=10, label_font_size=9,
+        plotter.add_scalar_bar("1 - cos", mapper=coloured.mapper, vertical=True, position_x=0.25,
+                               position_y=0.1, height=0.8, width=0.4, title_font_size=10, label_font_size=9,
                                color="black", n_labels=4, fmt="%.2f")
     plotter.link_views()
+    set_camera(plotter, "default", [h.hand for h in hands])
     return hands
+
+
+#: camera directions in view space (x = fingers, y = thumb side, z = back of the hand) and up vectors.
+CAMERA_PRESETS = {
+    "default": ((0.15, 0.45, -0.85), (1.0, 0.0, 0.0)),
+    "palm": ((0.0, 0.0, -1.0), (1.0, 0.0, 0.0)),
+    "back": ((0.0, 0.0, 1.0), (1.0, 0.0, 0.0)),
+    "side": ((0.0, 1.0, 0.0), (1.0, 0.0, 0.0)),
+}
+
+
+def set_camera(plotter: pv.Plotter, preset: str, hands: list[HandModel]) -> None:
+    """Point the shared camera at the palm centre from a preset direction, far enough for the largest hand
+    (every viewport shares the camera and has the same size: one scale for source and targets)."""
+    direction, up = CAMERA_PRESETS[preset]
+    extent = max(h.hand_length for h in hands)
+    d = np.asarray(direction) / np.linalg.norm(direction)
+    centre = np.array([0.4, 0.0, 0.0]) * extent  # the palm frame's origin is the wrist; fingers along x
+    camera = plotter.camera
+    camera.focal_point = centre
+    camera.position = centre + d * extent * 3.0
+    camera.up = up
+    camera.view_angle = 30.0
+    for renderer in plotter.renderers:
+        renderer.ResetCameraClippingRange()
+
+
+class Overlays:
+    """A hand's skeleton and its contacts, drawn over the skin when switched on: touching pads linked
+    (green), and on a retarget the contacts the source makes but it misses (lost, red)."""
+
+    def __init__(self, plotter: pv.Plotter, hand: HandModel, pose: HandPose, expected: np.ndarray | None):
+        self.hand, self.pose = hand, pose
+        self.contacts = detect_contacts(hand, pose)
+        self.lost = None if expected is None else expected & ~self.contacts
+        self.sites = to_view(hand, contact_sites(hand, pose))  # (T, 6, 3)
+        self.bones = skeleton(hand, pose, 0)
+        self.links, self.lost_links = pv.PolyData(self.sites[0]), pv.PolyData(self.sites[0])
+        self.actors = [plotter.add_mesh(self.bones, color=BONE_COLOUR, line_width=3, reset_camera=False),
+                       plotter.add_mesh(self.links, color=CONTACT_COLOUR, line_width=8, point_size=16,
+                                        render_points_as_spheres=True, reset_camera=False),
+                       plotter.add_mesh(self.lost_links, color=LOST_COLOUR, line_width=8, point_size=16,
+                                        render_points_as_spheres=True, reset_camera=False)]
+        self.show_skeleton = self.show_contacts = False
+        self._update_visibility()
+
+    def set_visible(self, skeleton_on: bool, contacts_on: bool) -> None:
+        self.show_skeleton, self.show_contacts = skeleton_on, contacts_on
+        self._update_visibility()
+
+    def _update_visibility(self) -> None:
+        self.actors[0].visibility = self.show_skeleton
+        self.actors[1].visibility = self.actors[2].visibility = self.show_contacts
+
+    def show(self, frame: int) -> None:
+        if self.show_skeleton:
+            self.bones.points = to_view(self.hand, self.pose.positions[frame].numpy().astype(np.float64))
+        if self.show_contacts:
+            for poly, mask in ((self.links, self.contacts[frame]),
+                               (self.lost_links, None if self.lost is None else self.lost[frame])):
+                pairs = PAIR_SITES[mask] if mask is not None and mask.any() else np.zeros((0, 2), dtype=np.int64)
+                poly.points = self.sites[frame]
+                poly.lines = np.column_stack([np.full(len(pairs), 2), pairs]).ravel() if len(pairs) else \
+                    np.zeros(0, dtype=np.int64)
+                sites = np.unique(pairs)  # the pads involved, as dots (a touching pair's link is short)
+                poly.verts = np.column_stack([np.ones(len(sites), dtype=np.int64), sites]).ravel() if len(sites) \
+                    else np.zeros(0, dtype=np.int64)
+
+
+def contact_sites(hand: HandModel, pose: HandPose) -> np.ndarray:
+    """(T, 6, 3) float64: the five fingertip pads and the palm centre, in hand space."""
+    positions = pose.positions.detach()
+    pads = pad_centres(positions).numpy()
+    palm = positions[:, list(topo.KNUCKLE_JOINTS[1:]) + [0]].mean(1, keepdim=True).numpy()
+    return np.concatenate([pads, palm], 1).astype(np.float64)
+
+
+@dataclass(frozen=True)
+class ViewOptions:
+    """How the grid is drawn: the camera preset, the overlays, the skin's opacity."""
+
+    camera: str = "default"
+    skeleton: bool = False
+    contacts: bool = False
+    opacity: float = 1.0
+
+
+def apply_options(plotter: pv.Plotter, hands: list[PosedHand], options: ViewOptions) -> None:
+    for hand in hands:
+        hand.set_opacity(options.opacity)
+        hand.overlay.set_visible(options.skeleton, options.contacts)
+    set_camera(plotter, options.camera, [h.hand for h in hands])
 
 
 def render_comparison(comparison: Comparison, path: str | Path, frame: int | None = None,
                       size: tuple[int, int] = (1400, 900),
-                      progress: Callable[[int, int], None] | None = None) -> Path:
-    """Off screen: one frame as PNG (``frame``, default 0), or every frame as MP4/GIF (by suffix)."""
+                      progress: Callable[[int, int], None] | None = None,
+                      caption: Callable[[int], str] | None = None,
+                      options: ViewOptions = ViewOptions()) -> Path:
+    """Off screen: one frame as PNG (``frame``, default 0), or every frame as MP4/GIF (by suffix).
+
+    ``caption(frame)`` adds a line under each image; ``progress(done, total)`` is called after every
+    frame and may raise (``retarget.progress.Cancelled``) to stop: nothing is written then."""
     from s2h_viewer.io.atomic import atomic_path
+    from s2h_viewer.render.caption import add_caption
     from s2h_viewer.render.video import VIDEO_SUFFIXES, write_video
 
     path = Path(path)
     plotter = pv.Plotter(off_screen=True, window_size=size, **grid_layout(comparison))
     plotter.render_window.SetMultiSamples(0)
     hands = populate(plotter, comparison)
+    apply_options(plotter, hands, options)
     plotter.show(auto_close=False)
 
     def image(f: int) -> np.ndarray:
         for hand in hands:
             hand.show(f)
         plotter.render()
+        rgb = np.asarray(plotter.screenshot(return_img=True))[..., :3]
         if progress:
             progress(f + 1, comparison.n_frames)
-        return np.asarray(plotter.screenshot(return_img=True))[..., :3]
+        return add_caption(rgb, caption(f)) if caption else rgb
 
     try:
         if path.suffix.lower() in VIDEO_SUFFIXES:

@@ -23,6 +23,7 @@ from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.hand.rotations import quat_to_tbs_euler, tbs_euler_to_quat
 from s2h_viewer.retarget.methods import on_target, register
+from s2h_viewer.retarget.progress import report
 from s2h_viewer.retarget.windows import Progress, stream_windows
 from s2h_viewer.semantics.anatomy import angle_excess, clamp_bends
 from s2h_viewer.semantics.asm import semantic_matrix
@@ -100,7 +101,8 @@ def _optimise_chunk(source_q: np.ndarray, source_hand: HandModel, target_hand: H
     correction = torch.zeros(len(keys), *start.shape[1:], requires_grad=True)
     optimiser = torch.optim.Adam([correction], lr=config.learning_rate)
     tol = CONTACT_TOLERANCE
-    for _ in range(config.steps):
+    for step in range(config.steps):
+        report(step / config.steps)  # progress, and where a cancel stops the optimisation
         angles = start[keys] + correction
         q = tbs_euler_to_quat(angles)
         pose = forward_kinematics(target_hand, q)

@@ -16,6 +16,7 @@ from s2h_viewer.hand.kinematics import HandPose, forward_kinematics
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.retarget.methods import retarget
+from s2h_viewer.retarget.progress import report, stage
 from s2h_viewer.semantics.asm import semantic_matrix
 from s2h_viewer.semantics.metrics import RetargetScores, per_joint_cosine, score_retarget
 
@@ -36,6 +37,11 @@ class MethodResult:
         """(T, 20) 1 - mean cosine over each finger joint's ASM row: the heatmap colour per joint."""
         return np.nanmean(self.cell_error, axis=-1)
 
+    @property
+    def frame_error(self) -> np.ndarray:
+        """(T,) mean ASM error over every unmasked cell: the error curve under the timeline."""
+        return np.nan_to_num(np.nanmean(self.cell_error.reshape(len(self.cell_error), -1), axis=-1))
+
 
 @dataclass
 class Comparison:
@@ -49,24 +55,38 @@ class Comparison:
         return self.motion.n_frames
 
 
+def source_semantics(motion: Motion, source: HandModel) -> tuple[HandPose, torch.Tensor]:
+    """FK and ASM of the clip on its source hand: what every retarget is measured against."""
+    with torch.no_grad():
+        source_pose = forward_kinematics(source, motion.q_tbs)
+        return source_pose, semantic_matrix(source_pose)
+
+
+def compute_result(motion: Motion, source: HandModel, source_asm: torch.Tensor, target: HandModel,
+                   method: str) -> MethodResult:
+    """One method's retarget onto one target, measured; reports progress (``retarget.progress``)."""
+    with stage(0.0, 0.9):
+        moved = retarget(motion, source, target, method)
+    report(0.9)
+    with torch.no_grad():
+        pose = forward_kinematics(target, moved.q_tbs)
+        cell_error = 1.0 - per_joint_cosine(source_asm, semantic_matrix(pose)).numpy()
+    scores = score_retarget(source, motion.q_tbs, target, moved.q_tbs)
+    report(1.0)
+    return MethodResult(method, target, moved, pose, cell_error, scores)
+
+
 def build_comparison(motion: Motion, source: HandModel, targets: list[HandModel], methods: list[str],
                      progress: Callable[[int, int, str], None] | None = None) -> Comparison:
     """Retarget ``motion`` onto every target with every method; ``progress(done, total, what)``."""
-    with torch.no_grad():
-        source_pose = forward_kinematics(source, motion.q_tbs)
-        source_asm = semantic_matrix(source_pose)
+    source_pose, source_asm = source_semantics(motion, source)
     total = len(targets) * len(methods)
     results = []
     for target in targets:
         for method in methods:
             if progress:
                 progress(len(results), total, f"{method} -> {target.name}")
-            moved = retarget(motion, source, target, method)
-            with torch.no_grad():
-                pose = forward_kinematics(target, moved.q_tbs)
-                cell_error = 1.0 - per_joint_cosine(source_asm, semantic_matrix(pose)).numpy()
-            scores = score_retarget(source, motion.q_tbs, target, moved.q_tbs)
-            results.append(MethodResult(method, target, moved, pose, cell_error, scores))
+            results.append(compute_result(motion, source, source_asm, target, method))
     if progress:
         progress(total, total, "done")
     return Comparison(source, motion, source_pose, results)

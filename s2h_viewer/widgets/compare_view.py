@@ -1,56 +1,158 @@
-"""Compare mode's viewport: the compare grid (`render.compare_scene`) in one `QtInteractor` with
+"""Compare mode's viewport: the compare grid (`render.compare_scene`) in one render window with
 linked cameras, no multisampling (software OpenGL pays 3-4x for it), redrawn on ``show_frame``.
 
-The widget renders the scene in its own paint, so a new frame asks for a repaint (``update``)
-rather than rendering too (that drew every frame twice); exports render synchronously."""
+The render window draws straight into a native widget (VTK's own ``QVTKRenderWindowInteractor``)
+rather than into pyvistaqt's ``QOpenGLWidget``, whose frame Qt copies and composes into the window
+on every paint: measured with `benchmarks/bench_window_playback.py`, the native widget draws as fast
+as off screen. The widget renders in its own paint, so a new frame asks for a repaint (``update``). A double-click on a hand shows its
+viewport alone (solo), a second one brings the grid back. ``drawn`` fires after every render, so
+the timeline can show the frames actually drawn per second."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
-from pyvistaqt import QtInteractor
+import pyvista as pv
+from PySide6.QtCore import QEvent, QObject, Signal
+from vtkmodules.qt.QVTKRenderWindowInteractor import QVTKRenderWindowInteractor
+from vtkmodules.vtkInteractionStyle import vtkInteractorStyleTrackballCamera
+from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
-from s2h_viewer.render.compare_scene import PosedHand, grid_layout, populate
+from s2h_viewer.render.compare_scene import PosedHand, ViewOptions, apply_options, grid_layout, populate
 from s2h_viewer.retarget.comparison import Comparison
+
+
+class _GridWidget(QVTKRenderWindowInteractor):
+    """VTK's native-window widget that stops painting once its render window is finalized (a paint
+    already queued when the grid is replaced would otherwise render into a freed window)."""
+
+    alive = True
+
+    def paintEvent(self, event) -> None:
+        if self.alive:
+            super().paintEvent(event)
+
+    def resizeEvent(self, event) -> None:
+        if self.alive:
+            super().resizeEvent(event)
 
 
 class CompareView(QWidget):
     """Source + targets x methods, synchronised on ``show_frame``."""
 
+    drawn = Signal()
+    solo_changed = Signal(int)  # the hand shown alone (index into the grid's hands), -1 for the grid
+
     def __init__(self, parent: QWidget | None = None):
         super().__init__(parent)
         self._layout = QVBoxLayout(self)
         self._layout.setContentsMargins(0, 0, 0, 0)
-        self.interactor: QtInteractor | None = None
+        self.interactor: _GridWidget | None = None
+        self.plotter: pv.Plotter | None = None
         self.comparison: Comparison | None = None
         self._hands: list[PosedHand] = []
-        self.opacity = 1.0
+        self.options = ViewOptions()
+        self.solo = -1
+        self._viewports: list[tuple[float, ...]] = []
+        self.frame = 0
+
+    @property
+    def opacity(self) -> float:
+        return self.options.opacity
 
     def set_comparison(self, comparison: Comparison) -> None:
-        """Lay out one subplot per hand: the source once, then a row per target, a column per method."""
+        """Lay out one subplot per hand: the source, then a row per target, a column per method."""
         self.comparison = comparison
-        if self.interactor is not None:  # pyvista fixes the subplot layout at construction: start afresh
-            self._layout.removeWidget(self.interactor)
-            self.interactor.close()
-            self.interactor.deleteLater()
-        self.interactor = QtInteractor(self, multi_samples=0, auto_update=False, **grid_layout(comparison))
+        self.close_grid()  # pyvista fixes the subplot layout at construction: start afresh
+        self.plotter = pv.Plotter(off_screen=False, **grid_layout(comparison))
+        self.plotter.render_window.SetMultiSamples(0)
+        self.interactor = _GridWidget(self, rw=self.plotter.render_window)
+        self.interactor.GetRenderWindow().GetInteractor().SetInteractorStyle(vtkInteractorStyleTrackballCamera())
+        self.interactor.installEventFilter(self)
+        self.plotter.render_window.AddObserver("EndEvent", lambda *_: self.drawn.emit())
         self._layout.addWidget(self.interactor)
-        self._hands = populate(self.interactor, comparison, self.opacity)
-        self.show_frame(0)
+        self.interactor.Initialize()
+        self._hands = populate(self.plotter, comparison, self.options.opacity)
+        self._viewports = [tuple(r.GetViewport()) for r in self.plotter.renderers]
+        self.solo = -1
+        apply_options(self.plotter, self._hands, self.options)
+        self.show_frame(min(self.frame, comparison.n_frames - 1))
+
     def show_frame(self, frame: int) -> None:
+        self.frame = frame
         for hand in self._hands:
             hand.show(frame)
         if self.interactor is not None:
             self.interactor.update()
 
-    def set_mesh_opacity(self, opacity: float) -> None:
-        self.opacity = opacity
-        for hand in self._hands:
-            hand.set_opacity(opacity)
+    def set_options(self, **changes) -> None:
+        """Change the camera preset, overlays or opacity (``ViewOptions`` fields) and redraw."""
+        self.options = dataclasses.replace(self.options, **changes)
         if self.interactor is not None:
-            self.interactor.update()
+            apply_options(self.plotter, self._hands, self.options)
+            self.show_frame(self.frame)
+
+    def set_mesh_opacity(self, opacity: float) -> None:
+        self.set_options(opacity=opacity)
+
+    def hand_at(self, x: int, y: int) -> int:
+        """The index of the hand whose viewport holds widget pixel (x, y), or -1."""
+        w, h = max(1, self.interactor.width()), max(1, self.interactor.height())
+        u, v = x / w, 1.0 - y / h
+        for index, viewport in enumerate(self.hand_viewports()):
+            if viewport[0] <= u < viewport[2] and viewport[1] <= v < viewport[3]:
+                return index
+        return -1
+
+    def hand_viewports(self) -> list[tuple[float, ...]]:
+        """Each hand's viewport in the grid (x0, y0, x1, y1 as fractions, y up), in ``_hands`` order."""
+        renderers = list(self.plotter.renderers)
+        return [self._viewports[renderers.index(hand.renderer)] for hand in self._hands]
+
+    def set_solo(self, index: int) -> None:
+        """Show hand ``index``'s viewport alone over the whole view; -1 restores the grid."""
+        self.solo = index
+        solo = self._hands[index].renderer if index >= 0 else None
+        for renderer, viewport in zip(self.plotter.renderers, self._viewports):
+            renderer.SetViewport(*((0.0, 0.0, 1.0, 1.0) if renderer is solo else viewport))
+            renderer.SetDraw(solo is None or renderer is solo)
+        self.solo_changed.emit(index)
+        self.interactor.update()
+
+    def eventFilter(self, watched: QObject, event: QEvent) -> bool:
+        if watched is self.interactor and event.type() == QEvent.Type.MouseButtonDblClick:
+            self.set_solo(-1 if self.solo >= 0 else self.hand_at(int(event.position().x()),
+                                                                 int(event.position().y())))
+            return True
+        return False
 
     def grab_rgb(self) -> np.ndarray:
         """The current view as an (H, W, 3) uint8 image (what screenshot and video export save)."""
-        self.interactor.render()
-        return np.asarray(self.interactor.screenshot(return_img=True))[..., :3]
+        window = self.plotter.render_window
+        window.Render()
+        grab = vtkWindowToImageFilter()
+        grab.SetInput(window)
+        grab.SetInputBufferTypeToRGB()
+        grab.ReadFrontBufferOff()
+        grab.Update()
+        image = pv.wrap(grab.GetOutput())
+        width, height, _ = image.dimensions
+        return np.asarray(image.point_data.active_scalars).reshape(height, width, -1)[::-1, :, :3].copy()
+
+    def close_grid(self) -> None:
+        """Free the render window and its widget (a new grid, or the window closing)."""
+        if self.interactor is not None:
+            self.interactor.alive = False
+            self.interactor.hide()
+            self._layout.removeWidget(self.interactor)
+            self.interactor.Finalize()
+            self.plotter.close()
+            self.interactor.deleteLater()
+            self.interactor = self.plotter = None
+            self._hands = []
+
+    def closeEvent(self, event) -> None:
+        self.close_grid()
+        super().closeEvent(event)

@@ -1,13 +1,28 @@
-"""Playback timeline: play/pause, scrub, step, loop, speed, and the frame rate actually drawn."""
+"""Playback timeline: play/pause, scrub, step, loop, speed, a frame/total and time readout, and the
+frame rate actually drawn.
+
+Playback runs against the clock: each tick shows the frame that real time (times the speed) has
+reached since play started, so a view that draws slower than the clip drops frames instead of
+slowing the clip down. Space and the arrow keys stay the window's shortcuts even when the frame box
+has the focus (it would take them for its text cursor otherwise)."""
 
 from __future__ import annotations
 
 import time
 
-from PySide6.QtCore import Qt, QTimer, Signal
+from PySide6.QtCore import QEvent, QObject, Qt, QTimer, Signal
 from PySide6.QtWidgets import QCheckBox, QComboBox, QHBoxLayout, QLabel, QPushButton, QSlider, QSpinBox, QWidget
 
-SPEEDS = (0.25, 0.5, 1.0, 2.0)
+SPEEDS = (0.25, 0.5, 1.0, 2.0, 4.0)
+MAX_DRAW_WAIT = 0.2  # seconds a tick waits for the view to draw the frame asked before asking anew
+PASSED_KEYS = (Qt.Key.Key_Space, Qt.Key.Key_Left, Qt.Key.Key_Right, Qt.Key.Key_Home, Qt.Key.Key_End)
+
+
+class _LeaveShortcutKeys(QObject):
+    """Refuses the frame box's claim (ShortcutOverride) on the playback keys: the shortcuts get them."""
+
+    def eventFilter(self, watched: QObject, event: QEvent) -> bool:
+        return event.type() == QEvent.Type.ShortcutOverride and event.key() in PASSED_KEYS
 
 
 class Timeline(QWidget):
@@ -20,30 +35,44 @@ class Timeline(QWidget):
         self.n_frames, self.clip_fps = 1, 30.0
         self.play_button = QPushButton("Play")
         self.play_button.setCheckable(True)
+        self.play_button.setFocusPolicy(Qt.FocusPolicy.NoFocus)  # Space is play/pause, not "press the button"
         self.slider = QSlider(Qt.Orientation.Horizontal)
         self.spin = QSpinBox()
+        self._key_filter = _LeaveShortcutKeys(self)
+        self.spin.installEventFilter(self._key_filter)
+        self.spin.lineEdit().installEventFilter(self._key_filter)
+        self.slider.installEventFilter(self._key_filter)
+        self.readout = QLabel()
         self.loop = QCheckBox("Loop")
         self.loop.setChecked(True)
         self.speed = QComboBox()
         self.speed.addItems([f"{s:g}x" for s in SPEEDS])
         self.speed.setCurrentIndex(SPEEDS.index(1.0))
         self.fps_label = QLabel("-- fps")
+        self.fps_label.setToolTip("frames drawn per second while playing")
         layout = QHBoxLayout(self)
-        for widget in (self.play_button, self.slider, self.spin, self.loop, self.speed, self.fps_label):
+        for widget in (self.play_button, self.slider, self.spin, self.readout, self.loop, self.speed, self.fps_label):
             layout.addWidget(widget)
         layout.setStretch(1, 1)
         self._timer = QTimer(self)
+        self._timer.setTimerType(Qt.TimerType.PreciseTimer)
         self._timer.timeout.connect(self._tick)
+        self._anchor = (0.0, 0)  # (clock, frame) when playback started or last changed speed / was scrubbed
         self._drawn: list[float] = []
+        self._asked_at: float | None = None  # when playback asked for a frame the view has not drawn yet
         self.play_button.toggled.connect(self.set_playing)
         self.slider.valueChanged.connect(self._set_from_widget)
         self.spin.valueChanged.connect(self._set_from_widget)
-        self.speed.currentIndexChanged.connect(lambda _: self._restart_timer())
+        self.speed.currentIndexChanged.connect(lambda _: self._restart_clock())
         self.set_clip(1, 30.0)
 
     @property
     def frame(self) -> int:
         return self.slider.value()
+
+    @property
+    def playing(self) -> bool:
+        return self.play_button.isChecked()
 
     def set_clip(self, n_frames: int, fps: float) -> None:
         self.n_frames, self.clip_fps = max(1, n_frames), fps
@@ -52,6 +81,7 @@ class Timeline(QWidget):
             widget.setRange(0, self.n_frames - 1)
             widget.setValue(0)
             widget.blockSignals(False)
+        self._show_readout(0)
         self.frame_changed.emit(0)
 
     def set_frame(self, frame: int) -> None:
@@ -69,16 +99,30 @@ class Timeline(QWidget):
         self.play_button.setText("Pause" if playing else "Play")
         self._drawn.clear()
         if playing:
-            self._restart_timer()
+            self._restart_clock()
+            self._timer.start(max(1, int(500.0 / self.clip_fps)))  # twice the clip's rate: no frame waits long
         else:
             self._timer.stop()
+            self.fps_label.setText("-- fps")
 
     def toggle(self) -> None:
-        self.set_playing(not self.play_button.isChecked())
+        self.set_playing(not self.playing)
 
-    def _restart_timer(self) -> None:
-        if self.play_button.isChecked():
-            self._timer.start(max(1, int(1000.0 / (self.clip_fps * SPEEDS[self.speed.currentIndex()]))))
+    def note_drawn(self) -> None:
+        """The view drew a frame: while playing, the label shows the frames drawn in the last second."""
+        self._asked_at = None
+        if not self.playing:
+            return
+        now = time.perf_counter()
+        self._drawn = [t for t in self._drawn if now - t < 1.0] + [now]
+        self.fps_label.setText(f"{len(self._drawn):d} fps")
+
+    def _restart_clock(self) -> None:
+        self._anchor = (time.perf_counter(), self.frame)
+
+    def _show_readout(self, frame: int) -> None:
+        total = self.n_frames - 1
+        self.readout.setText(f"{frame}/{total}  {frame / self.clip_fps:5.2f} s / {total / self.clip_fps:.2f} s")
 
     def _set_from_widget(self, frame: int) -> None:
         for widget in (self.slider, self.spin):
@@ -86,16 +130,26 @@ class Timeline(QWidget):
                 widget.blockSignals(True)
                 widget.setValue(frame)
                 widget.blockSignals(False)
+        if self.playing and self.sender() is not None and self.sender() is not self._timer:
+            self._restart_clock()  # scrubbing while playing: play on from there
+        self._show_readout(frame)
         self.frame_changed.emit(frame)
 
     def _tick(self) -> None:
-        nxt = self.frame + 1
-        if nxt >= self.n_frames:
+        if self._asked_at is not None and time.perf_counter() - self._asked_at < MAX_DRAW_WAIT:
+            return  # the last frame is not drawn yet: a new one now would be skinned and never shown
+        started, first = self._anchor
+        speed = SPEEDS[self.speed.currentIndex()]
+        due = first + int((time.perf_counter() - started) * self.clip_fps * speed)
+        if due >= self.n_frames:
             if not self.loop.isChecked():
+                self.set_frame(self.n_frames - 1)
                 self.set_playing(False)
                 return
-            nxt = 0
-        self.set_frame(nxt)
-        now = time.perf_counter()
-        self._drawn = [t for t in self._drawn if now - t < 1.0] + [now]
-        self.fps_label.setText(f"{len(self._drawn):d} fps")
+            due %= self.n_frames
+        if due != self.frame:
+            self.slider.blockSignals(True)  # the clock moves the frame: keep the anchor
+            self.slider.setValue(due)
+            self.slider.blockSignals(False)
+            self._asked_at = time.perf_counter()
+            self._set_from_widget(due)

@@ -1,0 +1,311 @@
+"""Compare mode (its own tab): a motion on its source hand retargeted onto targets with methods, on a
+timeline with the selected retarget's error curve, the ASM heatmap and the scores table beside it.
+
+All of it follows one ``CompareState``, changed only through this class's actions (methods, add or
+remove a target, load a motion, select, cancel). Each action queues the retargets it lacks or cancels
+running ones it no longer needs (``RetargetQueue``); results are cached per (motion, source, target,
+method), so ticking a method computes that method alone. The grid shows the state once everything it
+asks for is computed; Cancel goes back to what the grid showed, and the menus follow."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from PySide6.QtCore import Qt, Signal
+from PySide6.QtWidgets import QComboBox, QMenu, QProgressDialog, QSplitter, QVBoxLayout, QWidget
+
+from s2h_viewer.app.retarget_queue import RetargetQueue
+from s2h_viewer.hand.model import HandModel
+from s2h_viewer.hand.motion import Motion
+from s2h_viewer.retarget.compare_state import CompareState, ResultKey
+from s2h_viewer.retarget.comparison import Comparison, MethodResult
+from s2h_viewer.retarget.methods import METHODS
+from s2h_viewer.widgets.asm_heatmap import AsmHeatmap
+from s2h_viewer.widgets.compare_view import CompareView
+from s2h_viewer.widgets.error_curve import ErrorCurve
+from s2h_viewer.widgets.scores_table import ScoresTable
+from s2h_viewer.widgets.timeline import Timeline
+
+PROGRESS_STEPS = 1000
+HEATMAP_PERIOD_PLAYING = 0.25  # seconds: Qt repaints the labelled matrix in software, so not every frame
+
+
+@dataclass
+class CompareSetup:
+    """What compare mode starts with: a motion on its source hand, retargeted onto targets with methods."""
+
+    motion: Motion
+    source: HandModel
+    targets: list[HandModel]
+    methods: list[str] = field(default_factory=lambda: ["tbs_copy", "asrn"])
+
+
+def default_setup() -> CompareSetup:
+    """The shipped samples: the gestures clip on birch, onto a realistic and a stylised held-out hand."""
+    from s2h_viewer import samples
+    motion = next(m for m in samples.load_sample_motions() if m.name == "gestures")
+    return CompareSetup(motion, samples.load_sample_hand(motion.hand_name),
+                        [samples.load_sample_hand("iris"), samples.load_sample_hand("laurel")])
+
+
+def label(result: MethodResult) -> str:
+    return f"{METHODS[result.method].label} -> {result.target.name}"
+
+
+class CompareMode(QWidget):
+    """The Compare tab. ``comparison_ready`` fires when the grid shows everything the state asks for;
+    ``state_changed`` whenever methods or targets change (the window's menus follow it)."""
+
+    comparison_ready = Signal()
+    state_changed = Signal()
+
+    def __init__(self, setup: CompareSetup, error: Callable[[str], None], status: Callable[[str], None],
+                 parent: QWidget | None = None):
+        super().__init__(parent)
+        self.error, self.status = error, status
+        self.state = CompareState(setup.motion, setup.source, list(setup.targets), list(setup.methods))
+        self._shown: tuple | None = None  # (motion, source, targets, methods) on screen: where Cancel returns
+        self.comparison: Comparison | None = None
+        self.queue = RetargetQueue(self)
+        self._done_in_batch = 0
+        self._progress: QProgressDialog | None = None
+        self._heatmap_at = 0.0
+        self.view = CompareView()
+        self.timeline = Timeline()
+        self.curve = ErrorCurve()
+        self.heatmap = AsmHeatmap()
+        self.heatmap_choice = QComboBox()
+        self.heatmap_choice.setToolTip("the retarget the heatmap, the error curve, the scores' highlight and "
+                                       "exports follow")
+        self.scores = ScoresTable()
+        side = QWidget()
+        side_layout = QVBoxLayout(side)
+        side_layout.addWidget(self.heatmap_choice)
+        side_layout.addWidget(self.heatmap)
+        side_layout.addWidget(self.scores)
+        splitter = QSplitter()
+        splitter.addWidget(self.view)
+        splitter.addWidget(side)
+        splitter.setStretchFactor(0, 3)
+        layout = QVBoxLayout(self)
+        layout.addWidget(splitter, 1)
+        layout.addWidget(self.timeline)
+        layout.addWidget(self.curve)
+        self.timeline.frame_changed.connect(self.show_frame)
+        self.view.drawn.connect(self.timeline.note_drawn)
+        self.timeline.play_button.toggled.connect(lambda playing: playing or self.show_frame(self.timeline.frame))
+        self.curve.frame_clicked.connect(self.timeline.set_frame)
+        self.heatmap_choice.currentIndexChanged.connect(self._choice_changed)
+        self.scores.currentCellChanged.connect(lambda row, *_: self._select_row(row))
+        self.queue.result_ready.connect(self._on_result)
+        self.queue.semantics_ready.connect(self._on_semantics)
+        self.queue.progress.connect(self._on_progress)
+        self.queue.failed.connect(self._on_failure)
+        self.queue.idle.connect(self._on_idle)
+
+    @property
+    def setup(self) -> CompareState:
+        return self.state
+
+    # --- actions: the only ways the state changes ---
+    def start_comparison(self) -> None:
+        """Compute whatever the state lacks (everything, the first time) and show it."""
+        self._sync()
+
+    def set_methods(self, methods: list[str]) -> None:
+        self.state.methods = [m for m in METHODS if m in methods]
+        self._sync()
+
+    def add_target(self, hand: HandModel) -> None:
+        self.state.targets = [*self.state.targets, hand]
+        self._sync()
+
+    def remove_target(self, index: int) -> None:
+        """Drop one target and its results; the rest stay as computed."""
+        targets = list(self.state.targets)
+        del targets[index]
+        self.state.targets = targets
+        self._sync()
+
+    def load(self, motion: Motion, source: HandModel) -> None:
+        self.state.motion, self.state.source = motion, source
+        self.timeline.set_playing(False)
+        self._sync()
+
+    def select(self, key: ResultKey) -> None:
+        """One retarget for the heatmap, the error curve, the scores' highlight and the exports."""
+        self.state.selected = key
+        if self.comparison is not None:
+            keys = self._shown_keys()
+            if key in keys:
+                index = keys.index(key)
+                for widget, setter in ((self.heatmap_choice, lambda: self.heatmap_choice.setCurrentIndex(index)),
+                                       (self.scores, lambda: self.scores.selectRow(index))):
+                    widget.blockSignals(True)
+                    setter()
+                    widget.blockSignals(False)
+            self._show_selected_curve()
+            self.show_frame(self.timeline.frame)
+
+    def cancel(self) -> None:
+        """Stop every queued and running retarget and go back to what the grid shows; the menus follow."""
+        self.queue.cancel_all()
+        if self._shown is not None:
+            motion, source, targets, methods = self._shown
+            self.state.motion, self.state.source = motion, source
+            self.state.targets, self.state.methods = list(targets), list(methods)
+        else:
+            self.state.targets = []
+        self.status("retargeting cancelled")
+        self._sync()
+
+    # --- keeping the queue and the screen on the state ---
+    def _shown_keys(self) -> list[ResultKey]:
+        return [self.state.key(r.target, r.method) for r in self.comparison.results] if self.comparison else []
+
+    def _sync(self) -> None:
+        """Prune what nothing needs, queue what is missing (cancelling what is not wanted), show when complete."""
+        keep = set(self.state.wanted())
+        clips = {(id(self.state.motion), id(self.state.source))}
+        if self._shown is not None:
+            motion, source, targets, methods = self._shown
+            keep |= {ResultKey(id(motion), id(source), id(t), m) for t in targets for m in methods}
+            clips.add((id(motion), id(source)))
+        self.state.results = {k: r for k, r in self.state.results.items() if k in keep}
+        self.state.semantics = {k: s for k, s in self.state.semantics.items() if k in clips}
+        missing = self.state.missing()
+        was_busy = bool(self.queue.pending())
+        self.queue.submit([(k, self.state.motion, self.state.source, self.state.target_of(k)) for k in missing])
+        self.state_changed.emit()
+        if missing:
+            if not was_busy:
+                self._done_in_batch = 0
+            self.timeline.set_playing(False)
+            self._show_progress()
+        else:
+            self._close_progress()
+            self._show_state()
+
+    def _on_semantics(self, key: tuple[int, int], semantics: tuple) -> None:
+        if key == (id(self.state.motion), id(self.state.source)):
+            self.state.semantics[key] = semantics
+
+    def _on_result(self, key: ResultKey, result: MethodResult) -> None:
+        if key in set(self.state.wanted()):
+            self.state.results[key] = result
+            self._done_in_batch += 1
+        if not self.state.missing():
+            self._close_progress()
+            self._show_state()
+
+    def _on_failure(self, key: ResultKey, message: str) -> None:
+        self.cancel()
+        self.error(message)
+
+    def _on_idle(self) -> None:
+        if not self.queue.pending() and not self.state.missing():
+            self._close_progress()
+
+    def _show_state(self) -> None:
+        """Put the (complete) state on screen: grid, scores, selection, timeline."""
+        comparison = self.state.comparison()
+        if comparison is None:
+            return
+        if self.comparison is not None and comparison.motion is self.comparison.motion and [
+                id(r) for r in comparison.results] == [id(r) for r in self.comparison.results]:
+            self.comparison_ready.emit()  # already on screen (a cancel went back to it)
+            return
+        new_clip = self.comparison is None or self.comparison.motion is not comparison.motion
+        self.comparison = comparison
+        self._shown = (self.state.motion, self.state.source, tuple(self.state.targets), tuple(self.state.methods))
+        self.state.results = {k: self.state.results[k] for k in self.state.wanted()}
+        self.view.set_comparison(comparison)
+        self.scores.show_comparison(comparison)
+        self.heatmap_choice.blockSignals(True)
+        self.heatmap_choice.clear()
+        self.heatmap_choice.addItems([label(r) for r in comparison.results])
+        self.heatmap_choice.blockSignals(False)
+        if new_clip:
+            self.timeline.set_clip(comparison.n_frames, comparison.motion.fps)
+        keys = self._shown_keys()
+        self.select(self.state.selected if self.state.selected in keys else keys[0])
+        self.status(f"{comparison.motion.name}: {comparison.n_frames} frames, {len(comparison.results)} retargets")
+        self.comparison_ready.emit()
+
+    # --- progress ---
+    def _show_progress(self) -> None:
+        if self._progress is None:
+            self._progress = QProgressDialog("Retargeting...", "Cancel", 0, PROGRESS_STEPS, self)
+            self._progress.setWindowTitle("s2h-viewer: retargeting")
+            self._progress.setWindowModality(Qt.WindowModality.NonModal)  # menus stay usable: actions queue
+            self._progress.setMinimumDuration(300)
+            self._progress.setAutoClose(False)
+            self._progress.setAutoReset(False)
+            self._progress.canceled.connect(self.cancel)
+            self._progress.setValue(0)
+
+    def _close_progress(self) -> None:
+        if self._progress is not None:
+            self._progress.canceled.disconnect(self.cancel)
+            self._progress.close()
+            self._progress.deleteLater()
+            self._progress = None
+
+    def _on_progress(self, fraction: float, what: str) -> None:
+        remaining = len(self.queue.pending())
+        total = self._done_in_batch + max(remaining, 1)
+        overall = (self._done_in_batch + fraction) / total
+        text = f"{what} ({self._done_in_batch + 1} of {total})"
+        if self._progress is not None:
+            self._progress.setValue(int(overall * PROGRESS_STEPS))
+            self._progress.setLabelText(text)
+        self.status(f"retargeting: {text}, {overall:.0%}")
+
+    # --- showing a frame and the selection ---
+    def selected_result(self) -> MethodResult:
+        """The retarget the heatmap shows (and exports follow)."""
+        keys = self._shown_keys()
+        key = self.state.selected if self.state.selected in keys else keys[0]
+        return self.comparison.results[keys.index(key)]
+
+    def _choice_changed(self, index: int) -> None:
+        if self.comparison is not None and 0 <= index < len(self.comparison.results):
+            self.select(self._shown_keys()[index])
+
+    def _select_row(self, row: int) -> None:
+        if self.comparison is not None and 0 <= row < len(self.comparison.results):
+            self.select(self._shown_keys()[row])
+
+    def _show_selected_curve(self) -> None:
+        result = self.selected_result()
+        self.curve.set_curve(result.frame_error, label(result))
+
+    def show_frame(self, frame: int) -> None:
+        if self.comparison is None:
+            return
+        self.view.show_frame(frame)
+        self.curve.set_frame(frame)
+        now = time.perf_counter()
+        if not self.timeline.playing or now - self._heatmap_at >= HEATMAP_PERIOD_PLAYING:
+            self._heatmap_at = now  # while playing, the heatmap follows at a few frames a second
+            result = self.selected_result()
+            self.heatmap.show_matrix(result.cell_error[frame], f"ASM error, {label(result)}, frame {frame}")
+
+    def set_see_through(self, checked: bool) -> None:
+        self.view.set_options(opacity=0.4 if checked else 1.0)
+
+    def fill_targets_menu(self, menu: QMenu) -> None:
+        """One "Remove <target>" entry per target (rebuilt whenever the state changes)."""
+        menu.clear()
+        for index, target in enumerate(self.state.targets):
+            action = menu.addAction(f"Remove {target.name}")
+            action.triggered.connect(lambda _=False, i=index: self.remove_target(i))
+        menu.setEnabled(bool(self.state.targets))
+
+    def shutdown(self) -> None:
+        """Stop the retargets and free the render window (the window is closing)."""
+        self.queue.cancel_all()
+        self.queue.wait()
+        self.view.close_grid()

@@ -1,0 +1,97 @@
+"""Exports of compare mode: a PNG of the grid, an MP4/GIF of the clip, the selected retarget's motion.
+Every image carries a caption (clip, frame, selected method and target). The video is rendered off
+screen in a worker thread (its own VTK window), so the window stays live; Cancel stops it between
+frames and nothing is written."""
+
+from __future__ import annotations
+
+import threading
+from pathlib import Path
+
+from PySide6.QtCore import QObject, Qt, Signal
+from PySide6.QtWidgets import QProgressDialog, QWidget
+
+from s2h_viewer.app.compare_mode import CompareMode, label
+from s2h_viewer.render.caption import add_caption, caption_text
+from s2h_viewer.render.compare_scene import render_comparison
+from s2h_viewer.retarget.progress import Cancelled
+
+
+def caption_for(mode: CompareMode, frame: int) -> str:
+    comparison, result = mode.comparison, mode.selected_result()
+    return caption_text(comparison.motion.name, frame, comparison.n_frames, comparison.motion.fps,
+                        label(result).split(" -> ")[0], result.target.name)
+
+
+def export_screenshot(mode: CompareMode, path: str) -> Path:
+    """The grid as it is on screen with its caption, written atomically."""
+    from PIL import Image
+
+    from s2h_viewer.io.atomic import atomic_path
+    image = add_caption(mode.view.grab_rgb(), caption_for(mode, mode.timeline.frame))
+    with atomic_path(path) as tmp:
+        Image.fromarray(image).save(tmp, format="PNG")
+    return Path(path)
+
+
+class VideoExport(QObject):
+    """One video export in a worker thread: ``written(path)``, ``cancelled()`` or ``failed(message)``
+    arrive on the GUI thread; ``progress(done, total)`` after each frame."""
+
+    progress = Signal(int, int)
+    written = Signal(object)
+    cancelled = Signal()
+    failed = Signal(str)
+
+    def __init__(self, mode: CompareMode, path: str, parent: QWidget):
+        super().__init__(parent)
+        self.path = path
+        self._cancel = threading.Event()
+        comparison, view = mode.comparison, mode.view
+        captions = {f: caption_for(mode, f) for f in range(comparison.n_frames)}  # the selection now, not later
+        size = (view.interactor.width(), view.interactor.height()) if view.interactor is not None else (1400, 900)
+        self._job = (comparison, captions, size, view.options)
+        self.dialog = QProgressDialog(f"Rendering {Path(path).name}...", "Cancel", 0, comparison.n_frames, parent)
+        self.dialog.setWindowTitle("s2h-viewer: video export")
+        self.dialog.setWindowModality(Qt.WindowModality.NonModal)  # the timeline stays usable
+        self.dialog.setMinimumDuration(300)
+        self.dialog.setAutoClose(False)
+        self.dialog.setAutoReset(False)
+        self.dialog.canceled.connect(self.cancel)
+        self.progress.connect(lambda done, _: self.dialog.setValue(done))
+        for signal in (self.written, self.cancelled, self.failed):
+            signal.connect(self.dialog.close)
+        self.thread = threading.Thread(target=self._run, name="video export", daemon=True)
+
+    def start(self) -> "VideoExport":
+        self.dialog.setValue(0)
+        self.thread.start()
+        return self
+
+    def cancel(self) -> None:
+        self._cancel.set()
+
+    def _frame_done(self, done: int, total: int) -> None:
+        if self._cancel.is_set():
+            raise Cancelled()
+        self.progress.emit(done, total)
+
+    def _run(self) -> None:
+        comparison, captions, size, options = self._job
+        try:
+            path = render_comparison(comparison, self.path, size=size, progress=self._frame_done,
+                                     caption=captions.__getitem__, options=options)
+        except Cancelled:
+            self.cancelled.emit()
+        except (OSError, ValueError) as exc:
+            self.failed.emit(f"{self.path}: could not write the video ({exc})")
+        else:
+            self.written.emit(path)
+
+
+def export_motion(mode: CompareMode, path: str) -> Path:
+    """The selected retarget's motion on its target's rig."""
+    from s2h_viewer.io.files import save_motion_file
+    result = mode.selected_result()
+    save_motion_file(path, result.motion, result.target)
+    return Path(path)

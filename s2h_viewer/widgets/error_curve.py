@@ -1,0 +1,100 @@
+"""The selected retarget's ASM error per frame as a curve under the timeline: a click jumps to that
+frame, the worst frames are marked, the current frame is a vertical line."""
+
+from __future__ import annotations
+
+import numpy as np
+from PySide6.QtCore import QPointF, Signal
+from PySide6.QtGui import QColor, QPainter, QPen, QPixmap, QPolygonF
+from PySide6.QtWidgets import QWidget
+
+WORST = 5  # frames marked
+MARGIN = 4
+
+
+def worst_frames(error: np.ndarray, count: int = WORST, spacing: int | None = None) -> np.ndarray:
+    """The ``count`` highest-error frames, at least ``spacing`` frames apart (one peak, one mark)."""
+    spacing = spacing if spacing is not None else max(1, len(error) // 50)
+    chosen: list[int] = []
+    for frame in np.argsort(-error, kind="stable"):
+        if all(abs(int(frame) - c) >= spacing for c in chosen):
+            chosen.append(int(frame))
+        if len(chosen) == count:
+            break
+    return np.array(sorted(chosen), dtype=int)
+
+
+class ErrorCurve(QWidget):
+    """Emits ``frame_clicked(frame)``; ``set_curve`` gives the (T,) error and a title for the tooltip."""
+
+    frame_clicked = Signal(int)
+
+    def __init__(self, parent: QWidget | None = None):
+        super().__init__(parent)
+        self.setMinimumHeight(56)
+        self.setMaximumHeight(70)
+        self.error = np.zeros(1)
+        self.worst = np.zeros(0, dtype=int)
+        self.frame = 0
+        self.title = ""
+        self._curve: QPixmap | None = None  # the curve and its marks, drawn once per curve and size
+
+    def set_curve(self, error: np.ndarray, title: str) -> None:
+        self.error, self.title = np.asarray(error, dtype=float), title
+        self.worst = worst_frames(self.error)
+        self._curve = None
+        self.setToolTip(f"{title}: mean ASM error per frame; worst frames (red): "
+                        f"{', '.join(str(f) for f in self.worst)}. Click to jump.")
+        self.update()
+
+    def set_frame(self, frame: int) -> None:
+        """Move the cursor: only the strips under the old and the new cursor are repainted."""
+        for x in (self._x(self.frame), self._x(frame)):
+            self.update(int(x) - 2, 0, 5, self.height())
+        self.frame = frame
+
+    def resizeEvent(self, event) -> None:
+        self._curve = None
+        super().resizeEvent(event)
+
+    def frame_at(self, x: float) -> int:
+        width = max(1, self.width() - 2 * MARGIN)
+        return int(round(np.clip((x - MARGIN) / width, 0.0, 1.0) * (len(self.error) - 1)))
+
+    def _x(self, frame: float) -> float:
+        return MARGIN + frame / max(1, len(self.error) - 1) * (self.width() - 2 * MARGIN)
+
+    def _y(self, value: float) -> float:
+        top = max(float(self.error.max()), 1e-9)
+        return self.height() - MARGIN - value / top * (self.height() - 2 * MARGIN)
+
+    def mousePressEvent(self, event) -> None:
+        self.frame_clicked.emit(self.frame_at(event.position().x()))
+
+    def _draw_curve(self) -> QPixmap:
+        pixmap = QPixmap(self.size())
+        pixmap.fill(QColor("white"))
+        painter = QPainter(pixmap)
+        painter.setRenderHint(QPainter.RenderHint.Antialiasing)
+        step = max(1, len(self.error) // max(1, self.width()))  # at most one point per pixel
+        points = [QPointF(self._x(f), self._y(self.error[f])) for f in range(0, len(self.error), step)]
+        painter.setPen(QPen(QColor("#3b4cc0"), 1.5))
+        painter.drawPolyline(QPolygonF(points))
+        painter.setPen(QPen(QColor("#d62728"), 2))
+        for frame in self.worst:
+            x = self._x(frame)
+            painter.drawLine(QPointF(x, MARGIN), QPointF(x, MARGIN + 8))
+            painter.drawEllipse(QPointF(x, self._y(self.error[frame])), 3, 3)
+        painter.setPen(QPen(QColor("black"), 1))
+        painter.drawText(MARGIN + 2, self.height() - 4, f"ASM error per frame ({self.title})   max {self.error.max():.3f}")
+        painter.end()
+        return pixmap
+
+    def paintEvent(self, event) -> None:
+        if self._curve is None or self._curve.size() != self.size():
+            self._curve = self._draw_curve()
+        painter = QPainter(self)
+        painter.drawPixmap(event.rect(), self._curve, event.rect())
+        painter.setPen(QPen(QColor("black"), 1))
+        x = self._x(self.frame)
+        painter.drawLine(QPointF(x, 0), QPointF(x, self.height()))

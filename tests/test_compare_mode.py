@@ -1,0 +1,284 @@
+"""Compare mode in the real window (Xvfb, pytest-qt, shipped assets): actions that queue or cancel
+retargets so the grid and the menus agree, per-method caching, exports in the background with a
+caption, clock-driven playback and the QA tools (solo, error curve, overlays, heatmap tooltip)."""
+
+from __future__ import annotations
+
+import os
+import time
+
+import numpy as np
+import pytest
+
+pytest.importorskip("pytestqt")
+if not os.environ.get("DISPLAY"):
+    pytest.skip("the Qt viewport needs an X display: `make test` runs the suite under Xvfb", allow_module_level=True)
+
+import imageio.v2 as imageio  # noqa: E402
+from PIL import Image  # noqa: E402
+from PySide6.QtCore import QPoint, QSettings, Qt, QTimer  # noqa: E402
+from PySide6.QtWidgets import QPushButton  # noqa: E402
+
+from s2h_viewer.app.main_window import CompareSetup, MainWindow  # noqa: E402
+from s2h_viewer.hand import topology as topo  # noqa: E402
+from s2h_viewer.motions.synthesis import synthesize  # noqa: E402
+from s2h_viewer.render.caption import BAND  # noqa: E402
+from s2h_viewer.retarget.methods import METHODS  # noqa: E402
+from s2h_viewer.samples import ASSETS_DIR  # noqa: E402
+from s2h_viewer.widgets.asm_heatmap import CELL, LEFT, TOP  # noqa: E402
+from s2h_viewer.widgets.error_curve import worst_frames  # noqa: E402
+
+
+@pytest.fixture
+def window(qtbot, sample_hands, tmp_path):
+    motion = synthesize(["fist", "ok", "v_sign"], sample_hands["birch"], seed=4, name="short")
+    setup = CompareSetup(motion, sample_hands["birch"], [sample_hands["iris"]], ["tbs_copy", "asrn"])
+    settings = QSettings(str(tmp_path / "settings.ini"), QSettings.Format.IniFormat)
+    settings.setValue("compare/methods", ["tbs_copy", "asrn"])
+    win = MainWindow(setup, settings)
+    win.resize(1000, 700)
+    qtbot.addWidget(win)
+    win.show()
+    with qtbot.waitSignal(win.comparison_ready, timeout=120_000):
+        win.start_comparison()
+    yield win
+    win.close()
+
+
+def ticked(window) -> list[str]:
+    return [name for name, action in window.method_actions.items() if action.isChecked()]
+
+
+def grid_methods(window) -> list[str]:
+    return [r.method for r in window.comparison.results]
+
+
+def click_cancel(dialog, qtbot) -> None:
+    """Press the progress dialog's Cancel button, as a user does, once the dialog shows."""
+    qtbot.waitUntil(dialog.isVisible, timeout=30_000)
+    qtbot.mouseClick(dialog.findChild(QPushButton), Qt.MouseButton.LeftButton)
+
+
+def wait_until_running(window, qtbot, method: str) -> None:
+    """Until the queue's running job is ``method`` and it has reported progress."""
+    qtbot.waitUntil(lambda: window.compare.queue.pending()[:1] and
+                    window.compare.queue.pending()[0].method == method, timeout=30_000)
+    with qtbot.waitSignal(window.compare.queue.progress, timeout=60_000):
+        pass
+
+
+def test_toggling_a_method_during_a_retarget_queues_it_and_computes_only_it(window, qtbot):
+    before = dict(window.setup.results)
+    computed = len(window.compare.queue.computed)
+    window.method_actions["asm_opt"].trigger()
+    wait_until_running(window, qtbot, "asm_opt")
+    assert window.compare.queue.busy
+    with qtbot.waitSignal(window.comparison_ready, timeout=300_000):
+        window.method_actions["dm"].trigger()  # while ASM-Opt runs
+    expected = [m for m in METHODS if m in ("tbs_copy", "asrn", "dm", "asm_opt")]
+    assert ticked(window) == window.setup.methods == grid_methods(window) == expected
+    assert sorted(k.method for k in window.compare.queue.computed[computed:]) == ["asm_opt", "dm"]
+    for key, result in before.items():  # the cached ones are the same objects, not recomputed
+        assert window.setup.results[key] is result
+    assert len(window.view._hands) == 1 + len(expected)
+
+
+def test_unticking_the_running_method_cancels_it_and_the_grid_follows(window, qtbot):
+    window.method_actions["asm_opt"].trigger()
+    wait_until_running(window, qtbot, "asm_opt")
+    with qtbot.waitSignal(window.compare.queue.job_cancelled, timeout=60_000) as cancelled:
+        window.method_actions["asm_opt"].trigger()  # untick while it runs
+    assert cancelled.args[0].method == "asm_opt"
+    assert ticked(window) == window.setup.methods == grid_methods(window) == ["tbs_copy", "asrn"]
+    assert not window.compare.queue.busy or not window.compare.queue.pending()
+
+
+def test_cancel_a_retarget_goes_back_to_the_grid_and_the_menu_follows(window, qtbot):
+    shown = window.comparison
+    window.method_actions["asm_opt"].trigger()
+    wait_until_running(window, qtbot, "asm_opt")
+    dialog = window.compare._progress
+    assert dialog is not None and not dialog.isModal()  # the menus stay usable while it runs
+    with qtbot.waitSignal(window.compare.queue.job_cancelled, timeout=60_000):
+        click_cancel(dialog, qtbot)
+    assert ticked(window) == window.setup.methods == grid_methods(window) == ["tbs_copy", "asrn"]
+    assert window.comparison is shown and window.compare._progress is None
+    assert window.settings.value("compare/methods") == ["tbs_copy", "asrn"]  # remembered as shown
+
+
+def test_add_and_remove_a_target(window, qtbot):
+    computed = len(window.compare.queue.computed)
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.add_target_file(str(ASSETS_DIR / "hands" / "laurel.npz"))
+    assert [r.target.name for r in window.comparison.results] == ["iris", "iris", "laurel", "laurel"]
+    assert [k.method for k in window.compare.queue.computed[computed:]] == ["tbs_copy", "asrn"]  # laurel only
+    laurel_results = window.comparison.results[2:]
+    assert [a.text() for a in window.targets_menu.actions()] == ["Remove iris", "Remove laurel"]
+    with qtbot.waitSignal(window.comparison_ready, timeout=10_000):
+        window.targets_menu.actions()[0].trigger()
+    assert [r.target.name for r in window.comparison.results] == ["laurel", "laurel"]
+    assert all(a is b for a, b in zip(window.comparison.results, laurel_results))  # kept, not recomputed
+    assert [a.text() for a in window.targets_menu.actions()] == ["Remove laurel"]
+    assert window.scores.rowCount() == 2 and len(window.view._hands) == 3
+
+
+def test_video_export_runs_in_the_background_while_the_timeline_plays(window, qtbot, tmp_path):
+    fired, frames = [], []
+    timer = QTimer()
+    timer.timeout.connect(lambda: (fired.append(time.perf_counter()), window.timeline.step(1),
+                                   frames.append(window.timeline.frame)))
+    timer.start(20)
+    job = window.export_video(str(tmp_path / "compare.mp4"))
+    started = time.perf_counter()
+    with qtbot.waitSignal(job.written, timeout=300_000):
+        pass
+    ended = time.perf_counter()
+    timer.stop()
+    during = [t for t in fired if started < t < ended]
+    assert len(during) >= 10 and len(set(frames)) >= 10  # the GUI thread kept running and drawing frames
+    reader = imageio.get_reader(tmp_path / "compare.mp4")
+    assert reader.count_frames() == window.comparison.n_frames
+    first = reader.get_data(0)
+    reader.close()
+    view_height = window.view.interactor.height()
+    assert first.shape[0] >= view_height + BAND  # the caption band under the grid (padded to 16)
+    assert window.video_export is None
+
+
+def test_cancel_a_video_export_writes_nothing(window, qtbot, tmp_path):
+    path = tmp_path / "cancelled.mp4"
+    job = window.export_video(str(path))
+    with qtbot.waitSignal(job.progress, timeout=60_000):
+        pass
+    with qtbot.waitSignal(job.cancelled, timeout=60_000):
+        click_cancel(job.dialog, qtbot)
+    job.thread.join()
+    assert not path.exists() and not list(tmp_path.glob("*.mp4*"))
+
+
+def test_png_export_carries_a_caption_of_the_selected_retarget(window, tmp_path):
+    window.scores.selectRow(1)  # ASRN -> iris, picked in the scores table
+    assert window.heatmap_choice.currentIndex() == 1
+    np.testing.assert_allclose(window.heatmap.current, window.comparison.results[1].cell_error[0], equal_nan=True)
+    window.timeline.set_frame(7)
+    png = window.export_screenshot(str(tmp_path / "compare.png"))
+    image = np.asarray(Image.open(png).convert("RGB"))
+    assert image.shape[0] == window.view.interactor.height() + BAND
+    band = image[-BAND:]
+    assert (band < 80).any() and (band > 250).mean() > 0.8  # dark text on white
+    from s2h_viewer.app.exports import caption_for
+    text = caption_for(window.compare, 7)
+    assert "short" in text and "frame 7/" in text and "ASRN -> iris" in text
+    bvh = window.export_motion(str(tmp_path / "selected.bvh"))
+    assert bvh.read_text().startswith("HIERARCHY")
+
+
+def test_playback_follows_the_clock(window, qtbot):
+    shown = []
+    window.timeline.frame_changed.connect(lambda f: shown.append((time.perf_counter(), f)))
+    window.timeline.set_frame(0)
+    shown.clear()
+    window.timeline.set_playing(True)
+    started, first = window.timeline._anchor
+    qtbot.wait(1500)
+    window.timeline.set_playing(False)
+    fps = window.timeline.clip_fps
+    assert len(shown) >= 3
+    for when, frame in shown:  # each frame shown is the one real time had reached (frames dropped if late)
+        assert frame <= first + (when - started) * fps + 1e-6
+        assert frame >= first + (when - started) * fps - fps * 0.25 - 1  # at most a tick and a draw behind
+
+
+def test_playback_keys_reach_the_shortcuts_with_the_frame_box_focused(window, qtbot):
+    window.activateWindow()
+    qtbot.waitUntil(lambda: window.isActiveWindow(), timeout=5000)
+    window.timeline.set_frame(3)
+    window.timeline.spin.setFocus()
+    qtbot.waitUntil(lambda: window.timeline.spin.hasFocus(), timeout=5000)
+    qtbot.keyClick(window.timeline.spin.lineEdit(), Qt.Key.Key_Right)
+    assert window.timeline.frame == 4
+    qtbot.keyClick(window.timeline.spin.lineEdit(), Qt.Key.Key_Left)
+    assert window.timeline.frame == 3
+    qtbot.keyClick(window.timeline.spin.lineEdit(), Qt.Key.Key_Space)
+    assert window.timeline.playing
+    qtbot.keyClick(window.timeline.spin.lineEdit(), Qt.Key.Key_Space)
+    assert not window.timeline.playing
+    assert window.timeline.readout.text().startswith(f"{window.timeline.frame}/{window.timeline.n_frames - 1}")
+
+
+def test_double_click_solos_a_viewport_and_back(window, qtbot):
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.add_target_file(str(ASSETS_DIR / "hands" / "laurel.npz"))  # two rows: cells != renderers
+    view = window.view
+    viewports = view.hand_viewports()
+    hand = 4  # ASRN -> laurel, in the second row
+    x0, y0, x1, y1 = viewports[hand]
+    w, h = view.interactor.width(), view.interactor.height()
+    centre = QPoint(int((x0 + x1) / 2 * w), int((1 - (y0 + y1) / 2) * h))
+    assert view.hand_at(centre.x(), centre.y()) == hand
+    qtbot.mouseDClick(view.interactor, Qt.MouseButton.LeftButton, pos=centre)
+    assert view.solo == hand
+    drawn = [bool(r.GetDraw()) for r in view.plotter.renderers]
+    assert view._hands[hand].renderer.GetDraw() and sum(drawn) == 1
+    assert tuple(view._hands[hand].renderer.GetViewport()) == (0.0, 0.0, 1.0, 1.0)
+    qtbot.mouseDClick(view.interactor, Qt.MouseButton.LeftButton, pos=centre)
+    assert view.solo == -1 and all(r.GetDraw() for r in view.plotter.renderers)
+
+
+def test_every_hand_has_a_viewport_of_the_same_size_and_the_colour_bar_its_own(window):
+    viewports = np.array(window.view._viewports)
+    hands = np.array(window.view.hand_viewports())
+    sizes = np.column_stack([hands[:, 2] - hands[:, 0], hands[:, 3] - hands[:, 1]])
+    assert np.abs(sizes - sizes[0]).max() < 1e-6
+    bar = viewports[-1]  # the colour bar's column: right of every hand
+    assert bar[0] >= hands[:, 2].max() - 1e-6
+
+
+def test_error_curve_marks_the_worst_frames_and_a_click_jumps(window, qtbot):
+    curve = window.compare.curve
+    result = window.compare.selected_result()
+    np.testing.assert_allclose(curve.error, result.frame_error)
+    assert int(np.argmax(result.frame_error)) in curve.worst
+    assert worst_frames(np.array([0, 5, 1, 0, 9, 0.0]), count=2, spacing=1).tolist() == [1, 4]
+    target = curve.worst[0]
+    qtbot.mouseClick(curve, Qt.MouseButton.LeftButton, pos=QPoint(int(round(curve._x(target))), curve.height() // 2))
+    assert window.timeline.frame == target and curve.frame == target
+
+
+def test_contact_overlay_links_touching_pads_and_marks_lost_contacts(window):
+    window.contact_overlay.trigger()
+    source, target = window.view._hands[0].overlay, window.view._hands[1].overlay
+    np.testing.assert_array_equal(target.lost, source.contacts & ~target.contacts)
+    touching = np.flatnonzero(source.contacts.any(1))
+    assert len(touching), "the clip has an OK sign: thumb and index touch on the source"
+    frame = int(touching[0])
+    window.timeline.set_frame(frame)
+    assert source.links.n_lines == source.contacts[frame].sum() > 0
+    assert target.lost_links.n_lines == target.lost[frame].sum()
+    window.contact_overlay.trigger()
+    assert not source.actors[1].visibility
+
+
+def test_heatmap_tooltip_names_the_joint_pair(window):
+    heatmap = window.heatmap
+    row, column = topo.FINGER_JOINT_NAMES.index("index_tip"), topo.N_FINGER_JOINTS + 2
+    text = heatmap.cell_text(LEFT + column * CELL + CELL // 2, TOP + row * CELL + CELL // 2)
+    value = heatmap.current[row, column]
+    assert text.startswith("index_tip to palm anchor 3") and (f"{value:.3f}" in text or "masked" in text)
+    assert heatmap.cell_text(2, 2) == ""
+
+
+def test_camera_presets_turn_the_one_shared_camera(window):
+    from s2h_viewer.render.compare_scene import CAMERA_PRESETS
+    view_menu = next(a.menu() for a in window.menuBar().actions() if a.text() == "&View")
+    presets = {a.text(): a for a in view_menu.actions() if a.text().startswith("Camera: ")}
+    assert sorted(presets) == ["Camera: back", "Camera: palm", "Camera: reset", "Camera: side"]
+    for text, preset in (("Camera: palm", "palm"), ("Camera: side", "side"), ("Camera: reset", "default")):
+        presets[text].trigger()
+        camera = window.view.plotter.camera
+        direction = np.subtract(camera.position, camera.focal_point)
+        expected = np.asarray(CAMERA_PRESETS[preset][0])
+        np.testing.assert_allclose(direction / np.linalg.norm(direction), expected / np.linalg.norm(expected),
+                                   atol=1e-9)
+        cameras = {id(h.renderer.GetActiveCamera()) for h in window.view._hands}
+        assert len(cameras) == 1  # every hand seen through the same camera: one scale
