@@ -19,10 +19,9 @@ from s2h_viewer.errors import InputFileError
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
-from s2h_viewer.hand.rig_mapping import map_rig
 from s2h_viewer.io.atomic import atomic_path
 from s2h_viewer.hand.mirror import reflection
-from s2h_viewer.io.rig import (MIRROR_NORMAL, RigSkeleton, build_hand, motion_from_world_rotations,
+from s2h_viewer.io.rig import (MIRROR_NORMAL, RigSkeleton, build_hand, motion_from_world_rotations, recognise,
                                world_rotations_from_motion)
 
 WRITE_ORDER = "ZXY"
@@ -133,20 +132,21 @@ def _world(clip: BvhClip, local: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return rest, world
 
 
-def load_bvh(path: str | Path, side: str = "right", scheme: str | None = None,
+def load_bvh(path: str | Path, side: str | None = None, scheme: str | None = None,
              joint_map: dict[str, str] | None = None, name: str | None = None) -> tuple[HandModel, Motion]:
     """The hand skeleton of a BVH file and its finger motion (a hand alone or one hand of a body)."""
     path = Path(path)
     clip = read_bvh(path)
-    mapping = map_rig(clip.names, path, side, scheme, joint_map)
+    rest, world = _world(clip, _local_rotations(clip))
+    matrices = np.tile(np.eye(4), (len(clip.names), 1, 1))
+    matrices[:, :3, 3] = rest
+    skeleton = RigSkeleton(clip.names, matrices, clip.parents)
+    mapping = recognise(skeleton, path, side, scheme, joint_map)
     for tip in mapping.missing_tips:  # a finger's End Site is its tip
         end_site = f"{mapping.joints[topo.JOINT_NAMES[topo.joint_index(tip) - 1]]}_end"
         if end_site in clip.names:
             mapping.joints[tip] = end_site
-    rest, world = _world(clip, _local_rotations(clip))
-    matrices = np.tile(np.eye(4), (len(clip.names), 1, 1))
-    matrices[:, :3, 3] = rest
-    hand = build_hand(path, RigSkeleton(clip.names, matrices, clip.parents), mapping, None, side, name)
+    hand = build_hand(path, skeleton, mapping, None, name)
     lookup = {n: i for i, n in enumerate(clip.names)}
     rotating = [lookup[mapping.joints[topo.JOINT_NAMES[j]]] for j in topo.ROTATING_JOINTS]
     fps = 1.0 / clip.frame_time

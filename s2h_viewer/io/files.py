@@ -20,16 +20,32 @@ MOTION_SUFFIXES = (".npz", ".bvh", ".glb", ".gltf", ".fbx")
 EXPORT_SUFFIXES = (".npz", ".bvh", ".glb")
 
 
+JOINT_MAP_SUFFIX = ".joints.json"
+
+
+def joint_map_sidecar(hand_file: str | Path) -> Path:
+    """``<stem>.joints.json`` beside a hand file: its own joint map, picked up like the TBS sidecar."""
+    hand_file = Path(hand_file)
+    return hand_file.with_name(f"{hand_file.stem}{JOINT_MAP_SUFFIX}")
+
+
 @dataclass(frozen=True)
 class RigOptions:
-    """How to read a rig: which hand of a character, which naming scheme, or a user joint map."""
+    """How to read a rig: which hand (None: as names or geometry say), which naming scheme, a user joint
+    map (else the file's own ``<stem>.joints.json`` if there is one), which animation or take."""
 
-    side: str = "right"
+    side: str | None = None
     scheme: str | None = None
     joint_map: str | Path | None = None
+    animation: str | int | None = None
 
-    def mapping(self) -> dict[str, str] | None:
-        return load_user_mapping(self.joint_map) if self.joint_map else None
+    def mapping(self, hand_file: str | Path | None = None) -> dict[str, str] | None:
+        """The user's joint map, else ``hand_file``'s sidecar joint map, else None (recognise the rig)."""
+        if self.joint_map:
+            return load_user_mapping(self.joint_map)
+        if hand_file is not None and joint_map_sidecar(hand_file).exists():
+            return load_user_mapping(joint_map_sidecar(hand_file))
+        return None
 
 
 def _suffix(path: Path, allowed: tuple[str, ...], what: str) -> str:
@@ -52,12 +68,12 @@ def load_hand_file(path: str | Path, options: RigOptions = RigOptions()) -> Hand
         return load_hand(path)
     if suffix in (".glb", ".gltf"):
         from s2h_viewer.io.gltf import load_gltf_hand
-        return load_gltf_hand(path, options.side, options.scheme, options.mapping())
+        return load_gltf_hand(path, options.side, options.scheme, options.mapping(path))
     if suffix == ".fbx":
         from s2h_viewer.io.fbx import load_fbx_hand
-        return load_fbx_hand(path, options.side, options.scheme, options.mapping())
+        return load_fbx_hand(path, options.side, options.scheme, options.mapping(path))
     from s2h_viewer.io.bvh import load_bvh
-    return load_bvh(path, options.side, options.scheme, options.mapping())[0]
+    return load_bvh(path, options.side, options.scheme, options.mapping(path))[0]
 
 
 def load_motion_file(path: str | Path, hand: HandModel | None = None, options: RigOptions = RigOptions()
@@ -71,14 +87,27 @@ def load_motion_file(path: str | Path, hand: HandModel | None = None, options: R
         return load_motion(path), hand
     if suffix == ".bvh":
         from s2h_viewer.io.bvh import load_bvh
-        rig, motion = load_bvh(path, options.side, options.scheme, options.mapping())
+        rig, motion = load_bvh(path, options.side, options.scheme, options.mapping(path))
         return motion, rig
     rig = hand or load_hand_file(path, options)
     if suffix in (".glb", ".gltf"):
         from s2h_viewer.io.gltf import load_gltf_motion
-        return load_gltf_motion(path, rig), rig
+        return load_gltf_motion(path, rig, options.animation), rig
     from s2h_viewer.io.fbx import load_fbx_motion
-    return load_fbx_motion(path, rig), rig
+    return load_fbx_motion(path, rig, options.animation), rig
+
+
+def list_animations(path: str | Path) -> list[str]:
+    """Names of a motion file's animations (glTF) or takes (FBX); one unnamed clip for BVH and npz."""
+    path = Path(path)
+    suffix = _suffix(path, MOTION_SUFFIXES, "motion")
+    if suffix in (".glb", ".gltf"):
+        from s2h_viewer.io.gltf import list_gltf_animations
+        return [f"{name} ({seconds:.2f} s)" for name, seconds in list_gltf_animations(path)]
+    if suffix == ".fbx":
+        from s2h_viewer.io.fbx import list_fbx_takes
+        return list_fbx_takes(path)
+    return [path.stem]
 
 
 def save_motion_file(path: str | Path, motion: Motion, hand: HandModel) -> Path:
