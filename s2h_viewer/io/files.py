@@ -125,3 +125,41 @@ def save_motion_file(path: str | Path, motion: Motion, hand: HandModel) -> Path:
         return save_bvh(path, motion, hand)
     from s2h_viewer.io.gltf import save_gltf_motion
     return save_gltf_motion(path, motion, hand)
+
+
+def read_rig_skeleton(path: str | Path):
+    """The `RigSkeleton` (names, rest world matrices, parents) of a glTF, FBX or BVH rig file."""
+    path = Path(path)
+    suffix = _suffix(path, (".glb", ".gltf", ".fbx", ".bvh"), "rig")
+    from s2h_viewer.io.rig import RigSkeleton
+    if suffix in (".glb", ".gltf"):
+        from s2h_viewer.io.gltf import _Document
+        doc = _Document(path)
+        return RigSkeleton(doc.names, doc.world, doc.parents)
+    if suffix == ".fbx":
+        from s2h_viewer.io.fbx import _read
+        return _read(path)[0]
+    from s2h_viewer.io.bvh import bvh_skeleton, read_bvh
+    return bvh_skeleton(read_bvh(path))
+
+
+def recognise_file(path: str | Path, options: RigOptions = RigOptions()):
+    """The `RigMapping` of a rig file's hand (what `s2h rig` reports), without building the hand."""
+    path = Path(path)
+    from s2h_viewer.io.rig import recognise
+    if path.suffix.lower() in (".glb", ".gltf"):
+        from s2h_viewer.io.gltf import _Document, _recognise
+        return _recognise(_Document(path), options.side, options.scheme, options.mapping(path))
+    skeleton = read_rig_skeleton(path)
+    return recognise(skeleton, path, options.side, options.scheme, options.mapping(path))
+
+
+def joint_map_template(path: str | Path, side: str | None = None) -> dict[str, str]:
+    """A joint map for a rig file: every joint the names give filled in, the others left empty to edit."""
+    from s2h_viewer.hand import topology as topo
+    from s2h_viewer.hand.rig_mapping import best_name_match, sides_named
+
+    names = read_rig_skeleton(path).names
+    chosen = side or ("left" if sides_named(names) == {"left"} else "right")
+    found = best_name_match(names, chosen).joints
+    return {joint: found.get(joint, "") for joint in topo.JOINT_NAMES}
