@@ -148,21 +148,42 @@ def _topology_mapping(skeleton: Skeleton, found: FingerChains) -> RigMapping:
     return RigMapping("topology", joints, palm, confidence=confidence, notes=[note])
 
 
-def _hand_candidates(skeleton: Skeleton) -> tuple[list[FingerChains], FingerChains | None]:
-    """Bones with exactly five finger chains under them, and the best partial find (most chains) if none."""
+def _hand_candidates(skeleton: Skeleton) -> tuple[list[FingerChains], list[FingerChains]]:
+    """Bones with five hand-like finger chains under them (lowest first), and partial finds (2-7 chains)."""
     children = skeleton.children()
-    five, best = [], None
+    five, partial = [], []
     for node in range(len(skeleton.names)):
         if len(children[node]) < 2:
             continue
         found = finger_chains(skeleton, node, children)
-        if len(found.chains) == 5:
+        if len(found.chains) == 5 and _hand_like(skeleton, found):
             five.append(found)
-        elif 2 <= len(found.chains) < 8 and (best is None or len(found.chains) > len(best.chains)):
-            best = found
+        elif 2 <= len(found.chains) < 8 and len(found.chains) != 5 and _hand_like(skeleton, found):
+            partial.append(found)
     # a hand found under its own forearm is found again under the forearm: keep the lowest bone
     lowest = [f for f in five if not any(g is not f and _is_ancestor(skeleton, f.wrist, g.wrist) for g in five)]
-    return lowest, best
+    return lowest, partial
+
+
+def _hand_like(skeleton: Skeleton, found: FingerChains) -> bool:
+    """The chains but the most opposed one (the thumb) point roughly one way, as fingers do and a body's
+    limbs and head do not."""
+    pos = skeleton.positions
+    direction = _unit(np.array([pos[c[-1]] - pos[c[0]] for c in found.chains]))
+    similarity = direction @ direction.T
+    thumb = int(np.argmin(similarity.sum(1)))
+    fingers = [i for i in range(len(found.chains)) if i != thumb]
+    return float(similarity[np.ix_(fingers, fingers)].mean()) > 0.5
+
+
+def _add_leaf_tips(skeleton: Skeleton, mapping: RigMapping) -> None:
+    """A humanoid map names no tips: a distal bone's only child, a leaf, is its finger's tip."""
+    children = skeleton.children()
+    lookup = {n: i for i, n in enumerate(skeleton.names)}
+    for tip in mapping.missing_tips:
+        kids = children[lookup[mapping.joints[topo.JOINT_NAMES[topo.joint_index(tip) - 1]]]]
+        if len(kids) == 1 and not children[kids[0]]:
+            mapping.joints[tip] = skeleton.names[kids[0]]
 
 
 def _is_ancestor(skeleton: Skeleton, a: int, b: int) -> bool:
@@ -207,6 +228,7 @@ def recognise_rig(skeleton: Skeleton, source: str | Path, side: str | None = Non
                                          f"{next(iter(humanoid))}")
         mapping = map_user(names, source, humanoid[chosen], chosen)
         mapping.scheme, mapping.side_from = "vrm", "humanoid map"
+        _add_leaf_tips(skeleton, mapping)
         return mapping
     chosen = side or ("right" if "right" in named or not named else "left")
     by_name = best_name_match(names, chosen, scheme)
@@ -227,7 +249,10 @@ def recognise_rig(skeleton: Skeleton, source: str | Path, side: str | None = Non
                                          f"{split_side(names[hands[0].wrist])[1]}")
         hands = marked
     if not hands:
-        raise InputFileError(source, _refusal(skeleton, by_name, partial, chosen))
+        wrist = by_name.joints.get("wrist")
+        partial.sort(key=lambda p: (names[p.wrist] != wrist, split_side(names[p.wrist])[1] not in (chosen, None),
+                                    -len(p.chains)))
+        raise InputFileError(source, _refusal(skeleton, by_name, partial[0] if partial else None, chosen))
     candidates = [_topology_mapping(skeleton, h) for h in hands]
     if len(candidates) > 1:
         sides = [_side_of(skeleton, m)[0] for m in candidates]
@@ -264,14 +289,16 @@ def _settle_side(skeleton: Skeleton, mapping: RigMapping, side: str | None, name
 def _refusal(skeleton: Skeleton, by_name: RigMapping, partial: FingerChains | None, side: str) -> str:
     """One line: what names matched, what the topology found, what to do."""
     parts = []
-    if by_name.joints:
+    if set(by_name.joints) == {"wrist"}:
+        parts.append(f"only the wrist has a known name ({by_name.joints['wrist']!r}): no finger bone is named as one")
+    elif by_name.joints:
         parts.append(f"{by_name.scheme} names give the {side} hand but {describe_missing(by_name.missing)}")
     else:
         parts.append(f"no bone of the {len(skeleton.names)} is named as a {side} hand joint in a known scheme "
                      f"({', '.join(SCHEMES)})")
     if partial is not None:
-        parts.append(f"{_describe_chains(skeleton, partial)}, not 5: s2h needs a hand with 5 fingers and does not "
-                     f"guess one")
+        parts.append(f"{_describe_chains(skeleton, partial)}, not 5" + (
+            "" if by_name.joints else ": s2h needs a hand with 5 fingers and does not guess one"))
     else:
         parts.append("no bone has finger chains (3 or more bones) under it: no hand in this skeleton")
     return "; ".join(parts) + f"; {TEMPLATE_HINT}"
