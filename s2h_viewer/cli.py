@@ -117,6 +117,7 @@ def _cmd_rig(args: argparse.Namespace) -> int:
     """`s2h rig FILE`: what was recognised; an editable joint-map template where recognition fails."""
     import json
 
+    from s2h_viewer.errors import UnrecognisedRigError
     from s2h_viewer.hand import topology as topo
     from s2h_viewer.io.atomic import atomic_path
     from s2h_viewer.io.files import joint_map_sidecar, joint_map_template, list_animations, recognise_file
@@ -124,9 +125,7 @@ def _cmd_rig(args: argparse.Namespace) -> int:
     path = Path(args.file)
     try:
         mapping = recognise_file(path, _rig_options(args))
-    except S2HError as exc:
-        if not path.exists() or "cycle" in str(exc) or "not a readable" in str(exc):
-            raise
+    except UnrecognisedRigError as exc:
         template = Path(args.template) if args.template else joint_map_sidecar(path)
         with atomic_path(template) as tmp:
             tmp.write_text(json.dumps(joint_map_template(path, args.side), indent=2) + "\n")

@@ -24,3 +24,7 @@ class InputFileError(S2HError):
         self.path = Path(path)
         self.problem = problem
         super().__init__(f"{self.path}: {problem}")
+
+
+class UnrecognisedRigError(InputFileError):
+    """A rig file whose hand cannot be found; the message says what was found and what to do."""

@@ -265,8 +265,7 @@ def _fit_finger(f: int, loss: np.ndarray, u: np.ndarray, v: np.ndarray, twist: n
     best = int(np.argmin(total + prior))
     # evidence for the fit: the rays alone (where they point, how sharply) and the curl plane
     by_rays = int(np.argmin(total))
-    quarter = total[[(by_rays + n_angles // 4) % n_angles, (by_rays - n_angles // 4) % n_angles]].min()
-    ray_contrast = float(np.clip((quarter - total[by_rays]) / FULL_CONTRAST, 0.0, 1.0))
+    ray_contrast = float(np.clip((_quarter_turn_loss(total, by_rays) - total[by_rays]) / FULL_CONTRAST, 0.0, 1.0))
     rays_agree = abs(np.degrees(_wrap((by_rays - best) * step))) <= AGREE_DEGREES
     curl_agree = 1.0 - (unit_bend[best] @ curl_axis) ** 2 <= np.sin(np.radians(AGREE_DEGREES)) ** 2
     palm_agree = f > 0 and 1.0 - (unit_bend[best] @ guess[ref][:, 1]) ** 2 <= np.sin(np.radians(AGREE_DEGREES)) ** 2
@@ -286,7 +285,7 @@ def _fit_finger(f: int, loss: np.ndarray, u: np.ndarray, v: np.ndarray, twist: n
         if f == 0 and k == 0:  # the thumb CMC: no section of its own, it follows the thumb's bend
             out.append((j, z, 0.0, "thenar pad"))
             continue
-        own_contrast = float(np.clip((row_min_quarter(loss[j], own_best[k]) - loss[j, own_best[k]])
+        own_contrast = float(np.clip((_quarter_turn_loss(loss[j], own_best[k]) - loss[j, own_best[k]])
                                      / FULL_CONTRAST, 0.0, 1.0)) if np.isfinite(loss[j]).any() else 0.0
         off = abs(np.degrees(_wrap((own_best[k] - a) * step)))
         disagree = own_contrast * float(np.clip((off - AGREE_DEGREES) / AGREE_DEGREES, 0.0, 1.0))
@@ -299,7 +298,7 @@ def _fit_finger(f: int, loss: np.ndarray, u: np.ndarray, v: np.ndarray, twist: n
     return out
 
 
-def row_min_quarter(row: np.ndarray, best: int) -> float:
+def _quarter_turn_loss(row: np.ndarray, best: int) -> float:
     """The loss a quarter turn from ``best`` (the lower of the two sides): the contrast's reference."""
     n = len(row)
     return float(np.min(row[[(best + n // 4) % n, (best - n // 4) % n]]))

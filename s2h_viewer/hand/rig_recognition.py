@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from s2h_viewer.errors import InputFileError
+from s2h_viewer.errors import UnrecognisedRigError
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.rig_mapping import (SCHEMES, SIDES, RigMapping, best_name_match, describe_missing, map_user,
                                          sides_named, split_side)
@@ -211,7 +211,7 @@ def recognise_rig(skeleton: Skeleton, source: str | Path, side: str | None = Non
     bone, from VRM), then bone names (``scheme`` or every built-in one), then topology and geometry.
 
     ``side`` None decides the side from the names, else from geometry; a given side overrides geometry.
-    Raises `InputFileError` naming ``source``, what was found and what to do.
+    Raises `UnrecognisedRigError` (an `InputFileError`) naming ``source``, what was found and what to do.
     """
     if side is not None and side not in SIDES:
         raise ValueError(f"side must be one of {SIDES}, not {side!r}")
@@ -224,8 +224,8 @@ def recognise_rig(skeleton: Skeleton, source: str | Path, side: str | None = Non
     if humanoid:
         chosen = side or ("right" if "right" in humanoid else next(iter(humanoid)))
         if chosen not in humanoid:
-            raise InputFileError(source, f"the file's humanoid map has no {chosen} hand; use --side "
-                                         f"{next(iter(humanoid))}")
+            raise UnrecognisedRigError(source, f"the file's humanoid map has no {chosen} hand; use --side "
+                                               f"{next(iter(humanoid))}")
         mapping = map_user(names, source, humanoid[chosen], chosen)
         mapping.scheme, mapping.side_from = "vrm", "humanoid map"
         _add_leaf_tips(skeleton, mapping)
@@ -238,21 +238,21 @@ def recognise_rig(skeleton: Skeleton, source: str | Path, side: str | None = Non
             by_name.notes.append("the rig has both hands; the right one is taken (--side left for the other)")
         return _settle_side(skeleton, by_name, side, hand_sides)
     if scheme is not None:
-        raise InputFileError(source, f"cannot map the {chosen} hand ({scheme} names): "
+        raise UnrecognisedRigError(source, f"cannot map the {chosen} hand ({scheme} names): "
                                      f"{describe_missing(by_name.missing)}")
     hands, partial = _hand_candidates(skeleton)
     if side is not None and named:  # a character: keep the hand whose wrist name says the side asked for
         marked = [h for h in hands if split_side(names[h.wrist])[1] in (side, None)]
         if not marked and hands:
             found = ", ".join(f"{names[h.wrist]!r} ({split_side(names[h.wrist])[1]})" for h in hands)
-            raise InputFileError(source, f"no {side} hand: found {found}; use --side "
+            raise UnrecognisedRigError(source, f"no {side} hand: found {found}; use --side "
                                          f"{split_side(names[hands[0].wrist])[1]}")
         hands = marked
     if not hands:
         wrist = by_name.joints.get("wrist")
         partial.sort(key=lambda p: (names[p.wrist] != wrist, split_side(names[p.wrist])[1] not in (chosen, None),
                                     -len(p.chains)))
-        raise InputFileError(source, _refusal(skeleton, by_name, partial[0] if partial else None, chosen))
+        raise UnrecognisedRigError(source, _refusal(skeleton, by_name, partial[0] if partial else None, chosen))
     candidates = [_topology_mapping(skeleton, h) for h in hands]
     if len(candidates) > 1:
         sides = [_side_of(skeleton, m)[0] for m in candidates]
