@@ -273,7 +273,7 @@ def _save_rig_bvh(path: Path, motion: Motion, hand: HandModel, skeleton: RigSkel
         root = parent[bone] < 0
         chans = (["Xposition", "Yposition", "Zposition"] if root else []) + [f"{a}rotation" for a in WRITE_ORDER]
         lines.extend([f"{pad}{'ROOT' if root else 'JOINT'} {skeleton.names[bone]}", f"{pad}{{",
-                      f"{pad}  OFFSET {offset[0]:.6f} {offset[1]:.6f} {offset[2]:.6f}",
+                      f"{pad}  OFFSET {offset[0]:.9f} {offset[1]:.9f} {offset[2]:.9f}",  # file units: metres too
                       f"{pad}  CHANNELS {len(chans)} {' '.join(chans)}"])
         local = delta[bone] if root else delta[parent[bone]].transpose(0, 2, 1) @ delta[bone]
         euler = Rotation.from_matrix(local).as_euler(WRITE_ORDER, degrees=True)
@@ -282,8 +282,8 @@ def _save_rig_bvh(path: Path, motion: Motion, hand: HandModel, skeleton: RigSkel
             write(child, depth + 1)
         if not children[bone]:  # an end site half a bone beyond a leaf bone, along it
             tail = 0.5 * offset
-            lines.extend([f"{pad}  End Site", f"{pad}  {{", f"{pad}    OFFSET {tail[0]:.6f} {tail[1]:.6f} "
-                                                          f"{tail[2]:.6f}", f"{pad}  }}"])
+            lines.extend([f"{pad}  End Site", f"{pad}  {{", f"{pad}    OFFSET {tail[0]:.9f} {tail[1]:.9f} "
+                                                          f"{tail[2]:.9f}", f"{pad}  }}"])
         lines.append(f"{pad}}}")
 
     write(wrist, 0)
