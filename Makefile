@@ -23,6 +23,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_asm_fk.py
 	$(PY) benchmarks/bench_retarget.py
 	$(PY) benchmarks/bench_annotate.py
+	$(PY) benchmarks/bench_real_rigs.py
 	$(PY) benchmarks/bench_playback.py
 	$(if $(DISPLAY),,xvfb-run -a -s "-screen 0 1600x1000x24") $(PY) benchmarks/bench_window_playback.py
 

@@ -110,7 +110,44 @@ def _cmd_train(args: argparse.Namespace) -> int:
 def _rig_options(args: argparse.Namespace):
     from s2h_viewer.io.files import RigOptions
 
-    return RigOptions(side=args.side, scheme=args.scheme, joint_map=args.joint_map)
+    return RigOptions(side=args.side, scheme=args.scheme, joint_map=args.joint_map,
+                      animation=getattr(args, "animation", None))
+
+
+def _cmd_rig(args: argparse.Namespace) -> int:
+    """`s2h rig FILE`: what was recognised; an editable joint-map template where recognition fails."""
+    import json
+
+    from s2h_viewer.errors import UnrecognisedRigError
+    from s2h_viewer.hand import topology as topo
+    from s2h_viewer.io.atomic import atomic_path
+    from s2h_viewer.io.files import joint_map_sidecar, joint_map_template, list_animations, recognise_file
+
+    path = Path(args.file)
+    try:
+        mapping = recognise_file(path, _rig_options(args))
+    except UnrecognisedRigError as exc:
+        template = Path(args.template) if args.template else joint_map_sidecar(path)
+        with atomic_path(template) as tmp:
+            tmp.write_text(json.dumps(joint_map_template(path, args.side), indent=2) + "\n")
+        print(f"s2h: error: {exc}", file=sys.stderr)
+        print(f"wrote {template}: fill in the empty joints (bone names of {path.name}); it is picked up "
+              f"beside the file, or pass it with --joint-map")
+        return 2
+    print(f"{path}: {mapping.scheme} scheme, {mapping.side} hand (side from {mapping.side_from}), "
+          f"confidence {mapping.confidence:.2f}")
+    for f in topo.FINGERS:
+        bones = [mapping.joints.get(f"{f}_{lv}", "(extrapolated)") for lv in topo.FINGER_LEVELS[f]]
+        print(f"  {f:6s} {' > '.join(bones)}")
+    print(f"  wrist  {mapping.joints['wrist']}")
+    if mapping.palm_bones:
+        print(f"  palm bones (their skin moves with the wrist): {', '.join(mapping.palm_bones)}")
+    for note in mapping.notes:
+        print(f"  note: {note}")
+    if path.suffix.lower() in (".glb", ".gltf", ".fbx", ".bvh"):
+        clips = list_animations(path)
+        print(f"  animations: {', '.join(f'[{i}] {c}' for i, c in enumerate(clips)) if clips else 'none'}")
+    return 0
 
 
 def _cmd_annotate(args: argparse.Namespace) -> int:
@@ -178,9 +215,13 @@ def _cmd_view(args: argparse.Namespace) -> int:
 def _add_rig_options(parser: argparse.ArgumentParser) -> None:
     from s2h_viewer.hand.rig_mapping import SCHEMES, SIDES
 
-    parser.add_argument("--side", choices=SIDES, default="right", help="which hand of a rig or character")
+    parser.add_argument("--side", choices=SIDES, help="which hand of a character, or override the side a lone "
+                                                       "hand's names or geometry give (default: detect)")
     parser.add_argument("--scheme", choices=list(SCHEMES), help="joint naming scheme (default: detect)")
-    parser.add_argument("--joint-map", help='JSON file {"wrist": "<bone>", "index_mcp": "<bone>", ...}')
+    parser.add_argument("--joint-map", help='JSON file {"wrist": "<bone>", "index_mcp": "<bone>", ...} (default: '
+                                            "<stem>.joints.json beside each hand file, if there)")
+    parser.add_argument("--animation", help="which animation (glTF) or take (FBX) of a motion file: name or index "
+                                            "(default: the first; `s2h rig FILE` lists them)")
 
 
 def _cmd_gestures(args: argparse.Namespace) -> int:
@@ -268,6 +309,14 @@ def build_parser() -> argparse.ArgumentParser:
     tr.add_argument("--stop-at", type=int, help="end this run at that step (continue later with --resume)")
     tr.add_argument("--quiet", action="store_true")
     tr.set_defaults(func=_cmd_train)
+
+    rg = sub.add_parser("rig", help="what s2h recognises in a rig file (scheme, side, joints, animations); "
+                                    "writes an editable joint-map template when it cannot")
+    rg.add_argument("file", help="rig file (.glb .gltf .fbx .bvh)")
+    rg.add_argument("--template", help="where to write the joint-map template (default: <stem>.joints.json beside "
+                                       "the file)")
+    _add_rig_options(rg)
+    rg.set_defaults(func=_cmd_rig)
 
     gs = sub.add_parser("gestures", help="list the gesture library with its contact labels")
     gs.set_defaults(func=_cmd_gestures)

@@ -70,3 +70,7 @@ def reading(path: str | Path, what: str) -> Iterator[None]:
         raise InputFileError(path, f"cannot be read as {what}: it needs more memory than there is") from exc
     except Exception as exc:  # a reader's bug or a library's surprise on damaged data: still one line
         raise InputFileError(path, f"cannot be read as {what} ({type(exc).__name__}: {exc})") from exc
+
+
+class UnrecognisedRigError(InputFileError):
+    """A rig file whose hand cannot be found; the message says what was found and what to do."""

@@ -138,6 +138,18 @@ def test_fbx_take_is_the_counting_motion_it_was_baked_from(sample_hands):
     ("rigify", ["DEF-hand.R"] + [f"DEF-thumb.0{i}.R" for i in (1, 2, 3)]
      + [f"DEF-f_{f}.0{i}.R" for f in ("index", "middle", "ring", "pinky") for i in (1, 2, 3)], 5),
     ("mano", ["wrist"] + [f"{f}{i}" for f in ("index", "middle", "pinky", "ring", "thumb") for i in (1, 2, 3)], 5),
+    # Ready Player Me / Unity exports of Mixamo names, without the namespace
+    ("mixamo", ["RightHand"] + [f"RightHand{f}{i}" for f in ("Thumb", "Index", "Middle", "Ring", "Pinky")
+                                for i in range(1, 5)], 0),
+    ("unity", ["RightHand"] + [f"Right{f}{p}" for f in ("Thumb", "Index", "Middle", "Ring", "Little")
+                               for p in ("Proximal", "Intermediate", "Distal")], 5),
+    ("unreal", ["hand_r"] + [f"{f}_0{i}_r" for f in ("thumb", "index", "middle", "ring", "pinky") for i in (1, 2, 3)]
+     + [f"{f}_metacarpal_r" for f in ("index", "middle", "ring", "pinky")], 5),
+    ("openxr", ["wrist_r", "palm_r"] + [f"{f}-{p}-r" for f in ("index", "middle", "ring", "little")
+                                        for p in ("metacarpal", "proximal", "intermediate", "distal", "tip")]
+     + [f"thumb-{p}-r" for p in ("metacarpal", "proximal", "distal", "tip")], 0),
+    ("rigify", ["ORG-hand.R"] + [f"ORG-thumb.0{i}.R" for i in (1, 2, 3)]
+     + [f"ORG-f_{f}.0{i}.R" for f in ("index", "middle", "ring", "pinky") for i in (1, 2, 3)], 5),
 ])
 def test_built_in_rig_schemes_are_detected(scheme, names, tips_missing):
     mapping = map_rig(names + ["Hips", "Spine"], "rig.glb")
@@ -192,11 +204,17 @@ def test_four_finger_rigs_are_refused_naming_the_missing_finger(tmp_path, sample
     with pytest.raises(InputFileError, match=r"four_finger_hand\.fbx: .*missing pinky_mcp, pinky_pip, pinky_dip "
                                              r"\(no pinky finger"):
         load_fbx_hand(FBX / "four_finger_hand.fbx")
+
+
+def test_a_finger_with_unknown_names_is_found_by_topology(tmp_path, sample_hands, motion_on_birch):
+    """Five chains under the wrist, one of them named nowhere: the hand is still a hand, and says so."""
     text = save_bvh(tmp_path / "h.bvh", motion_on_birch, sample_hands["birch"]).read_text()
-    four = tmp_path / "four.bvh"
-    four.write_text(text.replace("ring_", "extra_"))
-    with pytest.raises(InputFileError, match=r"four\.bvh: .*no ring finger"):
-        load_bvh(four)
+    renamed = tmp_path / "renamed.bvh"
+    renamed.write_text(text.replace("ring_", "extra_"))
+    hand, motion = load_bvh(renamed, side="right")
+    assert hand.meta["rig_scheme"] == "topology" and hand.meta["rig_joints"]["ring_pip"] == "extra_pip"
+    original, _ = load_bvh(tmp_path / "h.bvh", side="right")
+    np.testing.assert_allclose(hand.rest_positions, original.rest_positions, atol=1e-9)
 
 
 def test_nan_rotations_are_refused_with_the_frame(tmp_path, sample_hands, motion_on_birch):

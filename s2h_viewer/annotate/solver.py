@@ -32,6 +32,17 @@ SMOOTHING_DEGREES = 25.0
 #: 0.3 is what a section 0.84 as deep as it is wide gives
 FULL_CONTRAST = 0.3
 LOW_CONFIDENCE = 0.3
+#: how far one joint's splay axis may turn from its finger's common fit, and what turning that far costs
+MAX_CORRECTION_DEGREES = 8.0
+CORRECTION_PENALTY = 0.02
+#: priors on a finger's common bend axis (loss units): across the palm, and normal to its curl plane
+PALM_PRIOR = 0.3
+CURL_PRIOR = 0.3
+FULL_CURL_DEGREES = 20.0
+#: a fit within this of the rays' own choice, or of the curl plane's normal, counts as agreeing with it
+AGREE_DEGREES = 20.0
+#: a finger whose fit follows the palm plane is that sure of it without other evidence
+PALM_EVIDENCE = 0.6
 
 
 @dataclass
@@ -101,8 +112,55 @@ def _ray_intersector(mesh: trimesh.Trimesh):
         return trimesh.ray.ray_triangle.RayMeshIntersector(mesh)
 
 
+def _exit_hits(mesh: trimesh.Trimesh, origins: np.ndarray, directions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Distance to and normal-along-ray of each ray's first hit where it LEAVES a surface (normal along the
+    ray): a ray from inside a finger crossing a nail or another overlapping primitive from outside first
+    (an entering hit) goes on to the surface it leaves. Inf / 0 for rays leaving nothing."""
+    locations, ray_index, tri_index = _ray_intersector(mesh).intersects_location(origins, directions,
+                                                                               multiple_hits=True)
+    dist = np.full(len(directions), np.inf)
+    normal_dot = np.zeros(len(directions))
+    if len(ray_index):
+        along = np.einsum("ij,ij->i", mesh.face_normals[tri_index], directions[ray_index])
+        d = np.linalg.norm(locations - origins[ray_index], axis=1)
+        leaving = along > 0.0
+        d, along, rays = d[leaving], along[leaving], ray_index[leaving]
+        order = np.lexsort((d, rays))  # per ray, nearest leaving hit first
+        rays, d, along = rays[order], d[order], along[order]
+        first = np.r_[True, rays[1:] != rays[:-1]]
+        dist[rays[first]], normal_dot[rays[first]] = d[first], along[first]
+    return dist, normal_dot
+
+
+def _wrap(angle: np.ndarray) -> np.ndarray:
+    """Angles (radians) wrapped to [-pi/2, pi/2): the loss repeats every half turn (rays go both ways)."""
+    return (angle + np.pi / 2) % np.pi - np.pi / 2
+
+
+def _curl_bend_axes(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per finger (5, 3) the normal of the plane its bones curl in, and how much they curl (0-1, full at
+    ``FULL_CURL_DEGREES``): where a finger is bent at rest, anatomy puts its bend axes along that normal."""
+    axes, strength = np.zeros((topo.N_FINGERS, 3)), np.zeros(topo.N_FINGERS)
+    for f in range(topo.N_FINGERS):
+        chain = positions[1 + 4 * f: 5 + 4 * f]
+        bones = np.diff(chain, axis=0)
+        bones /= np.linalg.norm(bones, axis=1, keepdims=True)
+        normal = np.cross(bones[:-1], bones[1:]).sum(0)
+        size = np.linalg.norm(normal)
+        if size > 1e-9:
+            axes[f] = normal / size
+            strength[f] = min(np.degrees(np.arcsin(min(size / 2.0, 1.0))) / FULL_CURL_DEGREES, 1.0)
+    return axes, strength
+
+
 def solve_tbs_frames(hand: HandModel, n_angles: int = N_ANGLES) -> TbsSolution:
-    """TBS rest frames for ``hand`` found from its mesh (``hand.rest_frames`` is not read)."""
+    """TBS rest frames for ``hand`` found from its mesh (``hand.rest_frames`` is not read).
+
+    Per joint, a ray loss over the splay angle; per finger, one common bend direction fitted to the sum
+    of its joints' losses (anatomy: a finger's joints bend about nearly parallel axes, as the official
+    code's one bend axis per finger), each joint then corrected within ``MAX_CORRECTION_DEGREES`` of it.
+    Where rays cannot tell (round sections), the finger's own curl plane and the palm plane decide.
+    """
     if hand.mesh is None:
         raise InvalidHandError(f"hand {hand.name!r}: has no mesh; the TBS solver casts rays at the mesh")
     mesh = trimesh.Trimesh(hand.mesh.vertices, hand.mesh.faces, process=False)
@@ -122,12 +180,7 @@ def solve_tbs_frames(hand: HandModel, n_angles: int = N_ANGLES) -> TbsSolution:
     directions = np.concatenate([splay, bend, -splay, -bend], axis=1)  # (J, 4A, 3)
     ray_directions = np.broadcast_to(directions, (len(stations), *directions.shape)).reshape(-1, 3)
     ray_origins = np.repeat(stations.reshape(-1, 3), 4 * n_angles, axis=0)
-    locations, ray_index, tri_index = _ray_intersector(mesh).intersects_location(
-        ray_origins, ray_directions, multiple_hits=False)
-    dist = np.full(len(ray_directions), np.inf)
-    normal_dot = np.zeros(len(ray_directions))
-    dist[ray_index] = np.linalg.norm(locations - ray_origins[ray_index], axis=1)
-    normal_dot[ray_index] = np.einsum("ij,ij->i", mesh.face_normals[tri_index], ray_directions[ray_index])
+    dist, normal_dot = _exit_hits(mesh, ray_origins, ray_directions)
     dist = dist.reshape(len(stations), n_joints, 4, n_angles)
     normal_dot = normal_dot.reshape(len(stations), n_joints, 4, n_angles)
 
@@ -140,42 +193,115 @@ def solve_tbs_frames(hand: HandModel, n_angles: int = N_ANGLES) -> TbsSolution:
     half_thickness = 0.5 * (dist[:, :, 0] + dist[:, :, 2]).mean(axis=0)  # (J, A)
     half_width = 0.5 * (dist[:, :, 1] + dist[:, :, 3]).mean(axis=0)
 
-    frames = np.empty((n_joints, 3, 3))
+    fallback = ~hit.any(axis=1)
+    guess = palm_plane_frames(positions)
+    curl_axis, curl_strength = _curl_bend_axes(positions)
+    step = 2 * np.pi / n_angles
+    frames = guess.copy()
     confidence = np.zeros(n_joints)
     thickness = np.full(n_joints, np.nan)
     width = np.full(n_joints, np.nan)
-    fallback = ~np.isfinite(loss).any(axis=1)  # no direction whose whole smoothing window hit
     diagnostics = []
-    back = back_directions(positions)
-    guess = palm_plane_frames(positions)
-    for j in range(n_joints):
-        name = topo.ARTICULATED_NAMES[j]
-        if fallback[j]:
-            z = guess[j][:, 2]
-            diagnostics.append(f"{name}: no ray hit the mesh (is the joint outside it?); frame taken from the "
-                               f"palm plane, review it")
-        else:
-            best = int(np.argmin(loss[j]))
-            z = splay[j, best]
-            thickness[j], width[j] = half_thickness[j, best], half_width[j, best]
-            quarter = loss[j, [(best + n_angles // 4) % n_angles, (best - n_angles // 4) % n_angles]]
-            contrast = np.min(quarter) - loss[j, best]
-            confidence[j] = float(np.clip(contrast / FULL_CONTRAST, 0.0, 1.0)) * hit[j].mean()
-            if confidence[j] < LOW_CONFIDENCE:
-                diagnostics.append(f"{name}: low confidence {confidence[j]:.2f} (round section or rays "
-                                   f"missing: {hit[j].mean():.0%} hit); review the frame")
-            if z @ back[j] < 0:
-                z = -z
-        frames[j] = np.stack([twist[j], np.cross(z, twist[j]), z], axis=1)
-    # the thumb's CMC sits inside the thenar pad, where no section belongs to its bone: its bend axis
-    # is taken from the thumb MCP (the thumb's joints flex about nearly parallel axes)
-    cmc, mcp = topo.ARTICULATED_NAMES.index("thumb_cmc"), topo.ARTICULATED_NAMES.index("thumb_mcp")
-    if not fallback[mcp]:
-        y = frames[mcp][:, 1] - twist[cmc] * (frames[mcp][:, 1] @ twist[cmc])
-        y /= np.linalg.norm(y)
-        frames[cmc] = np.stack([twist[cmc], y, np.cross(twist[cmc], y)], axis=1)
-        confidence[cmc] = confidence[mcp]
+    for f in range(topo.N_FINGERS):
+        fit = _fit_finger(f, loss, u, v, twist, guess, curl_axis[f], curl_strength[f], fallback, step)
+        for j, z, conf, note in fit:
+            name = topo.ARTICULATED_NAMES[j]
+            if fallback[j]:
+                diagnostics.append(f"{name}: no ray hit the mesh (is the joint outside it?); frame taken from the "
+                                   f"{'palm plane' if z is None else 'rest of its finger'}, review it")
+                if z is None:
+                    continue
+            else:
+                a = int(round(np.arctan2(z @ v[j], z @ u[j]) / step)) % n_angles
+                thickness[j], width[j] = half_thickness[j, a], half_width[j, a]
+                confidence[j] = conf * hit[j].mean()
+                if confidence[j] < LOW_CONFIDENCE:
+                    diagnostics.append(f"{name}: low confidence {confidence[j]:.2f} ({note}); review the frame")
+            frames[j] = np.stack([twist[j], np.cross(z, twist[j]), z], axis=1)
     return TbsSolution(frames, confidence, hit.mean(axis=1), thickness, width, fallback, diagnostics)
+
+
+def _fit_finger(f: int, loss: np.ndarray, u: np.ndarray, v: np.ndarray, twist: np.ndarray, guess: np.ndarray,
+                curl_axis: np.ndarray, curl_strength: float, fallback: np.ndarray, step: float
+                ) -> list[tuple[int, np.ndarray | None, float, str]]:
+    """One finger: (joint, splay axis or None, confidence, why unsure) for its three joints.
+
+    Candidate common bend directions are the MCP's (CMC's) plane sampled at every angle; each joint
+    takes that direction projected into its own plane, moved by up to ``MAX_CORRECTION_DEGREES`` where
+    its loss is lower (a quadratic penalty on the move). The finger's loss adds the curl and palm priors."""
+    members = [3 * f + level for level in range(3)]
+    weights = np.array([0.0 if (f == 0 and level == 0) else 1.0 for level in range(3)])  # thumb CMC: thenar pad
+    weights[fallback[members]] = 0.0
+    if not weights.any():
+        return [(j, None, 0.0, "no hits") for j in members]
+    n_angles = loss.shape[1]
+    ref = members[1] if f == 0 else members[0]
+    theta = np.arange(n_angles) * step
+    bend_ref = np.cos(theta)[:, None] * np.cross(u[ref], twist[ref]) + np.sin(theta)[:, None] * np.cross(
+        v[ref], twist[ref])  # (A, 3) candidate common bend directions
+    window = int(round(np.radians(MAX_CORRECTION_DEGREES) / step))
+    offsets = np.arange(-window, window + 1)
+    penalty = CORRECTION_PENALTY * (offsets / max(window, 1)) ** 2
+    total = np.zeros(n_angles)
+    chosen = np.zeros((3, n_angles), dtype=int)
+    own_best = np.zeros(3, dtype=int)
+    for k, j in enumerate(members):
+        # the candidate bend projected into joint j's plane -> splay = twist x bend -> its angle index there
+        b = bend_ref - np.outer(bend_ref @ twist[j], twist[j])
+        z = np.cross(twist[j], b)
+        idx = np.round(np.arctan2(z @ v[j], z @ u[j]) / step).astype(int) % n_angles
+        options = (idx[:, None] + offsets[None]) % n_angles  # (A, 2w+1)
+        row = loss[j] if np.isfinite(loss[j]).any() else np.zeros(n_angles)
+        row = np.where(np.isfinite(row), row, np.nanmax(np.where(np.isfinite(row), row, np.nan)) + 1.0)
+        scored = row[options] + penalty[None]
+        pick = np.argmin(scored, axis=1) if weights[k] else np.full(n_angles, window)  # unweighted: no correction
+        chosen[k] = options[np.arange(n_angles), pick]
+        total += weights[k] * scored[np.arange(n_angles), pick]
+        own_best[k] = int(np.argmin(row))
+    total /= weights.sum()
+    unit_bend = bend_ref / np.linalg.norm(bend_ref, axis=1, keepdims=True)
+    prior = PALM_PRIOR * (1.0 - (unit_bend @ guess[ref][:, 1]) ** 2) if f else np.zeros(n_angles)  # thumb: no
+    prior += CURL_PRIOR * curl_strength * (1.0 - (unit_bend @ curl_axis) ** 2)
+    best = int(np.argmin(total + prior))
+    # evidence for the fit: the rays alone (where they point, how sharply) and the curl plane
+    by_rays = int(np.argmin(total))
+    ray_contrast = float(np.clip((_quarter_turn_loss(total, by_rays) - total[by_rays]) / FULL_CONTRAST, 0.0, 1.0))
+    rays_agree = abs(np.degrees(_wrap((by_rays - best) * step))) <= AGREE_DEGREES
+    curl_agree = 1.0 - (unit_bend[best] @ curl_axis) ** 2 <= np.sin(np.radians(AGREE_DEGREES)) ** 2
+    palm_agree = f > 0 and 1.0 - (unit_bend[best] @ guess[ref][:, 1]) ** 2 <= np.sin(np.radians(AGREE_DEGREES)) ** 2
+    shape_support = max(curl_strength * curl_agree, PALM_EVIDENCE * palm_agree)  # evidence without rays
+    finger_confidence = max(ray_contrast * rays_agree, shape_support) * (1.0 - 0.5 * ray_contrast * (not rays_agree))
+    finger_why = ("its finger's rays point elsewhere than the palm and curl say" if not rays_agree
+                  else "ambiguous rays (round or faceted section) on a straight finger")
+    out = []
+    back = guess[ref][:, 2]
+    sign = 1.0
+    for k, j in enumerate(members):
+        a = chosen[k, best]
+        z = np.cos(a * step) * u[j] + np.sin(a * step) * v[j]
+        if k == 0 or (f == 0 and k == 1):
+            sign = 1.0 if z @ back >= 0 else -1.0  # the finger's back side, once for all its joints
+        z = sign * z
+        if f == 0 and k == 0:  # the thumb CMC: no section of its own, it follows the thumb's bend
+            out.append((j, z, 0.0, "thenar pad"))
+            continue
+        own_contrast = float(np.clip((_quarter_turn_loss(loss[j], own_best[k]) - loss[j, own_best[k]])
+                                     / FULL_CONTRAST, 0.0, 1.0)) if np.isfinite(loss[j]).any() else 0.0
+        off = abs(np.degrees(_wrap((own_best[k] - a) * step)))
+        disagree = own_contrast * float(np.clip((off - AGREE_DEGREES) / AGREE_DEGREES, 0.0, 1.0))
+        conf = finger_confidence * (1.0 - disagree * (1.0 - shape_support))
+        why = f"its own rays point {off:.0f} deg away from its finger's bend axis" if disagree > 0.5 else finger_why
+        out.append((j, z, conf, why))
+    thumb_mcp = out[1] if f == 0 else None
+    if thumb_mcp is not None:  # the CMC's confidence is the thumb's
+        out[0] = (out[0][0], out[0][1], thumb_mcp[2], thumb_mcp[3])
+    return out
+
+
+def _quarter_turn_loss(row: np.ndarray, best: int) -> float:
+    """The loss a quarter turn from ``best`` (the lower of the two sides): the contrast's reference."""
+    n = len(row)
+    return float(np.min(row[[(best + n // 4) % n, (best - n // 4) % n]]))
 
 
 def frame_angle_errors(frames: np.ndarray, reference: np.ndarray) -> np.ndarray:

@@ -1,12 +1,19 @@
 """Joint-name mapping: which bones of a real rig are the wrist and the 20 finger joints (DESIGN.md section 1).
 
-Built-in schemes: the project's own names, WebXR (``index-finger-phalanx-proximal``), OpenXR
-(``XR_HAND_JOINT_INDEX_PROXIMAL_EXT``), Mixamo (``mixamorig:RightHandIndex1..4``), Blender Rigify
-(``f_index.01.R``, ``DEF-`` prefixes too) and MANO's 16 joints (``index1..3``, optional ``index4``
-tips); a user JSON map ``{"wrist": "...", "index_mcp": "...", ...}`` for anything else. Names
-are compared case-, separator- and namespace-insensitively. Tips may be absent (Rigify and MANO
-have none): the loader extrapolates them. A rig missing any other joint is refused with the list of
-what is missing; a hand without five fingers is never guessed.
+Built-in schemes (compared case-, separator- and namespace-insensitively, with the side read off the
+name first: ``_R``/``.L`` suffixes, ``Right``/``Left`` prefixes, ``r_``/``l_`` prefixes):
+
+- ``s2h``: the project's own names; ``webxr``: ``index-finger-phalanx-proximal``;
+- ``openxr``: ``XR_HAND_JOINT_INDEX_PROXIMAL_EXT`` and Title_Case ``Index_Proximal_R`` (``Little`` = pinky);
+- ``mixamo``: ``mixamorig:RightHandIndex1..4``, also without the prefix (Ready Player Me, Unity exports);
+- ``unity``: Unity Humanoid ``RightIndexProximal`` (thumb Proximal = CMC), also VRM 0.x bone names;
+- ``unreal``: the Unreal mannequin ``hand_r``, ``index_01_r``..``index_03_r``, ``index_04_leaf_r`` tips,
+  ``index_metacarpal_r`` palm bones (UE5);
+- ``rigify``: Blender Rigify ``f_index.01.R`` with ``DEF-`` (preferred) or ``ORG-`` prefixes;
+- ``mano``: MANO's 16 joints ``index1..3`` with optional ``index4`` tips.
+
+A user JSON map ``{"wrist": "...", "index_mcp": "...", ...}`` overrides names. Tips may be absent: the
+loader extrapolates them. What names cannot settle, `rig_recognition` settles from topology and geometry.
 """
 
 from __future__ import annotations
@@ -21,12 +28,9 @@ from s2h_viewer.hand import topology as topo
 
 SIDES = ("right", "left")
 MAX_JOINT_MAP_BYTES = 1024 ** 2
-_MIXAMO_FINGERS = {"thumb": "Thumb", "index": "Index", "middle": "Middle", "ring": "Ring", "pinky": "Pinky"}
-_XR_FINGERS = {"thumb": "THUMB", "index": "INDEX", "middle": "MIDDLE", "ring": "RING", "pinky": "LITTLE"}
-_WEBXR_LEVELS = {"thumb": ("metacarpal", "phalanx-proximal", "phalanx-distal", "tip"),
-                 **{f: ("phalanx-proximal", "phalanx-intermediate", "phalanx-distal", "tip") for f in topo.FINGERS[1:]}}
-_XR_LEVELS = {"thumb": ("METACARPAL", "PROXIMAL", "DISTAL", "TIP"),
-              **{f: ("PROXIMAL", "INTERMEDIATE", "DISTAL", "TIP") for f in topo.FINGERS[1:]}}
+_PREFIX_SIDE = re.compile(r"^(?:(?i:(right|left))(?=[A-Z0-9_.\- ]|$)|(?i:(r|l))[_.\- ])")
+_SUFFIX_SIDE = re.compile(r"(?:[_.\- ](r|l)|[_.\- ]?(right|left))$", re.IGNORECASE)
+_RIGIFY_PREFIXES = ("def", "", "org")  # deform bones first: they carry the skin
 
 
 def normalise_name(name: str) -> str:
@@ -35,94 +39,148 @@ def normalise_name(name: str) -> str:
     return re.sub(r"[^0-9a-z]", "", name.lower())
 
 
-def _webxr(side: str) -> tuple[dict[str, list[str]], list[str]]:
-    names = {"wrist": ["wrist"]}
+def split_side(name: str) -> tuple[str, str | None]:
+    """(normalised name without its side marker, "right"/"left"/None): ``Index_Proximal_R`` ->
+    (``indexproximal``, "right"), ``mixamorig:LeftHandIndex1`` -> (``handindex1``, "left")."""
+    name = re.split(r"[:|]", name)[-1]
+    side = None
+    match = _SUFFIX_SIDE.search(name)
+    if match and len(name) > len(match.group(0)):
+        side = "right" if (match.group(1) or match.group(2)).lower().startswith("r") else "left"
+        name = name[:match.start()]
+    else:
+        match = _PREFIX_SIDE.search(name)
+        if match and len(name) > len(match.group(0)):
+            side = "right" if (match.group(1) or match.group(2)).lower().startswith("r") else "left"
+            name = name[match.end():]
+    return normalise_name(name), side
+
+
+def _levels(scheme_names: dict[str, tuple[str, ...]]) -> dict[str, list[str]]:
+    """Canonical joint -> candidate names from per-finger tuples of (level 1, level 2, level 3, tip) names."""
+    out = {}
     for f in topo.FINGERS:
-        prefix = "thumb" if f == "thumb" else f"{f}-finger"
-        for level, part in zip(topo.FINGER_LEVELS[f], _WEBXR_LEVELS[f]):
-            names[f"{f}_{level}"] = [f"{prefix}-{part}"]
-    return names, [f"{f}-finger-metacarpal" for f in topo.FINGERS[1:]]
+        for level, name in zip(topo.FINGER_LEVELS[f], scheme_names[f]):
+            out[f"{f}_{level}"] = [normalise_name(n) for n in name.split("|")]
+    return out
 
 
-def _openxr(side: str) -> tuple[dict[str, list[str]], list[str]]:
-    names = {"wrist": ["XR_HAND_JOINT_WRIST_EXT"]}
+def _webxr() -> tuple[dict[str, list[str]], list[str]]:
+    names = {"thumb": ("thumb-metacarpal", "thumb-phalanx-proximal", "thumb-phalanx-distal", "thumb-tip")}
+    for f in topo.FINGERS[1:]:
+        names[f] = tuple(f"{f}-finger-{p}" for p in ("phalanx-proximal", "phalanx-intermediate", "phalanx-distal",
+                                                     "tip"))
+    return {"wrist": ["wrist"], **_levels(names)}, [f"{f}fingermetacarpal" for f in topo.FINGERS[1:]]
+
+
+_XR = {"thumb": "thumb", "index": "index", "middle": "middle", "ring": "ring", "pinky": "little"}
+
+
+def _openxr() -> tuple[dict[str, list[str]], list[str]]:
+    names = {}
+    for f, xr in _XR.items():
+        parts = ("metacarpal", "proximal", "distal", "tip") if f == "thumb" else (
+            "proximal", "intermediate", "distal", "tip")
+        names[f] = tuple(f"XR_HAND_JOINT_{xr}_{p}_EXT|{xr}_{p}|{xr}_{p}_bone" for p in parts)
+    palm = [normalise_name(f"{p}{_XR[f]}metacarpal{s}") for f in topo.FINGERS[1:] for p in ("xrhandjoint", "")
+            for s in (("ext",) if p else ("", "bone"))]
+    return {"wrist": ["xrhandjointwristext", "wrist", "wristbone"], **_levels(names)}, palm + [
+        "xrhandjointpalmext", "palm", "palmbone"]
+
+
+def _mixamo() -> tuple[dict[str, list[str]], list[str]]:
+    names = {f: tuple(f"Hand{f.capitalize()}{i}" for i in range(1, 5)) for f in topo.FINGERS}
+    return {"wrist": ["hand"], **_levels(names)}, []
+
+
+def _unity() -> tuple[dict[str, list[str]], list[str]]:
+    names = {f: tuple(f"{f.capitalize()}{p}" for p in ("Proximal", "Intermediate", "Distal", "Tip"))
+             for f in ("thumb", "index", "middle", "ring")}
+    names["pinky"] = tuple(f"Little{p}|Pinky{p}" for p in ("Proximal", "Intermediate", "Distal", "Tip"))
+    return {"wrist": ["hand"], **_levels(names)}, []
+
+
+def _unreal() -> tuple[dict[str, list[str]], list[str]]:
+    names = {f: (f"{f}_01", f"{f}_02", f"{f}_03", f"{f}_04_leaf|{f}_04|{f}_tip") for f in topo.FINGERS}
+    return {"wrist": ["hand"], **_levels(names)}, [f"{f}metacarpal" for f in topo.FINGERS[1:]]
+
+
+def _rigify() -> tuple[dict[str, list[str]], list[str]]:
+    names = {f: tuple("|".join(f"{p}{'thumb' if f == 'thumb' else 'f_' + f}.0{i}" for p in _RIGIFY_PREFIXES)
+                      for i in (1, 2, 3)) for f in topo.FINGERS}
+    joints = {"wrist": [f"{p}hand" for p in _RIGIFY_PREFIXES]}
     for f in topo.FINGERS:
-        for level, part in zip(topo.FINGER_LEVELS[f], _XR_LEVELS[f]):
-            names[f"{f}_{level}"] = [f"XR_HAND_JOINT_{_XR_FINGERS[f]}_{part}_EXT"]
-    return names, [f"XR_HAND_JOINT_{_XR_FINGERS[f]}_METACARPAL_EXT" for f in topo.FINGERS[1:]] + [
-        "XR_HAND_JOINT_PALM_EXT"]
+        for level, name in zip(topo.FINGER_LEVELS[f], names[f]):
+            joints[f"{f}_{level}"] = [normalise_name(n) for n in name.split("|")]
+    return joints, [f"{p}palm0{i}" for p in _RIGIFY_PREFIXES for i in range(1, 5)]
 
 
-def _mixamo(side: str) -> tuple[dict[str, list[str]], list[str]]:
-    s = side.capitalize()
-    names = {"wrist": [f"{s}Hand"]}
-    for f in topo.FINGERS:
-        for i, level in enumerate(topo.FINGER_LEVELS[f]):
-            names[f"{f}_{level}"] = [f"{s}Hand{_MIXAMO_FINGERS[f]}{i + 1}"]
-    return names, []
+def _mano() -> tuple[dict[str, list[str]], list[str]]:
+    names = {f: tuple(f"{f}{i}" for i in range(1, 5)) for f in topo.FINGERS}
+    return {"wrist": ["wrist"], **_levels(names)}, []
 
 
-def _rigify(side: str) -> tuple[dict[str, list[str]], list[str]]:
-    s = side[0].upper()
-    names = {"wrist": [f"hand.{s}", f"DEF-hand.{s}"]}
-    for f in topo.FINGERS:
-        bone = "thumb" if f == "thumb" else f"f_{f}"
-        for i, level in enumerate(topo.FINGER_LEVELS[f]):
-            names[f"{f}_{level}"] = [f"{bone}.0{i + 1}.{s}", f"DEF-{bone}.0{i + 1}.{s}"]
-    palm = [f"{p}palm.0{i}.{s}" for p in ("", "DEF-") for i in range(1, 5)]
-    return names, palm
+def _project() -> tuple[dict[str, list[str]], list[str]]:
+    return {name: [normalise_name(name)] for name in topo.JOINT_NAMES}, []
 
 
-def _mano(side: str) -> tuple[dict[str, list[str]], list[str]]:
-    names = {"wrist": ["wrist"]}
-    for f in topo.FINGERS:
-        for i, level in enumerate(topo.FINGER_LEVELS[f]):
-            names[f"{f}_{level}"] = [f"{f}{i + 1}"]
-    return names, []
-
-
-def _project(side: str) -> tuple[dict[str, list[str]], list[str]]:
-    return {name: [name] for name in topo.JOINT_NAMES}, []
-
-
-#: scheme name -> function(side) -> (canonical joint -> candidate rig names, palm bones folded into the wrist)
-SCHEMES = {"s2h": _project, "webxr": _webxr, "openxr": _openxr, "mixamo": _mixamo, "rigify": _rigify,
-           "mano": _mano}
+#: scheme name -> function() -> (canonical joint -> candidate normalised names, palm bones' normalised names)
+SCHEMES = {"s2h": _project, "webxr": _webxr, "openxr": _openxr, "mixamo": _mixamo, "unity": _unity,
+           "unreal": _unreal, "rigify": _rigify, "mano": _mano}
 
 
 @dataclass
 class RigMapping:
-    """Rig bone name of each canonical joint; tips absent from the rig are missing from ``joints``."""
+    """Rig bone name of each canonical joint; tips absent from the rig are missing from ``joints``.
+
+    ``side`` is the hand the bones belong to, ``side_from`` how that was decided (names, geometry,
+    the user); ``confidence`` in [0, 1] how sure the recognition is (1 for names that all matched)."""
 
     scheme: str
     joints: dict[str, str]  # canonical joint name -> rig bone name
     palm_bones: list[str] = field(default_factory=list)  # rig bones whose skin weights go to the wrist
+    side: str = "right"
+    side_from: str = "names"
+    confidence: float = 1.0
+    notes: list[str] = field(default_factory=list)
 
     @property
     def missing_tips(self) -> list[str]:
         return [topo.JOINT_NAMES[t] for t in topo.TIP_JOINTS if topo.JOINT_NAMES[t] not in self.joints]
 
+    @property
+    def missing(self) -> list[str]:
+        """Required (non-tip) canonical joints the mapping lacks."""
+        return [n for j, n in enumerate(topo.JOINT_NAMES) if j not in topo.TIP_JOINTS and n not in self.joints]
 
-def _match(candidates: dict[str, list[str]], palm: list[str], rig_names: list[str], scheme: str) -> RigMapping:
-    by_normal = {}
+
+def sides_named(rig_names: list[str]) -> set[str]:
+    """The sides the rig's bone names mark (empty when none does)."""
+    return {s for s in (split_side(n)[1] for n in rig_names) if s}
+
+
+def _match(scheme: str, rig_names: list[str], side: str | None) -> RigMapping:
+    """Bones of ``side`` (or carrying no side) whose names fit ``scheme``; a side-marked bone wins."""
+    candidates, palm = SCHEMES[scheme]()
+    side_specific: dict[str, str] = {}
+    sideless: dict[str, str] = {}
     for name in rig_names:
-        by_normal.setdefault(normalise_name(name), name)
+        base, name_side = split_side(name)
+        if name_side == side:
+            side_specific.setdefault(base, name)
+        elif name_side is None:
+            sideless.setdefault(base, name)
+    by_base = {**sideless, **side_specific}
     joints = {}
     for joint, options in candidates.items():
-        for option in options:
-            if normalise_name(option) in by_normal:
-                joints[joint] = by_normal[normalise_name(option)]
-                break
-    palm_bones = [by_normal[normalise_name(p)] for p in palm if normalise_name(p) in by_normal]
-    return RigMapping(scheme, joints, palm_bones)
+        found = next((by_base[o] for o in options if o in by_base), None)
+        if found is not None:
+            joints[joint] = found
+    palm_bones = [by_base[p] for p in palm if p in by_base]
+    return RigMapping(scheme, joints, palm_bones, side or "right")
 
 
-def _missing(mapping: RigMapping) -> list[str]:
-    required = [n for j, n in enumerate(topo.JOINT_NAMES) if j not in topo.TIP_JOINTS]
-    return [n for n in required if n not in mapping.joints]
-
-
-def _describe_missing(missing: list[str]) -> str:
+def describe_missing(missing: list[str]) -> str:
     absent_fingers = [f for f in topo.FINGERS if all(f"{f}_{lv}" in missing for lv in topo.FINGER_LEVELS[f][:3])]
     text = f"missing {', '.join(missing)}"
     if absent_fingers:
@@ -148,35 +206,53 @@ def load_user_mapping(path: str | Path) -> dict[str, str]:
     unknown = sorted(set(document) - set(topo.JOINT_NAMES))
     if unknown:
         raise InputFileError(path, f"unknown joint names {', '.join(unknown)}; use {', '.join(topo.JOINT_NAMES)}")
+    empty = [joint for joint, bone in document.items() if not bone.strip()]
+    if empty:
+        raise InputFileError(path, f"joint map leaves {', '.join(empty)} empty: write the rig's bone name for each "
+                                   f"(or remove an unknown tip)")
     return document
 
 
-def map_rig(rig_names: list[str], source: str | Path, side: str = "right", scheme: str | None = None,
+def map_user(rig_names: list[str], source: str | Path, user_map: dict[str, str], side: str) -> RigMapping:
+    """The mapping a user's joint map gives; an `InputFileError` for bones the rig lacks or joints left out."""
+    present = set(rig_names)
+    absent = [bone for bone in user_map.values() if bone not in present]
+    if absent:
+        raise InputFileError(source, f"joint map names bones the rig does not have: {', '.join(absent)}")
+    mapping = RigMapping("user", dict(user_map), [], side, "user")
+    if mapping.missing:
+        raise InputFileError(source, f"the joint map does not name {', '.join(mapping.missing)}")
+    return mapping
+
+
+def map_rig(rig_names: list[str], source: str | Path, side: str | None = "right", scheme: str | None = None,
             user_map: dict[str, str] | None = None) -> RigMapping:
-    """Map a rig's bone names onto the 21-joint topology.
+    """Map a rig's bone names onto the 21-joint topology by names alone.
 
     ``scheme`` None tries every built-in scheme and keeps the one matching most joints; ``user_map``
-    overrides everything. Raises `InputFileError` naming ``source`` and the missing joints.
+    overrides everything. ``side`` None takes the side the names mark (right when both are there).
+    Raises `InputFileError` naming ``source`` and what is missing.
     """
-    if side not in SIDES:
+    if side is not None and side not in SIDES:
         raise ValueError(f"side must be one of {SIDES}, not {side!r}")
+    named = sides_named(rig_names)
+    chosen = side or ("right" if "right" in named or not named else "left")
     if user_map is not None:
-        candidates = {joint: [bone] for joint, bone in user_map.items()}
-        mapping = _match(candidates, [], rig_names, "user")
-        absent = [bone for joint, bone in user_map.items() if joint not in mapping.joints]
-        if absent:
-            raise InputFileError(source, f"joint map names bones the rig does not have: {', '.join(absent)}")
-    else:
-        if scheme is not None and scheme not in SCHEMES:
-            raise ValueError(f"unknown rig scheme {scheme!r}; choose from {', '.join(SCHEMES)}")
-        tried = [_match(*SCHEMES[s](side), rig_names, s) for s in ([scheme] if scheme else SCHEMES)]
-        mapping = max(tried, key=lambda m: len(m.joints))
-        if not mapping.joints:
-            raise InputFileError(source, f"no {side} hand joints found among the rig's {len(rig_names)} bones "
-                                         f"(known schemes: {', '.join(SCHEMES)}; pass a JSON joint map for "
-                                         f"others)")
-    missing = _missing(mapping)
-    if missing:
-        raise InputFileError(source, f"cannot map the {side} hand ({mapping.scheme} names): "
-                                     f"{_describe_missing(missing)}")
+        return map_user(rig_names, source, user_map, chosen)
+    mapping = best_name_match(rig_names, chosen, scheme)
+    if not mapping.joints:
+        raise InputFileError(source, f"no {chosen} hand joints found among the rig's {len(rig_names)} bones "
+                                     f"(known schemes: {', '.join(SCHEMES)}; pass a JSON joint map for others)")
+    if mapping.missing:
+        raise InputFileError(source, f"cannot map the {chosen} hand ({mapping.scheme} names): "
+                                     f"{describe_missing(mapping.missing)}")
+    mapping.side_from = "names" if chosen in named else ("user" if side else "default")
     return mapping
+
+
+def best_name_match(rig_names: list[str], side: str, scheme: str | None = None) -> RigMapping:
+    """The built-in scheme (or ``scheme``) whose names match most of the rig's bones on ``side``."""
+    if scheme is not None and scheme not in SCHEMES:
+        raise ValueError(f"unknown rig scheme {scheme!r}; choose from {', '.join(SCHEMES)}")
+    tried = [_match(s, rig_names, side) for s in ([scheme] if scheme else SCHEMES)]
+    return max(tried, key=lambda m: (len(m.joints) - len(m.missing_tips), len(m.joints)))

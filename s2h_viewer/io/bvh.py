@@ -20,10 +20,9 @@ from s2h_viewer.errors import InputFileError, reading, require_readable_file
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
-from s2h_viewer.hand.rig_mapping import map_rig
 from s2h_viewer.io.atomic import atomic_path
 from s2h_viewer.hand.mirror import reflection
-from s2h_viewer.io.rig import (MIRROR_NORMAL, RigSkeleton, build_hand, motion_from_world_rotations,
+from s2h_viewer.io.rig import (MIRROR_NORMAL, RigSkeleton, build_hand, motion_from_world_rotations, recognise,
                                world_rotations_from_motion)
 
 WRITE_ORDER = "ZXY"
@@ -163,18 +162,27 @@ def _local_rotations(clip: BvhClip) -> np.ndarray:
     return out
 
 
-def _world(clip: BvhClip, local: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Rest world positions (N, 3) and world rotations over time (T, N, 3, 3)."""
-    rest = np.zeros((len(clip.names), 3))
+def _world(clip: BvhClip, local: np.ndarray) -> np.ndarray:
+    """(T, N, 3, 3) world rotations over time (from rest: BVH rest frames are the world axes)."""
     world = local.copy()
     for j, p in enumerate(clip.parents):  # BVH lists parents before children
         if p >= 0:
-            rest[j] = rest[p] + clip.offsets[j]
             world[:, j] = world[:, p] @ local[:, j]
-    return rest, world
+    return world
 
 
-def load_bvh(path: str | Path, side: str = "right", scheme: str | None = None,
+def bvh_skeleton(clip: BvhClip) -> RigSkeleton:
+    """The clip's skeleton at rest: BVH rest frames are the world axes, so only positions vary."""
+    rest = np.zeros((len(clip.names), 3))
+    for j, p in enumerate(clip.parents):  # BVH lists parents before children
+        if p >= 0:
+            rest[j] = rest[p] + clip.offsets[j]
+    matrices = np.tile(np.eye(4), (len(clip.names), 1, 1))
+    matrices[:, :3, 3] = rest
+    return RigSkeleton(clip.names, matrices, clip.parents)
+
+
+def load_bvh(path: str | Path, side: str | None = None, scheme: str | None = None,
              joint_map: dict[str, str] | None = None, name: str | None = None) -> tuple[HandModel, Motion]:
     """The hand skeleton of a BVH file and its finger motion (a hand alone or one hand of a body)."""
     path = Path(path)
@@ -182,17 +190,16 @@ def load_bvh(path: str | Path, side: str = "right", scheme: str | None = None,
         return _load_bvh(path, read_bvh(path), side, scheme, joint_map, name)
 
 
-def _load_bvh(path: Path, clip: BvhClip, side: str, scheme: str | None, joint_map: dict[str, str] | None,
+def _load_bvh(path: Path, clip: BvhClip, side: str | None, scheme: str | None, joint_map: dict[str, str] | None,
               name: str | None) -> tuple[HandModel, Motion]:
-    mapping = map_rig(clip.names, path, side, scheme, joint_map)
+    world = _world(clip, _local_rotations(clip))
+    skeleton = bvh_skeleton(clip)
+    mapping = recognise(skeleton, path, side, scheme, joint_map)
     for tip in mapping.missing_tips:  # a finger's End Site is its tip
         end_site = f"{mapping.joints[topo.JOINT_NAMES[topo.joint_index(tip) - 1]]}_end"
         if end_site in clip.names:
             mapping.joints[tip] = end_site
-    rest, world = _world(clip, _local_rotations(clip))
-    matrices = np.tile(np.eye(4), (len(clip.names), 1, 1))
-    matrices[:, :3, 3] = rest
-    hand = build_hand(path, RigSkeleton(clip.names, matrices, clip.parents), mapping, None, side, name)
+    hand = build_hand(path, skeleton, mapping, None, name)
     lookup = {n: i for i, n in enumerate(clip.names)}
     rotating = [lookup[mapping.joints[topo.JOINT_NAMES[j]]] for j in topo.ROTATING_JOINTS]
     fps = 1.0 / clip.frame_time
@@ -202,8 +209,13 @@ def _load_bvh(path: Path, clip: BvhClip, side: str, scheme: str | None, joint_ma
 
 
 def save_bvh(path: str | Path, motion: Motion, hand: HandModel) -> Path:
-    """Write ``motion`` on ``hand`` as BVH (centimetres, the wrist as root), atomically."""
+    """Write ``motion`` on ``hand`` as BVH, atomically: with the rig's own bone names, hierarchy (under the
+    wrist) and rest offsets (file units) when the hand was read from a rig file, so it re-imports onto the
+    avatar; else with the project's joint names (centimetres, the wrist as root)."""
     path = Path(path)
+    if "rig_joints" in hand.meta and Path(hand.source).exists():
+        from s2h_viewer.io.files import read_rig_skeleton
+        return _save_rig_bvh(path, motion, hand, read_rig_skeleton(hand.source))
     rotations = world_rotations_from_motion(hand, motion)  # (T, 16, 3, 3) the rig's frames over time
     rig, positions = hand.rig_frames, hand.rest_positions * 100.0
     if hand.meta.get("side") == "left":  # written as the left hand it was loaded from
@@ -248,3 +260,82 @@ def save_bvh(path: str | Path, motion: Motion, hand: HandModel) -> Path:
         tmp.write_text("\n".join(lines) + "\n")
     return path
 
+
+
+def _rig_tree(skeleton: RigSkeleton, hand: HandModel) -> tuple[list[int], np.ndarray]:
+    """The bones to write (the wrist, everything under it, the mapped and palm bones) parents first, and
+    each one's parent among them (-1 for the wrist). A bone whose file parent is outside (a flat
+    hierarchy, as in WebXR) hangs from its finger's previous joint, a palm bone from the wrist."""
+    lookup = {n: i for i, n in enumerate(skeleton.names)}
+    joints = hand.meta["rig_joints"]
+    wrist = lookup[joints["wrist"]]
+    chosen = {wrist} | {lookup[b] for b in joints.values()} | {lookup[b] for b in hand.meta.get("palm_bones", [])}
+    for bone in range(len(skeleton.names)):
+        node = skeleton.parents[bone]
+        while node >= 0 and node != wrist:
+            node = skeleton.parents[node]
+        if node == wrist:
+            chosen.add(bone)
+    canonical_parent = {lookup[b]: lookup[joints[topo.JOINT_NAMES[topo.PARENTS[topo.joint_index(j)]]]]
+                        for j, b in joints.items() if j != "wrist"}
+    parent = np.full(len(skeleton.names), -1)
+    for bone in chosen - {wrist}:
+        node = skeleton.parents[bone]
+        while node >= 0 and node not in chosen:
+            node = skeleton.parents[node]
+        parent[bone] = node if node >= 0 else canonical_parent.get(bone, wrist)
+    order, placed = [wrist], {wrist}
+    while len(order) < len(chosen):
+        for bone in sorted(chosen - placed):
+            if parent[bone] in placed:
+                order.append(bone)
+                placed.add(bone)
+    return order, parent
+
+
+def _save_rig_bvh(path: Path, motion: Motion, hand: HandModel, skeleton: RigSkeleton) -> Path:
+    """BVH of ``motion`` on the rig ``skeleton`` the hand was read from (see `save_bvh`)."""
+    from s2h_viewer.io.rig import rotation_part
+
+    order, parent = _rig_tree(skeleton, hand)
+    lookup = {n: i for i, n in enumerate(skeleton.names)}
+    rest_rot = rotation_part(skeleton.world)
+    rest_pos = skeleton.world[:, :3, 3]
+    wrist = order[0]
+    hand_rot = world_rotations_from_motion(hand, motion)  # (T, 16, 3, 3) in the rig's wrist frame
+    delta = {wrist: np.broadcast_to(np.eye(3), (motion.n_frames, 3, 3))}  # world rotation from rest, per bone
+    rotating = {lookup[hand.meta["rig_joints"][topo.JOINT_NAMES[j]]]: r for r, j in enumerate(topo.ROTATING_JOINTS)}
+    for bone in order[1:]:
+        if bone in rotating:
+            delta[bone] = rest_rot[wrist] @ hand_rot[:, rotating[bone]] @ rest_rot[bone].T
+        else:  # unmapped bones (palm, tips, twist bones) follow their parent rigidly
+            delta[bone] = delta[parent[bone]]
+    children = {b: [c for c in order if parent[c] == b] for b in order}
+    lines, data = ["HIERARCHY"], []
+
+    def write(bone: int, depth: int) -> None:
+        pad = "  " * depth
+        offset = rest_pos[bone] - (rest_pos[parent[bone]] if parent[bone] >= 0 else 0.0)
+        root = parent[bone] < 0
+        chans = (["Xposition", "Yposition", "Zposition"] if root else []) + [f"{a}rotation" for a in WRITE_ORDER]
+        lines.extend([f"{pad}{'ROOT' if root else 'JOINT'} {skeleton.names[bone]}", f"{pad}{{",
+                      f"{pad}  OFFSET {offset[0]:.9f} {offset[1]:.9f} {offset[2]:.9f}",  # file units: metres too
+                      f"{pad}  CHANNELS {len(chans)} {' '.join(chans)}"])
+        local = delta[bone] if root else delta[parent[bone]].transpose(0, 2, 1) @ delta[bone]
+        euler = Rotation.from_matrix(local).as_euler(WRITE_ORDER, degrees=True)
+        data.append(np.concatenate([np.tile(rest_pos[bone], (motion.n_frames, 1)), euler], 1) if root else euler)
+        for child in children[bone]:
+            write(child, depth + 1)
+        if not children[bone]:  # an end site half a bone beyond a leaf bone, along it
+            tail = 0.5 * offset
+            lines.extend([f"{pad}  End Site", f"{pad}  {{", f"{pad}    OFFSET {tail[0]:.9f} {tail[1]:.9f} "
+                                                          f"{tail[2]:.9f}", f"{pad}  }}"])
+        lines.append(f"{pad}}}")
+
+    write(wrist, 0)
+    values = np.concatenate(data, axis=1)
+    lines += ["MOTION", f"Frames: {motion.n_frames}", f"Frame Time: {1.0 / motion.fps:.8f}"]
+    lines += [" ".join(f"{v:.6f}" for v in row) for row in values]
+    with atomic_path(path) as tmp:
+        tmp.write_text("\n".join(lines) + "\n")
+    return path

@@ -15,11 +15,9 @@ from pathlib import Path
 import numpy as np
 
 from s2h_viewer.errors import InputFileError, reading, require_readable_file
-from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
-from s2h_viewer.hand.rig_mapping import map_rig
-from s2h_viewer.io.rig import RigMesh, RigSkeleton, build_hand, motion_from_world_rotations
+from s2h_viewer.io.rig import RigMesh, RigSkeleton, bone_indices, build_hand, motion_from_world_rotations, recognise
 
 READ_TIMEOUT_S = 300
 
@@ -53,7 +51,7 @@ def _read(path: Path, fps: float = 30.0) -> tuple[RigSkeleton, RigMesh | None, l
     return skeleton, mesh, takes
 
 
-def load_fbx_hand(path: str | Path, side: str = "right", scheme: str | None = None,
+def load_fbx_hand(path: str | Path, side: str | None = None, scheme: str | None = None,
                   joint_map: dict[str, str] | None = None, name: str | None = None) -> HandModel:
     """The hand of an FBX file (a lone hand or one hand of a character), annotated, as a right hand."""
     path = Path(path)
@@ -61,25 +59,27 @@ def load_fbx_hand(path: str | Path, side: str = "right", scheme: str | None = No
         skeleton, mesh, _ = _read(path)
         if not skeleton.names:
             raise InputFileError(path, "has no nodes (no skeleton)")
-        mapping = map_rig(skeleton.names, path, side, scheme, joint_map)
-        return build_hand(path, skeleton, mapping, mesh, side, name)
+        return build_hand(path, skeleton, recognise(skeleton, path, side, scheme, joint_map), mesh, name)
 
 
-def load_fbx_motion(path: str | Path, hand: HandModel, take: int = 0, fps: float = 30.0) -> Motion:
-    """Take ``take`` of the file, sampled at ``fps``, as finger rotations on ``hand``."""
+def list_fbx_takes(path: str | Path) -> list[str]:
+    """The names of the file's animation takes, in file order."""
+    return [name for name, _ in _read(Path(path))[2]]
+
+
+def load_fbx_motion(path: str | Path, hand: HandModel, take: str | int | None = None, fps: float = 30.0) -> Motion:
+    """Take ``take`` (name or index; the first by default) of the file, sampled at ``fps``, as finger
+    rotations on ``hand``."""
     path = Path(path)
     with reading(path, "an FBX take"):
         return _take_motion(path, hand, take, fps)
 
 
-def _take_motion(path: Path, hand: HandModel, take: int, fps: float) -> Motion:
+def _take_motion(path: Path, hand: HandModel, take: str | int | None, fps: float) -> Motion:
+    from s2h_viewer.io.gltf import pick_animation  # the one rule for picking an animation by name or index
+
     skeleton, _, takes = _read(path, fps)
-    if not takes:
-        raise InputFileError(path, "has no animation takes")
-    if not 0 <= take < len(takes):
-        raise InputFileError(path, f"has {len(takes)} takes; no take {take}")
-    mapping = map_rig(skeleton.names, path, hand.meta.get("side", "right"), hand.meta.get("rig_scheme"))
-    lookup = {n: i for i, n in enumerate(skeleton.names)}
-    rotating = [lookup[mapping.joints[topo.JOINT_NAMES[j]]] for j in topo.ROTATING_JOINTS]
-    name, world = takes[take]
+    index = pick_animation([name for name, _ in takes], take, path, "take")
+    rotating = bone_indices(skeleton.names, hand, path)
+    name, world = takes[index]
     return motion_from_world_rotations(hand, world[:, rotating], fps, path, name or path.stem)

@@ -20,16 +20,32 @@ MOTION_SUFFIXES = (".npz", ".bvh", ".glb", ".gltf", ".fbx")
 EXPORT_SUFFIXES = (".npz", ".bvh", ".glb")
 
 
+JOINT_MAP_SUFFIX = ".joints.json"
+
+
+def joint_map_sidecar(hand_file: str | Path) -> Path:
+    """``<stem>.joints.json`` beside a hand file: its own joint map, picked up like the TBS sidecar."""
+    hand_file = Path(hand_file)
+    return hand_file.with_name(f"{hand_file.stem}{JOINT_MAP_SUFFIX}")
+
+
 @dataclass(frozen=True)
 class RigOptions:
-    """How to read a rig: which hand of a character, which naming scheme, or a user joint map."""
+    """How to read a rig: which hand (None: as names or geometry say), which naming scheme, a user joint
+    map (else the file's own ``<stem>.joints.json`` if there is one), which animation or take."""
 
-    side: str = "right"
+    side: str | None = None
     scheme: str | None = None
     joint_map: str | Path | None = None
+    animation: str | int | None = None
 
-    def mapping(self) -> dict[str, str] | None:
-        return load_user_mapping(self.joint_map) if self.joint_map else None
+    def mapping(self, hand_file: str | Path | None = None) -> dict[str, str] | None:
+        """The user's joint map, else ``hand_file``'s sidecar joint map, else None (recognise the rig)."""
+        if self.joint_map:
+            return load_user_mapping(self.joint_map)
+        if hand_file is not None and joint_map_sidecar(hand_file).exists():
+            return load_user_mapping(joint_map_sidecar(hand_file))
+        return None
 
 
 def _suffix(path: Path, allowed: tuple[str, ...], what: str) -> str:
@@ -57,12 +73,12 @@ def _load_hand(path: Path, suffix: str, options: RigOptions) -> HandModel:
         return load_hand(path)
     if suffix in (".glb", ".gltf"):
         from s2h_viewer.io.gltf import load_gltf_hand
-        return load_gltf_hand(path, options.side, options.scheme, options.mapping())
+        return load_gltf_hand(path, options.side, options.scheme, options.mapping(path))
     if suffix == ".fbx":
         from s2h_viewer.io.fbx import load_fbx_hand
-        return load_fbx_hand(path, options.side, options.scheme, options.mapping())
+        return load_fbx_hand(path, options.side, options.scheme, options.mapping(path))
     from s2h_viewer.io.bvh import load_bvh
-    return load_bvh(path, options.side, options.scheme, options.mapping())[0]
+    return load_bvh(path, options.side, options.scheme, options.mapping(path))[0]
 
 
 def load_motion_file(path: str | Path, hand: HandModel | None = None, options: RigOptions = RigOptions()
@@ -82,14 +98,27 @@ def _load_motion(path: Path, suffix: str, hand: HandModel | None, options: RigOp
         return load_motion(path), hand
     if suffix == ".bvh":
         from s2h_viewer.io.bvh import load_bvh
-        rig, motion = load_bvh(path, options.side, options.scheme, options.mapping())
+        rig, motion = load_bvh(path, options.side, options.scheme, options.mapping(path))
         return motion, rig
     rig = hand or _load_hand(path, suffix, options)
     if suffix in (".glb", ".gltf"):
         from s2h_viewer.io.gltf import load_gltf_motion
-        return load_gltf_motion(path, rig), rig
+        return load_gltf_motion(path, rig, options.animation), rig
     from s2h_viewer.io.fbx import load_fbx_motion
-    return load_fbx_motion(path, rig), rig
+    return load_fbx_motion(path, rig, options.animation), rig
+
+
+def list_animations(path: str | Path) -> list[str]:
+    """Names of a motion file's animations (glTF) or takes (FBX); one unnamed clip for BVH and npz."""
+    path = Path(path)
+    suffix = _suffix(path, MOTION_SUFFIXES, "motion")
+    if suffix in (".glb", ".gltf"):
+        from s2h_viewer.io.gltf import list_gltf_animations
+        return [f"{name} ({seconds:.2f} s)" for name, seconds in list_gltf_animations(path)]
+    if suffix == ".fbx":
+        from s2h_viewer.io.fbx import list_fbx_takes
+        return list_fbx_takes(path)
+    return [path.stem]
 
 
 def save_motion_file(path: str | Path, motion: Motion, hand: HandModel) -> Path:
@@ -107,3 +136,41 @@ def save_motion_file(path: str | Path, motion: Motion, hand: HandModel) -> Path:
         return save_bvh(path, motion, hand)
     from s2h_viewer.io.gltf import save_gltf_motion
     return save_gltf_motion(path, motion, hand)
+
+
+def read_rig_skeleton(path: str | Path):
+    """The `RigSkeleton` (names, rest world matrices, parents) of a glTF, FBX or BVH rig file."""
+    path = Path(path)
+    suffix = _suffix(path, (".glb", ".gltf", ".fbx", ".bvh"), "rig")
+    from s2h_viewer.io.rig import RigSkeleton
+    if suffix in (".glb", ".gltf"):
+        from s2h_viewer.io.gltf import _Document
+        doc = _Document(path)
+        return RigSkeleton(doc.names, doc.world, doc.parents)
+    if suffix == ".fbx":
+        from s2h_viewer.io.fbx import _read
+        return _read(path)[0]
+    from s2h_viewer.io.bvh import bvh_skeleton, read_bvh
+    return bvh_skeleton(read_bvh(path))
+
+
+def recognise_file(path: str | Path, options: RigOptions = RigOptions()):
+    """The `RigMapping` of a rig file's hand (what `s2h rig` reports), without building the hand."""
+    path = Path(path)
+    from s2h_viewer.io.rig import recognise
+    if path.suffix.lower() in (".glb", ".gltf"):
+        from s2h_viewer.io.gltf import _Document, _recognise
+        return _recognise(_Document(path), options.side, options.scheme, options.mapping(path))
+    skeleton = read_rig_skeleton(path)
+    return recognise(skeleton, path, options.side, options.scheme, options.mapping(path))
+
+
+def joint_map_template(path: str | Path, side: str | None = None) -> dict[str, str]:
+    """A joint map for a rig file: every joint the names give filled in, the others left empty to edit."""
+    from s2h_viewer.hand import topology as topo
+    from s2h_viewer.hand.rig_mapping import best_name_match, sides_named
+
+    names = read_rig_skeleton(path).names
+    chosen = side or ("left" if sides_named(names) == {"left"} else "right")
+    found = best_name_match(names, chosen).joints
+    return {joint: found.get(joint, "") for joint in topo.JOINT_NAMES}

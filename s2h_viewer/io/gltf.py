@@ -20,14 +20,18 @@ from s2h_viewer.errors import InputFileError, reading, require_readable_file
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
-from s2h_viewer.hand.rig_mapping import RigMapping, map_rig
+from s2h_viewer.hand.rig_mapping import RigMapping
 from s2h_viewer.io.atomic import atomic_path
-from s2h_viewer.io.rig import (RigMesh, RigSkeleton, build_hand, motion_from_world_rotations, rotation_part,
-                               world_rotations_from_motion)
+from s2h_viewer.io.rig import (RigMesh, RigSkeleton, bone_indices, build_hand, motion_from_world_rotations,
+                               recognise, rotation_part, world_rotations_from_motion)
 
 _DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
 _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}
 GLTF_SUFFIXES = (".glb", ".gltf")
+_VRM_FINGER = {"thumb": "Thumb", "index": "Index", "middle": "Middle", "ring": "Ring", "pinky": "Little"}
+#: VRM humanoid bone suffixes of the three articulated levels: (fingers, thumb)
+VRM0_LEVELS = (("Proximal", "Intermediate", "Distal"), ("Proximal", "Intermediate", "Distal"))
+VRM1_LEVELS = (("Proximal", "Intermediate", "Distal"), ("Metacarpal", "Proximal", "Distal"))
 
 
 #: bounds on what a file may declare, checked before anything is allocated
@@ -80,9 +84,11 @@ class _Document:
         for i, node in enumerate(nodes):
             for child in node.children or []:
                 child = _index(path, child, nodes, f"node {i}'s child")
-                if self.parents[child] >= 0 or child == i:
-                    raise InputFileError(path, f"node {child} has more than one parent (not a tree)")
+                if self.parents[child] >= 0:
+                    raise InputFileError(path, f"node {self.names[child]!r} has two parents "
+                                               f"({self.names[self.parents[child]]!r}, {self.names[i]!r})")
                 self.parents[child] = i
+        self._refuse_cycles()
         self.order = self._parents_first()
         self.local = (np.stack([_local_matrix(path, i, n) for i, n in enumerate(nodes)]) if nodes
                       else np.zeros((0, 4, 4)))
@@ -90,6 +96,44 @@ class _Document:
         for i in self.order:
             if self.parents[i] >= 0:
                 self.world[i] = self.world[self.parents[i]] @ self.local[i]
+
+    def _refuse_cycles(self) -> None:
+        """Bones whose parents lead back to themselves: one clear error naming the loop."""
+        for start in range(len(self.parents)):
+            path, node = [], start
+            while node >= 0 and node not in path and len(path) <= len(self.parents):
+                path.append(node)
+                node = self.parents[node]
+            if node >= 0:
+                loop = path[path.index(node):] + [node]
+                raise InputFileError(self.path, "bones form a cycle (" + " -> ".join(self.names[n] for n in loop)
+                                     + "): a skeleton must be a tree; fix the parenting in the authoring tool")
+
+    def humanoid_map(self) -> dict[str, dict[str, str]] | None:
+        """VRM 0.x / 1.0 humanoid bones of each hand as side -> canonical joint -> node name, None if not VRM."""
+        extensions = self.gltf.extensions or {}
+        if "VRMC_vrm" in extensions:
+            bones = {k: v.get("node") for k, v in extensions["VRMC_vrm"].get("humanoid", {}).get("humanBones",
+                                                                                                  {}).items()}
+            levels = VRM1_LEVELS
+        elif "VRM" in extensions:
+            bones = {b.get("bone"): b.get("node") for b in extensions["VRM"].get("humanoid", {}).get("humanBones", [])}
+            levels = VRM0_LEVELS
+        else:
+            return None
+        out = {}
+        for side in ("right", "left"):
+            joints = {}
+            for joint, vrm_bone in [("wrist", "Hand")] + [(f"{f}_{lv}", f"{_VRM_FINGER[f]}{part}")
+                                                         for f in topo.FINGERS
+                                                         for lv, part in zip(topo.FINGER_LEVELS[f],
+                                                                             levels[f == "thumb"])]:
+                node = bones.get(f"{side}{vrm_bone}")
+                if isinstance(node, int) and 0 <= node < len(self.names):
+                    joints[joint] = self.names[node]
+            if "wrist" in joints:
+                out[side] = joints
+        return out or None
 
     def _parents_first(self) -> list[int]:
         """Nodes ordered parents first; an `InputFileError` if the hierarchy has a cycle."""
@@ -229,22 +273,50 @@ def _skinned_mesh(doc: _Document) -> RigMesh | None:
                    np.concatenate([p[2] for p in parts]), np.concatenate([p[3] for p in parts]))
 
 
-def _map(doc: _Document, side: str, scheme: str | None, joint_map: dict[str, str] | None) -> RigMapping:
+def _recognise(doc: _Document, side: str | None, scheme: str | None, joint_map: dict[str, str] | None) -> RigMapping:
     if not doc.gltf.nodes:
         raise InputFileError(doc.path, "has no nodes (no skeleton)")
-    return map_rig(doc.names, doc.path, side, scheme, joint_map)
+    return recognise(RigSkeleton(doc.names, doc.world, doc.parents), doc.path, side, scheme, joint_map,
+                     doc.humanoid_map() if joint_map is None and scheme is None else None)
 
 
-def load_gltf_hand(path: str | Path, side: str = "right", scheme: str | None = None,
+def load_gltf_hand(path: str | Path, side: str | None = None, scheme: str | None = None,
                    joint_map: dict[str, str] | None = None, name: str | None = None) -> HandModel:
-    """The hand of a glTF/GLB file (a lone hand or one hand of a character), annotated, as a right hand."""
+    """The hand of a glTF/GLB file (a lone hand or one hand of a character), annotated, as a right hand.
+    ``side`` None: the side the names say, else the one geometry says (see `rig_recognition`)."""
     with reading(path, "a glTF hand"):
         doc = _Document(Path(path))
-        mapping = _map(doc, side, scheme, joint_map)
+        mapping = _recognise(doc, side, scheme, joint_map)
         skeleton = RigSkeleton(doc.names, doc.world, doc.parents)
-        return build_hand(doc.path, skeleton, mapping, _skinned_mesh(doc), side, name)
+        return build_hand(doc.path, skeleton, mapping, _skinned_mesh(doc), name)
 
 
+def list_gltf_animations(path: str | Path) -> list[tuple[str, float]]:
+    """(name, duration in seconds) of each animation of the file, in file order."""
+    with reading(path, "a glTF file's animations"):
+        doc = _Document(Path(path))
+        out = []
+        for i, anim in enumerate(doc.gltf.animations or []):
+            ends = [float(_rotation_track(doc, anim, c, f"animation {i} channel {k}")[0][-1])
+                    for k, c in enumerate(anim.channels or []) if c.target is not None and c.target.path == "rotation"]
+            out.append((anim.name or f"animation {i}", max(ends, default=0.0)))
+        return out
+
+
+def pick_animation(names: list[str], wanted: str | int | None, path: Path, what: str = "animation") -> int:
+    """Index of ``wanted`` (a name, or an index as int or digits) among ``names``; clear error if absent."""
+    if not names:
+        raise InputFileError(path, f"has no {what}s")
+    if wanted is None:
+        return 0
+    if isinstance(wanted, int) or str(wanted).isdigit():
+        index = int(wanted)
+        if not 0 <= index < len(names):
+            raise InputFileError(path, f"has {len(names)} {what}s (0-{len(names) - 1}); no {what} {index}")
+        return index
+    if wanted in names:
+        return names.index(wanted)
+    raise InputFileError(path, f"has no {what} named {wanted!r}; it has {', '.join(repr(n) for n in names)}")
 def _rotation_track(doc: _Document, anim, channel, label: str) -> tuple[np.ndarray, np.ndarray]:
     """(times, xyzw) of a rotation channel: times finite and strictly increasing, quaternions non-zero."""
     path = doc.path
@@ -266,23 +338,19 @@ def _rotation_track(doc: _Document, anim, channel, label: str) -> tuple[np.ndarr
     return times, values
 
 
-def load_gltf_motion(path: str | Path, hand: HandModel, animation: int = 0, fps: float = 30.0) -> Motion:
-    """Animation ``animation`` of the file, resampled at ``fps``, as finger rotations on ``hand``
-    (a hand loaded from the same rig, or any rig with the same bone names)."""
+def load_gltf_motion(path: str | Path, hand: HandModel, animation: str | int | None = None, fps: float = 30.0
+                     ) -> Motion:
+    """Animation ``animation`` (name or index; the first by default) of the file, resampled at ``fps``, as
+    finger rotations on ``hand`` (a hand loaded from the same rig, or any rig with the same bone names)."""
     with reading(path, "a glTF animation"):
         return _load_motion(_Document(Path(path)), hand, animation, fps)
 
 
-def _load_motion(doc: _Document, hand: HandModel, animation: int, fps: float) -> Motion:
+def _load_motion(doc: _Document, hand: HandModel, animation: str | int | None, fps: float) -> Motion:
     animations = doc.gltf.animations or []
-    if not animations:
-        raise InputFileError(doc.path, "has no animations")
-    if not 0 <= animation < len(animations):
-        raise InputFileError(doc.path, f"has {len(animations)} animations; no animation {animation}")
+    animation = pick_animation([a.name or f"animation {i}" for i, a in enumerate(animations)], animation, doc.path)
     anim = animations[animation]
-    mapping = _map(doc, hand.meta.get("side", "right"), hand.meta.get("rig_scheme"), None)
-    lookup = {n: i for i, n in enumerate(doc.names)}
-    rotating = [lookup[mapping.joints[topo.JOINT_NAMES[j]]] for j in topo.ROTATING_JOINTS]
+    rotating = bone_indices(doc.names, hand, doc.path)
     needed = sorted({a for r in rotating for a in _ancestors(doc, r)})  # the bones whose rotations matter
     tracks = {}
     end = 0.0

@@ -24,6 +24,7 @@ from s2h_viewer.hand.mirror import mirror_hand, reflection
 from s2h_viewer.hand.model import HandModel, SkinnedMesh
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.hand.rig_mapping import RigMapping
+from s2h_viewer.hand.rig_recognition import Skeleton, recognise_rig
 from s2h_viewer.io.annotation import load_annotation
 
 #: a tip missing from the rig is put this far beyond its DIP, as a fraction of the DIP bone
@@ -63,6 +64,25 @@ def rotation_part(matrices: np.ndarray) -> np.ndarray:
     return r
 
 
+def recognise(skeleton: RigSkeleton, source: str | Path, side: str | None = None, scheme: str | None = None,
+              joint_map: dict[str, str] | None = None, humanoid: dict[str, dict[str, str]] | None = None
+              ) -> RigMapping:
+    """The hand of a rig read from any format (see `rig_recognition.recognise_rig`)."""
+    return recognise_rig(Skeleton(skeleton.names, skeleton.parents, skeleton.world[:, :3, 3]), source, side, scheme,
+                         joint_map, humanoid)
+
+
+def bone_indices(names: list[str], hand: HandModel, source: str | Path) -> list[int]:
+    """Index in ``names`` of the hand's 16 rotating bones (by the names the hand was loaded with)."""
+    lookup = {n: i for i, n in enumerate(names)}
+    bones = [hand.meta["rig_joints"][topo.JOINT_NAMES[j]] for j in topo.ROTATING_JOINTS]
+    absent = [b for b in bones if b not in lookup]
+    if absent:
+        raise InputFileError(source, f"has no bones {', '.join(absent)} of the hand {hand.name!r} "
+                                     f"(loaded from {hand.source})")
+    return [lookup[b] for b in bones]
+
+
 def _bone_index(skeleton: RigSkeleton, mapping: RigMapping) -> np.ndarray:
     """(21,) skeleton index of each canonical joint, -1 for a tip the rig lacks."""
     lookup = {n: i for i, n in enumerate(skeleton.names)}
@@ -84,9 +104,10 @@ def _hand_space(skeleton: RigSkeleton, index: np.ndarray, source: Path) -> tuple
 
 
 def build_hand(source: str | Path, skeleton: RigSkeleton, mapping: RigMapping, mesh: RigMesh | None,
-               side: str = "right", name: str | None = None) -> HandModel:
+               name: str | None = None) -> HandModel:
     """The `HandModel` of a mapped rig, annotated (sidecar, solver or palm plane) and mirrored if left."""
     source = Path(source)
+    side = mapping.side
     index = _bone_index(skeleton, mapping)
     wrist_rot, wrist_origin, to_metres = _hand_space(skeleton, index, source)
     positions = np.zeros((topo.N_JOINTS, 3))
@@ -107,7 +128,9 @@ def build_hand(source: str | Path, skeleton: RigSkeleton, mapping: RigMapping, m
         hand = HandModel(name=name or source.stem, offsets=offsets, rest_frames=palm_plane_frames(positions),
                          rig_frames=rig_frames, radii=np.full(topo.N_JOINTS, 0.01), mesh=skinned,
                          source=str(source),
-                         meta={"side": side, "rig_scheme": mapping.scheme, "rig_joints": mapping.joints,
+                         meta={"side": side, "side_from": mapping.side_from, "rig_scheme": mapping.scheme,
+                               "rig_joints": mapping.joints, "rig_confidence": mapping.confidence,
+                               "rig_notes": mapping.notes, "palm_bones": mapping.palm_bones,
                                "extrapolated_tips": mapping.missing_tips, "to_metres": to_metres})
         if side == "left":
             hand = mirror_hand(hand, MIRROR_NORMAL)
@@ -151,13 +174,19 @@ def _hand_mesh(mesh: RigMesh, skeleton: RigSkeleton, mapping: RigMapping, index:
     column = np.full(len(skeleton.names) + 1, -1)  # skeleton bone -> rotating column; -1 not the hand
     column[index[0]] = 0
     lookup = {n: i for i, n in enumerate(skeleton.names)}
-    for bone in mapping.palm_bones:
+    for bone in mapping.palm_bones:  # named palm bones (also where the hierarchy is flat, as in WebXR)
         column[lookup[bone]] = 0
     for r, joint in enumerate(topo.ROTATING_JOINTS):
         column[index[joint]] = r
     for tip in topo.TIP_JOINTS:  # the tip bone's skin moves with the DIP
         if index[tip] >= 0:
             column[index[tip]] = column[index[tip - 1]]
+    for bone in range(len(skeleton.names)):  # any other bone under the wrist (palm, metacarpal, twist, nail
+        node = bone                            # bones) moves with its nearest mapped ancestor
+        while column[bone] < 0 and node >= 0:
+            node = skeleton.parents[node]
+            if node >= 0 and column[node] >= 0:
+                column[bone] = column[node]
     cols = column[mesh.bone_index]
     weights = np.zeros((len(mesh.vertices), topo.N_ROTATING))
     on_hand = cols >= 0
