@@ -5,7 +5,7 @@ Schema (version 1)::
     {"schema": "s2h-tbs-annotation", "version": 1,
      "hand_file": "right.glb", "hand_sha256": "<hex digest of the hand file>",
      "joints": {"thumb_cmc": {"frame": [[...], [...], [...]], "set_by": "solver" | "manual",
-                              "confidence": 0.9}, ... 15 joints},
+                              "confidence": 0.9 | null (not scored)}, ... 15 joints},
      "diagnostics": ["..."]}
 
 ``frame`` rows are the hand-space matrix rows (columns twist, bend, splay). The hash ties the
@@ -33,7 +33,7 @@ SET_BY = ("solver", "manual")
 
 @dataclass
 class Annotation:
-    """Per articulated joint (15): frame, who set it, and the solver's confidence (1 for manual)."""
+    """Per articulated joint (15): frame, who set it, and the solver's confidence (NaN: never scored)."""
 
     frames: np.ndarray  # (15, 3, 3)
     set_by: list[str]
@@ -50,11 +50,16 @@ def file_sha256(path: str | Path) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
+def _confidence_json(confidence: float) -> float | None:
+    """A confidence as JSON: null for a frame nobody scored (NaN is not JSON)."""
+    return round(float(confidence), 4) if np.isfinite(confidence) else None
+
+
 def save_annotation(annotation: Annotation, hand_file: str | Path) -> Path:
     """Write the sidecar of ``hand_file`` atomically; returns its path."""
     hand_file = Path(hand_file)
     joints = {name: {"frame": np.round(annotation.frames[a], 8).tolist(), "set_by": annotation.set_by[a],
-                     "confidence": round(float(annotation.confidence[a]), 4)}
+                     "confidence": _confidence_json(annotation.confidence[a])}
               for a, name in enumerate(topo.ARTICULATED_NAMES)}
     document = {"schema": SCHEMA, "version": VERSION, "hand_file": hand_file.name,
                 "hand_sha256": file_sha256(hand_file), "joints": joints, "diagnostics": annotation.diagnostics}
@@ -89,7 +94,8 @@ def load_annotation(hand_file: str | Path) -> Annotation | None:
     try:
         frames = np.array([joints[n]["frame"] for n in topo.ARTICULATED_NAMES], dtype=np.float64)
         set_by = [str(joints[n].get("set_by", "solver")) for n in topo.ARTICULATED_NAMES]
-        confidence = np.array([float(joints[n].get("confidence", 1.0)) for n in topo.ARTICULATED_NAMES])
+        confidence = np.array([np.nan if (c := joints[n].get("confidence", 1.0)) is None else float(c)
+                               for n in topo.ARTICULATED_NAMES])
     except (TypeError, ValueError, KeyError) as exc:
         raise InputFileError(path, f"malformed joint entry ({exc})") from None
     if frames.shape != (topo.N_ARTICULATED, 3, 3) or not np.isfinite(frames).all():
