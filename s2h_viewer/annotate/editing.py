@@ -113,5 +113,13 @@ class AnnotationSession:
         flag = "  review" if self.needs_review(joint) else ""
         return f"{topo.ARTICULATED_NAMES[joint]}: {shown} ({by}){flag}"
 
+    def restore(self, state: Annotation, frames_from: str) -> None:
+        """Go back to a state taken with `annotation` (undo and redo of a solver run)."""
+        self.frames = state.frames.copy()
+        self.set_by = list(state.set_by)
+        self.confidence = state.confidence.copy()
+        self.diagnostics = list(state.diagnostics)
+        self.frames_from = frames_from
+
     def annotation(self) -> Annotation:
         return Annotation(self.frames.copy(), list(self.set_by), self.confidence.copy(), list(self.diagnostics))

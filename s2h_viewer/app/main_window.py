@@ -34,7 +34,7 @@ class MainWindow(QMainWindow):
 
     def __init__(self, setup: CompareSetup, settings: QSettings | None = None):
         super().__init__()
-        self.setWindowTitle("s2h-viewer")
+        self.setWindowTitle("s2h-viewer[*]")
         self.settings = settings or QSettings("s2h-viewer", "s2h-viewer")
         self.runner = TaskRunner(self, self.error, self.statusBar().showMessage)
         self.compare = CompareMode(setup, self.runner, lambda text: self.statusBar().showMessage(text, 5000))
@@ -42,6 +42,7 @@ class MainWindow(QMainWindow):
                                      self)
         self.compare.comparison_ready.connect(self.comparison_ready)
         self.annotate.annotation_ready.connect(self.annotation_ready)
+        self.annotate.undo_stack.cleanChanged.connect(lambda clean: self.setWindowModified(not clean))
         self.tabs = QTabWidget()
         self.tabs.addTab(self.compare, "Compare")
         self.tabs.addTab(self.annotate.view, "Annotate")
@@ -279,7 +280,10 @@ class MainWindow(QMainWindow):
         self._ask_to_open("Open hand to annotate", "Hands (*.glb *.gltf *.fbx *.npz)", self.annotate_file)
 
     def annotate_file(self, path: str) -> None:
-        """Load a hand (its sidecar or solver frames come with it) and show it in annotation mode."""
+        """Load a hand (its sidecar or solver frames come with it) and show it in annotation mode; unsaved
+        edits of the last hand are saved or dropped first, as the user says."""
+        if not self.annotate.confirm_discard("opening another hand"):
+            return
         hand = self._load_hand(path, "annotate")
         if hand is None:
             return
@@ -307,6 +311,9 @@ class MainWindow(QMainWindow):
                 self.load_motion(path)
 
     def closeEvent(self, event) -> None:
+        if not self.annotate.confirm_discard("quitting"):
+            event.ignore()
+            return
         self.settings.setValue("window/geometry", self.saveGeometry())
         self.runner.finish()
         super().closeEvent(event)

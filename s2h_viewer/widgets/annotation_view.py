@@ -22,7 +22,7 @@ LEGEND = ("TBS frames: twist (along the bone) red, bend green, splay (out of the
 #: a click this many pixels from a joint on screen, or nearer, selects it
 PICK_PIXELS = 24
 #: the ring's radius and the arrows' length as shares of the hand's length
-RING_RADIUS = 0.075
+RING_RADIUS = 0.09
 ARROW_LENGTH = 0.12
 
 
@@ -93,7 +93,7 @@ class AnnotationView(QWidget):
             plotter.add_mesh(mesh, color=colour, pickable=False)
         self.ring.attach()
         plotter.add_text(f"{session.hand.name}: annotation", font_size=10, color="black", position="upper_left")
-        plotter.view_vector((0.15, 0.45, -0.85), viewup=(1.0, 0.0, 0.0))
+        plotter.view_vector((0.5, 0.35, -0.8), viewup=(1.0, 0.0, 0.0))
         plotter.reset_camera()
         self.refresh_list()
         self.refresh()
