@@ -42,7 +42,7 @@ class MainWindow(QMainWindow):
                                      self)
         self.compare.comparison_ready.connect(self.comparison_ready)
         self.annotate.annotation_ready.connect(self.annotation_ready)
-        self.annotate.undo_stack.cleanChanged.connect(lambda clean: self.setWindowModified(not clean))
+        self.annotate.undo_stack.cleanChanged.connect(self._show_unsaved)  # a method: gone with the window
         self.tabs = QTabWidget()
         self.tabs.addTab(self.compare, "Compare")
         self.tabs.addTab(self.annotate.view, "Annotate")
@@ -54,6 +54,10 @@ class MainWindow(QMainWindow):
             self.restoreGeometry(geometry)
         else:
             self.resize(1400, 900)
+
+    def _show_unsaved(self, clean: bool) -> None:
+        """A '*' in the title while the annotation has edits not saved."""
+        self.setWindowModified(not clean)
 
     # --- the modes' parts, under the names scripts and tests use ---
     @property
