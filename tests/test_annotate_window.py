@@ -237,3 +237,39 @@ def test_unsaved_edits_are_asked_about_before_another_hand_or_quitting(window, q
     window.annotate_file(iris)
     assert len(asked) == 4 and window.annotation.hand.name == "iris"
     assert (tmp_path / "hand.tbs.json").read_text() == saved  # discarded, not written
+
+
+def test_an_edge_on_ring_rolls_under_the_pointer(window, qtbot, hand_file):
+    window.annotate_file(str(hand_file))
+    view = window.annotate_view
+    joint = 7  # middle_pip
+    view.select(joint)
+    frame = to_view(window.annotation.hand, window.annotation.frames[joint].T).T
+    centre = view.joint_centres()[joint]
+    camera = view.interactor.camera  # looking across the bone: the ring is seen edge-on
+    distance = camera.distance
+    camera.focal_point = centre
+    camera.position = centre + distance * frame[:, 2]
+    camera.up = frame[:, 0]
+    view.interactor.render()
+    settle()
+    towards_viewer = -np.array(camera.GetDirectionOfProjection())
+    assert abs(np.dot(frame[:, 0], towards_viewer)) < 0.05
+    radius = RING_RADIUS * window.annotation.hand.hand_length
+    front = centre + radius * frame[:, 2]  # the ring's point nearest the camera
+    before = window.annotation.frames[joint].copy()
+    press = widget_point(view, front)
+    side = widget_point(view, centre + radius * frame[:, 1]) - widget_point(view, centre)
+    step = np.array([side.x(), side.y()], float)
+    step = 12 * step / np.linalg.norm(step)  # 12 pixels along the ring's line on screen
+    target = QPoint(round(press.x() + step[0]), round(press.y() + step[1]))
+    QTest.mousePress(view.interactor, Qt.MouseButton.LeftButton, pos=press)
+    assert view.ring.dragging
+    QTest.mouseMove(view.interactor, target)
+    QTest.mouseRelease(view.interactor, Qt.MouseButton.LeftButton, pos=target)
+    angle = np.radians(turn_angle(before, window.annotation.frames[joint]))
+    assert abs(angle) > np.radians(5)
+    # the grabbed point, turned with the frame, is under the pointer again (within 2 pixels)
+    turned = centre + radius * (np.cos(angle) * frame[:, 2] - np.sin(angle) * frame[:, 1])
+    moved = widget_point(view, turned)
+    assert (moved - target).manhattanLength() <= 3
