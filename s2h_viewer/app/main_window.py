@@ -24,8 +24,10 @@ RECENT_FILES = 8
 SHORTCUTS = (("Space", "play / pause"), ("Left / Right", "previous / next frame"), ("Home / End", "first / last frame"),
              ("Ctrl+O", "open a motion"), ("Ctrl+T", "add a target hand"), ("Ctrl+S", "export a screenshot"),
              ("Ctrl+E", "export a video"), ("Ctrl+Shift+O", "open a hand to annotate"), ("Ctrl+R", "run the TBS solver"),
-             ("Ctrl+Shift+S", "save the annotation sidecar"), ("Ctrl+Z / Ctrl+Shift+Z", "undo / redo a frame turn"),
-             ("click a joint / the list", "select it; drag the dial to turn its frame about the twist axis"))
+             ("Ctrl+Shift+S", "save the annotation sidecar"),
+             ("Ctrl+Z / Ctrl+Shift+Z", "undo / redo a frame turn or a solver run"),
+             ("click a joint in 3D / the list", "select it"),
+             ("drag the ring in 3D / the dial", "turn the selected joint's frame about its twist axis"))
 
 
 class MainWindow(QMainWindow):

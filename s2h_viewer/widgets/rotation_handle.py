@@ -1,8 +1,9 @@
 """A rotation handle in a 3D view, as in a DCC tool: a ring about one joint's twist axis. The left
 mouse grabs the ring (it lights up under the pointer) and turns it; the point under the pointer
 stays on the ring while the plane faces the camera, and the grabbed point of a ring seen edge-on
-follows the pointer along its path on screen, like a wheel seen from the side. A left click that grabs nothing and does not move is
-reported as a click (the view picks a joint with it); any other press goes on to the camera.
+follows the pointer along its path on screen, like a wheel seen from the side. A left click that
+grabs nothing and does not move is reported as a click (the view picks a joint with it); any other
+press goes on to the camera.
 
 The mouse is read from the 3D widget's Qt events, ahead of VTK: once VTK's camera style takes a press it
 holds the mouse until the release, so VTK observers never hear how a click ended."""
