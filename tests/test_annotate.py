@@ -106,3 +106,52 @@ def test_damaged_sidecars_give_clear_errors(sample_hands, tmp_path, edit, messag
     path.write_text("{not json")
     with pytest.raises(InputFileError, match=r"h\.tbs\.json: not valid JSON"):
         load_annotation(hand_file)
+
+
+def test_a_session_opens_with_the_sidecars_set_by_and_confidence_and_keeps_manual_frames_on_request(tmp_path):
+    from s2h_viewer.annotate.editing import AnnotationSession, rotate_about_twist
+    glb = shutil.copy(ASSETS_DIR / "hands" / "webxr" / "generic-hand-right.glb", tmp_path / "hand.glb")
+    fresh = AnnotationSession.open(load_gltf_hand(glb), glb)
+    solution = solve_tbs_frames(fresh.hand)
+    assert fresh.frames_from == "solver" and fresh.set_by == ["solver"] * topo.N_ARTICULATED
+    np.testing.assert_allclose(fresh.confidence, solution.confidence)  # scored, not a blanket 1.0
+    fresh.frames[2] = rotate_about_twist(fresh.frames[2], 35.0)
+    fresh.set_by[2] = "manual"
+    fresh.confidence[5] = np.nan  # a frame nobody scored is written as null and read back as NaN
+    save_annotation(fresh.annotation(), glb)
+    assert json.loads(sidecar_path(glb).read_text())["joints"][topo.ARTICULATED_NAMES[5]]["confidence"] is None
+
+    reopened = AnnotationSession.open(load_gltf_hand(glb), glb)
+    assert reopened.frames_from == "sidecar" and reopened.set_by == fresh.set_by
+    np.testing.assert_allclose(reopened.confidence, fresh.confidence, atol=1e-4, equal_nan=True)
+    np.testing.assert_allclose(reopened.frames, fresh.frames, atol=1e-7)
+    assert "(manual)" in reopened.describe(2) and "not scored" in reopened.describe(5)
+
+    kept = reopened.frames[2].copy()
+    reopened.apply_solution(solution, keep_manual=True)
+    np.testing.assert_allclose(reopened.frames[2], kept)
+    assert reopened.manual_joints() == [2]
+    np.testing.assert_allclose(np.delete(reopened.frames, 2, 0), np.delete(solution.frames, 2, 0))
+    reopened.apply_solution(solution)
+    assert reopened.manual_joints() == [] and np.allclose(reopened.frames, solution.frames)
+
+
+def test_drag_geometry_signed_angles_rays_and_turns_past_half_a_circle():
+    from s2h_viewer.annotate.editing import ray_plane_point, ring_polyline, signed_angle_about, unwrap_degrees
+    axis = np.array([0.0, 0.0, 2.0])
+    assert signed_angle_about(axis, np.array([1.0, 0, 0]), np.array([0, 1.0, 0])) == pytest.approx(90.0)
+    assert signed_angle_about(-axis, np.array([1.0, 0, 0]), np.array([0, 1.0, 0])) == pytest.approx(-90.0)
+    centre = np.array([0.0, 0.0, 1.0])
+    hit = ray_plane_point(np.array([0.3, 0.2, 5.0]), np.array([0.0, 0.0, -1.0]), centre, axis)
+    np.testing.assert_allclose(hit, [0.3, 0.2, 1.0])
+    assert ray_plane_point(np.zeros(3), np.array([1.0, 0.0, 0.05]), centre, axis) is None  # along the plane
+    assert ray_plane_point(np.zeros(3), np.array([0.0, 0.0, -1.0]), centre, axis) is None  # away from it
+    total, last = 0.0, 0.0
+    for angle in (90.0, 170.0, -170.0, -90.0, 0.0):  # one full turn, seen as angles in (-180, 180]
+        total, last = unwrap_degrees(total, last, angle), angle
+    assert total == pytest.approx(360.0)
+    frame = np.eye(3)
+    points = ring_polyline(centre, frame, 0.5, n=8)
+    np.testing.assert_allclose(points[0], centre + [0, 0.5, 0])  # angle 0 on the bend axis
+    np.testing.assert_allclose(np.linalg.norm(points - centre, axis=1), 0.5)
+    np.testing.assert_allclose((points - centre) @ frame[:, 0], 0.0, atol=1e-12)

@@ -26,7 +26,7 @@ def window(qtbot, sample_hands, tmp_path):
     settings.setValue("compare/methods", ["tbs_copy", "asrn"])
     win = MainWindow(setup, settings)
     win.resize(1000, 700)
-    qtbot.addWidget(win)
+    qtbot.addWidget(win, before_close_func=lambda w: w.undo_stack.clear())  # closed without a "save?" question
     win.show()
     with qtbot.waitSignal(win.comparison_ready, timeout=120_000):
         win.start_comparison()
@@ -85,7 +85,7 @@ def test_annotation_mode_solve_turn_undo_save(window, qtbot, tmp_path):
     solved = session.frames[4].copy()
     arrows_before = view._arrow_meshes[2].points.copy()
     view.turn_selected(30)
-    assert session.set_by[4] == "manual" and window.undo_stack.count() == 1
+    assert session.set_by[4] == "manual" and window.undo_stack.count() == 2  # the solver run, the turn
     angle = np.degrees(np.arccos(np.clip((np.trace(solved.T @ session.frames[4]) - 1) / 2, -1, 1)))
     assert abs(angle - 30) < 1e-6
     np.testing.assert_allclose(session.frames[4][:, 0], solved[:, 0], atol=1e-12)  # twist unchanged

@@ -26,8 +26,10 @@ SHORTCUTS = (("Space", "play / pause"), ("Left / Right", "previous / next frame"
              "contact overlay"), ("Ctrl+1 / 2 / 3 / 0", "camera: palm / back / side / reset"),
              ("Ctrl+O", "open a motion"), ("Ctrl+T", "add a target hand"), ("Ctrl+S", "export a screenshot"),
              ("Ctrl+E", "export a video"), ("Ctrl+Shift+O", "open a hand to annotate"), ("Ctrl+R", "run the TBS solver"),
-             ("Ctrl+Shift+S", "save the annotation sidecar"), ("Ctrl+Z / Ctrl+Shift+Z", "undo / redo a frame turn"),
-             ("click a joint / the list", "select it; drag the dial to turn its frame about the twist axis"))
+             ("Ctrl+Shift+S", "save the annotation sidecar"),
+             ("Ctrl+Z / Ctrl+Shift+Z", "undo / redo a frame turn or a solver run"),
+             ("click a joint in 3D / the list", "select it"),
+             ("drag the ring in 3D / the dial", "turn the selected joint's frame about its twist axis"))
 
 
 class MainWindow(QMainWindow):
@@ -36,7 +38,7 @@ class MainWindow(QMainWindow):
 
     def __init__(self, setup: CompareSetup, settings: QSettings | None = None):
         super().__init__()
-        self.setWindowTitle("s2h-viewer")
+        self.setWindowTitle("s2h-viewer[*]")
         self.settings = settings or QSettings("s2h-viewer", "s2h-viewer")
         self.runner = TaskRunner(self, self.error, self.statusBar().showMessage)
         self.compare = CompareMode(setup, self.error, lambda text: self.statusBar().showMessage(text, 5000))
@@ -46,6 +48,7 @@ class MainWindow(QMainWindow):
         self.compare.comparison_ready.connect(self.comparison_ready)
         self.compare.state_changed.connect(self._state_changed)
         self.annotate.annotation_ready.connect(self.annotation_ready)
+        self.annotate.undo_stack.cleanChanged.connect(self._show_unsaved)  # a method: gone with the window
         self.tabs = QTabWidget()
         self.tabs.addTab(self.compare, "Compare")
         self.tabs.addTab(self.annotate.view, "Annotate")
@@ -57,6 +60,10 @@ class MainWindow(QMainWindow):
             self.restoreGeometry(geometry)
         else:
             self.resize(1400, 900)
+
+    def _show_unsaved(self, clean: bool) -> None:
+        """A '*' in the title while the annotation has edits not saved."""
+        self.setWindowModified(not clean)
 
     # --- the modes' parts, under the names scripts and tests use ---
     @property
@@ -318,7 +325,10 @@ class MainWindow(QMainWindow):
         self._ask_to_open("Open hand to annotate", "Hands (*.glb *.gltf *.fbx *.npz)", self.annotate_file)
 
     def annotate_file(self, path: str) -> None:
-        """Load a hand (its sidecar or solver frames come with it) and show it in annotation mode."""
+        """Load a hand (its sidecar or solver frames come with it) and show it in annotation mode; unsaved
+        edits of the last hand are saved or dropped first, as the user says."""
+        if not self.annotate.confirm_discard("opening another hand"):
+            return
         hand = self._load_hand(path, "annotate")
         if hand is None:
             return
@@ -346,6 +356,9 @@ class MainWindow(QMainWindow):
                 self.load_motion(path)
 
     def closeEvent(self, event) -> None:
+        if not self.annotate.confirm_discard("quitting"):
+            event.ignore()
+            return
         self.settings.setValue("window/geometry", self.saveGeometry())
         self.runner.finish()
         self.compare.shutdown()

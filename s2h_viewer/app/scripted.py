@@ -53,4 +53,5 @@ def scripted_window(size: tuple[int, int] = (1400, 900)) -> Iterator[MainWindow]
         try:
             yield window
         finally:
+            window.undo_stack.clear()  # a script's annotation edits are throwaway: no "save?" question
             window.close()

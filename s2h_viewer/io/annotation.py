@@ -5,7 +5,7 @@ Schema (version 1)::
     {"schema": "s2h-tbs-annotation", "version": 1,
      "hand_file": "right.glb", "hand_sha256": "<hex digest of the hand file>",
      "joints": {"thumb_cmc": {"frame": [[...], [...], [...]], "set_by": "solver" | "manual",
-                              "confidence": 0.9}, ... 15 joints},
+                              "confidence": 0.9 | null (not scored)}, ... 15 joints},
      "diagnostics": ["..."]}
 
 ``frame`` rows are the hand-space matrix rows (columns twist, bend, splay). The hash ties the
@@ -34,7 +34,7 @@ MAX_SIDECAR_BYTES = 16 * 1024 ** 2
 
 @dataclass
 class Annotation:
-    """Per articulated joint (15): frame, who set it, and the solver's confidence (1 for manual)."""
+    """Per articulated joint (15): frame, who set it, and the solver's confidence (NaN: never scored)."""
 
     frames: np.ndarray  # (15, 3, 3)
     set_by: list[str]
@@ -51,11 +51,16 @@ def file_sha256(path: str | Path) -> str:
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
 
 
+def _confidence_json(confidence: float) -> float | None:
+    """A confidence as JSON: null for a frame nobody scored (NaN is not JSON)."""
+    return round(float(confidence), 4) if np.isfinite(confidence) else None
+
+
 def save_annotation(annotation: Annotation, hand_file: str | Path) -> Path:
     """Write the sidecar of ``hand_file`` atomically; returns its path."""
     hand_file = Path(hand_file)
     joints = {name: {"frame": np.round(annotation.frames[a], 8).tolist(), "set_by": annotation.set_by[a],
-                     "confidence": round(float(annotation.confidence[a]), 4)}
+                     "confidence": _confidence_json(annotation.confidence[a])}
               for a, name in enumerate(topo.ARTICULATED_NAMES)}
     document = {"schema": SCHEMA, "version": VERSION, "hand_file": hand_file.name,
                 "hand_sha256": file_sha256(hand_file), "joints": joints, "diagnostics": annotation.diagnostics}
@@ -78,6 +83,8 @@ def _joint_entry(path: Path, name: str, entry) -> tuple[np.ndarray, str, float]:
     if set_by not in SET_BY:
         raise InputFileError(path, f"joint {name}: unknown set_by value {set_by!r}; expected solver or manual")
     confidence = entry.get("confidence", 1.0)
+    if confidence is None:  # not scored (a frame from the hand file, say)
+        return np.array(frame, dtype=np.float64), set_by, float("nan")
     if isinstance(confidence, bool) or not isinstance(confidence, (int, float)) or not 0 <= confidence <= 1:
         raise InputFileError(path, f"joint {name}: confidence {confidence!r} is not a number from 0 to 1")
     return np.array(frame, dtype=np.float64), set_by, float(confidence)

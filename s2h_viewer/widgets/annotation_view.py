@@ -1,6 +1,7 @@
 """Annotation mode's view: one hand at rest, see-through, each joint's TBS frame as three arrows
-(twist red, bend green, splay blue), a joint list with the solver's confidence, and a rotation
-handle (a dial) that turns the selected joint's frame about its twist axis while it is dragged."""
+(twist red, bend green, splay blue), a joint list with the solver's confidence, and two handles that
+turn the selected joint's frame about its twist axis while they are dragged: a ring about the joint in
+the 3D view and a dial beside it."""
 
 from __future__ import annotations
 
@@ -11,12 +12,18 @@ from PySide6.QtCore import Signal
 from PySide6.QtWidgets import QDial, QHBoxLayout, QLabel, QListWidget, QSplitter, QVBoxLayout, QWidget
 
 from s2h_viewer.annotate.editing import AnnotationSession, rotate_about_twist
-from s2h_viewer.annotate.solver import LOW_CONFIDENCE
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.render.scene import (AXIS_COLOURS, BONE_COLOUR, SKIN_COLOUR, display_hand, pose_frame, skeleton,
                                      surface, to_view)
+from s2h_viewer.widgets.rotation_handle import RotationRing
 
-LEGEND = "TBS frames: twist (along the bone) red, bend green, splay (out of the back) blue"
+LEGEND = ("TBS frames: twist (along the bone) red, bend green, splay (out of the back) blue. Drag the "
+          "selected joint's ring (or the dial) to turn its frame about the twist axis.")
+#: a click this many pixels from a joint on screen, or nearer, selects it
+PICK_PIXELS = 24
+#: the ring's radius and the arrows' length as shares of the hand's length
+RING_RADIUS = 0.09
+ARROW_LENGTH = 0.12
 
 
 def _arrows(session: AnnotationSession, axis: int, selected: int) -> pv.PolyData:
@@ -25,12 +32,12 @@ def _arrows(session: AnnotationSession, axis: int, selected: int) -> pv.PolyData
     cloud = pv.PolyData(origins)
     cloud["vectors"] = to_view(hand, session.frames[:, :, axis])
     cloud["size"] = np.where(np.arange(topo.N_ARTICULATED) == selected, 1.6, 1.0)
-    return cloud.glyph(orient="vectors", scale="size", factor=0.12 * hand.hand_length,
+    return cloud.glyph(orient="vectors", scale="size", factor=ARROW_LENGTH * hand.hand_length,
                        geom=pv.Arrow(shaft_radius=0.05, tip_radius=0.12))
 
 
 class AnnotationView(QWidget):
-    """Emits ``frame_edited(joint, frame_before, frame_after)`` when a drag of the handle ends."""
+    """Emits ``frame_edited(joint, frame_before, frame_after)`` when a drag of a handle ends."""
 
     frame_edited = Signal(int, object, object)
 
@@ -40,6 +47,7 @@ class AnnotationView(QWidget):
         self.selected = 0
         self._drag_base: np.ndarray | None = None
         self.interactor = QtInteractor(self, multi_samples=0, auto_update=False)
+        self.ring = RotationRing(self.interactor, self._begin_drag, self._turn_to, self._end_drag, self._clicked)
         self.joints = QListWidget()
         self.dial = QDial()
         self.dial.setRange(-180, 180)
@@ -61,53 +69,67 @@ class AnnotationView(QWidget):
         layout.addWidget(splitter)
         self.joints.currentRowChanged.connect(self.select)
         self.dial.sliderPressed.connect(self._begin_drag)
-        self.dial.valueChanged.connect(self._drag)
+        self.dial.valueChanged.connect(self._dial_turned)
         self.dial.sliderReleased.connect(self._end_drag)
         self._arrow_meshes: list[pv.PolyData] = []
 
     def set_session(self, session: AnnotationSession) -> None:
+        """Show a newly opened hand: its mesh, skeleton, frames and joint list replace the last hand's."""
         self.session = session
+        self.selected = 0
+        self._drag_base = None
         plotter = self.interactor
         plotter.clear()
         plotter.set_background("white")
         hand = display_hand(session.hand)
         if hand.mesh is not None:
-            plotter.add_mesh(surface(hand, to_view(hand, hand.mesh.vertices)), color=SKIN_COLOUR, opacity=0.3)
-        plotter.add_mesh(skeleton(hand, pose_frame(hand, hand.rest_tbs)), color=BONE_COLOUR, line_width=3)
+            plotter.add_mesh(surface(hand, to_view(hand, hand.mesh.vertices)), color=SKIN_COLOUR, opacity=0.3,
+                             pickable=False)
+        plotter.add_mesh(skeleton(hand, pose_frame(hand, hand.rest_tbs)), color=BONE_COLOUR, line_width=3,
+                         pickable=False)
         self._arrow_meshes = [_arrows(session, axis, self.selected) for axis in range(3)]
         for mesh, colour in zip(self._arrow_meshes, AXIS_COLOURS):
-            plotter.add_mesh(mesh, color=colour)
+            plotter.add_mesh(mesh, color=colour, pickable=False)
+        self.ring.attach()
         plotter.add_text(f"{session.hand.name}: annotation", font_size=10, color="black", position="upper_left")
-        plotter.view_vector((0.15, 0.45, -0.85), viewup=(1.0, 0.0, 0.0))
+        plotter.view_vector((0.5, 0.35, -0.8), viewup=(1.0, 0.0, 0.0))
         plotter.reset_camera()
-        plotter.enable_point_picking(self._picked, show_message=False, left_clicking=True, show_point=False,
-                                     use_picker=True)
         self.refresh_list()
-        self.select(0)
+        self.refresh()
 
-    def _picked(self, point) -> None:
-        """A click in 3D selects the nearest joint."""
-        if self.session is None or point is None:
+    def joint_centres(self) -> np.ndarray:
+        """(15, 3) the articulated joints in view space, where their frames and the ring are drawn."""
+        return to_view(self.session.hand, self.session.hand.rest_positions[topo.ARTICULATED_JOINTS])
+
+    def _clicked(self, x: int, y: int) -> None:
+        """A click in 3D (VTK display pixels) selects the joint nearest to it on screen, if one is near."""
+        if self.session is None:
             return
-        origins = to_view(self.session.hand, self.session.hand.rest_positions[topo.ARTICULATED_JOINTS])
-        self.joints.setCurrentRow(int(np.argmin(np.linalg.norm(origins - np.asarray(point), axis=1))))
+        renderer = self.interactor.renderer
+        on_screen = []
+        for point in self.joint_centres():
+            renderer.SetWorldPoint(*point, 1.0)
+            renderer.WorldToDisplay()
+            on_screen.append(renderer.GetDisplayPoint()[:2])
+        distance = np.linalg.norm(np.asarray(on_screen) - (x, y), axis=1)
+        if distance.min() <= PICK_PIXELS:
+            self.select(int(distance.argmin()))
 
     def refresh_list(self) -> None:
-        s = self.session
         self.joints.blockSignals(True)
         self.joints.clear()
-        for j, name in enumerate(topo.ARTICULATED_NAMES):
-            flag = "  review" if s.set_by[j] == "solver" and s.confidence[j] < LOW_CONFIDENCE else ""
-            self.joints.addItem(f"{name}: {s.confidence[j]:.2f} ({s.set_by[j]}){flag}")
+        self.joints.addItems([self.session.describe(j) for j in range(topo.N_ARTICULATED)])
         self.joints.setCurrentRow(self.selected)
         self.joints.blockSignals(False)
 
     def refresh(self) -> None:
-        """Redraw the arrows from the session's frames (after an edit, an undo, a solver run)."""
+        """Redraw the arrows and the ring from the session's frames (after an edit, an undo, a solver run)."""
         if self.session is None:
             return
         for mesh, axis in zip(self._arrow_meshes, range(3)):
             mesh.copy_from(_arrows(self.session, axis, self.selected))
+        view_frame = to_view(self.session.hand, self.session.frames[self.selected].T).T
+        self.ring.place(self.joint_centres()[self.selected], view_frame, RING_RADIUS * self.session.hand.hand_length)
         self.interactor.render()
 
     def select(self, joint: int) -> None:
@@ -121,8 +143,12 @@ class AnnotationView(QWidget):
     def _begin_drag(self) -> None:
         self._drag_base = self.session.frames[self.selected].copy() if self.session is not None else None
 
-    def _drag(self, degrees: int) -> None:
-        self.angle_label.setText(f"turn about twist: {degrees} deg")
+    def _dial_turned(self, degrees: int) -> None:
+        self._turn_to(float(degrees))
+
+    def _turn_to(self, degrees: float) -> None:
+        """Live: the selected frame is its frame at the grab turned by ``degrees`` about its twist axis."""
+        self.angle_label.setText(f"turn about twist: {degrees:+.0f} deg")
         if self._drag_base is None or self.session is None:
             return
         self.session.frames[self.selected] = rotate_about_twist(self._drag_base, degrees)
@@ -141,7 +167,7 @@ class AnnotationView(QWidget):
             self.frame_edited.emit(self.selected, before, after)
 
     def turn_selected(self, degrees: int) -> None:
-        """What one drag of the handle does, for keyboard users and tests: press, turn, release."""
+        """What one drag of the dial does, for keyboard users and tests: press, turn, release."""
         self.dial.sliderPressed.emit()
         self.dial.setValue(degrees)
         self.dial.sliderReleased.emit()

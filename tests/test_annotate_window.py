@@ -1,0 +1,275 @@
+"""Annotate mode in the real window (Xvfb, pytest-qt, shipped hands): a joint clicked in 3D through the
+render window, its ring dragged with the mouse and undone, a second hand opened, a sidecar reopened with
+who set each frame, and the questions before manual frames or unsaved edits are lost."""
+
+from __future__ import annotations
+
+import os
+import shutil
+
+import numpy as np
+import pytest
+
+pytest.importorskip("pytestqt")
+if not os.environ.get("DISPLAY"):
+    pytest.skip("the Qt viewport needs an X display: `make test` runs the suite under Xvfb", allow_module_level=True)
+
+from PySide6.QtCore import QPoint, QSettings, Qt, QTimer  # noqa: E402
+from PySide6.QtTest import QTest  # noqa: E402
+from PySide6.QtWidgets import QApplication, QMessageBox  # noqa: E402
+from vtkmodules.vtkRenderingCore import vtkCoordinate  # noqa: E402
+
+from s2h_viewer.annotate.editing import rotate_about_twist  # noqa: E402
+from s2h_viewer.app.main_window import CompareSetup, MainWindow  # noqa: E402
+from s2h_viewer.hand import topology as topo  # noqa: E402
+from s2h_viewer.motions.synthesis import synthesize  # noqa: E402
+from s2h_viewer.render.scene import to_view  # noqa: E402
+from s2h_viewer.samples import ASSETS_DIR  # noqa: E402
+from s2h_viewer.widgets.annotation_view import RING_RADIUS  # noqa: E402
+
+WEBXR = ASSETS_DIR / "hands" / "webxr" / "generic-hand-right.glb"
+
+
+@pytest.fixture
+def window(qtbot, sample_hands, tmp_path):
+    """The main window (compare mode idle: annotate mode needs no comparison), settings thrown away."""
+    motion = synthesize(["fist"], sample_hands["birch"], seed=1, name="short")
+    settings = QSettings(str(tmp_path / "settings.ini"), QSettings.Format.IniFormat)
+    win = MainWindow(CompareSetup(motion, sample_hands["birch"], [sample_hands["iris"]], ["tbs_copy"]), settings)
+    win.resize(1200, 800)
+    qtbot.addWidget(win, before_close_func=lambda w: w.undo_stack.clear())  # closed without a "save?" question
+    win.show()
+    qtbot.waitExposed(win)
+    return win
+
+
+@pytest.fixture
+def hand_file(tmp_path):
+    return shutil.copy(WEBXR, tmp_path / "hand.glb")
+
+
+def widget_point(view, point: np.ndarray) -> QPoint:
+    """Where a view-space point is drawn, in the 3D widget's Qt pixels (VTK's own projection)."""
+    coordinate = vtkCoordinate()
+    coordinate.SetCoordinateSystemToWorld()
+    coordinate.SetValue(*point)
+    x, y = coordinate.GetComputedDoubleDisplayValue(view.interactor.renderer)
+    scale = view.interactor.devicePixelRatioF()
+    return QPoint(round(x / scale), round(view.interactor.height() - 1 - y / scale))
+
+
+def ring_point(view, joint: int, degrees: float) -> np.ndarray:
+    """The point of ``joint``'s ring ``degrees`` from its bend axis towards its splay axis, in view space."""
+    session = view.session
+    frame = to_view(session.hand, session.frames[joint].T).T
+    a = np.radians(degrees)
+    radius = RING_RADIUS * session.hand.hand_length
+    return view.joint_centres()[joint] + radius * (np.cos(a) * frame[:, 1] + np.sin(a) * frame[:, 2])
+
+
+def answer(qtbot, button_text: str, asked: list[str]) -> None:
+    """Click ``button_text`` in the next question box as soon as it opens; its text goes to ``asked``."""
+    def click() -> None:
+        box = QApplication.activeModalWidget()
+        if not isinstance(box, QMessageBox):
+            QTimer.singleShot(20, click)
+            return
+        asked.append(box.text())
+        button = next(b for b in box.buttons() if b.text() == button_text)
+        QTest.mouseClick(button, Qt.MouseButton.LeftButton)
+
+    QTimer.singleShot(0, click)
+
+
+def turn_angle(before: np.ndarray, after: np.ndarray) -> float:
+    """Signed degrees about ``before``'s twist axis that take ``before`` to ``after``."""
+    axis = before[:, 0]
+    return float(np.degrees(np.arctan2(np.dot(axis, np.cross(before[:, 1], after[:, 1])),
+                                       np.dot(before[:, 1], after[:, 1]))))
+
+
+def keyboard_to(qtbot, widget) -> None:
+    """The window active and ``widget`` focused, as after a user's click there: shortcuts reach the window."""
+    widget.window().activateWindow()
+    qtbot.waitActive(widget.window())
+    widget.setFocus()
+    qtbot.waitUntil(widget.hasFocus)
+
+
+def settle() -> None:
+    for _ in range(5):
+        QApplication.processEvents()
+
+
+def test_click_a_joint_drag_its_ring_and_undo(window, qtbot, hand_file):
+    window.annotate_file(str(hand_file))
+    view = window.annotate_view
+    settle()
+    assert view.selected == 0
+    # a click at a joint drawn well apart from the others (and from the selected joint's ring) selects it
+    on_screen = np.array([[widget_point(view, p).x(), widget_point(view, p).y()] for p in view.joint_centres()])
+    gaps = np.linalg.norm(on_screen[:, None] - on_screen[None], axis=2) + np.eye(len(on_screen)) * 1e9
+    ring_px = np.linalg.norm(on_screen[0] - np.array([widget_point(view, ring_point(view, 0, 0)).x(),
+                                                      widget_point(view, ring_point(view, 0, 0)).y()]))
+    towards_viewer = -np.array(view.interactor.camera.GetDirectionOfProjection())
+    frames = to_view(window.annotation.hand, window.annotation.frames.transpose(0, 2, 1)).transpose(0, 2, 1)
+    facing = np.abs(frames[:, :, 0] @ towards_viewer)  # rings that face the camera follow the pointer exactly
+    candidates = [j for j in np.argsort(-gaps.min(axis=1)) if j != 0 and gaps[j, 0] > 2 * ring_px and facing[j] > 0.5]
+    joint = int(candidates[0])
+    QTest.mouseClick(view.interactor, Qt.MouseButton.LeftButton, pos=QPoint(*on_screen[joint]))
+    assert view.selected == joint and view.joints.currentRow() == joint
+
+    # drag the ring from one of its points to another 50 deg further round: the frame turns by 50 deg
+    start, drag = next((a, 50.0) for a in range(0, 360, 15)
+                       if (widget_point(view, ring_point(view, joint, a)) -
+                           widget_point(view, ring_point(view, joint, a + 50))).manhattanLength() > 25)
+    path = [widget_point(view, ring_point(view, joint, start + t)) for t in np.linspace(0, drag, 11)]
+    before = window.annotation.frames[joint].copy()
+    camera = np.array(view.interactor.camera.position)
+    QTest.mousePress(view.interactor, Qt.MouseButton.LeftButton, pos=path[0])
+    assert view.ring.dragging  # the ring, not the camera, took the press
+    for point in path[1:6]:
+        QTest.mouseMove(view.interactor, point)
+    halfway = turn_angle(before, window.annotation.frames[joint])
+    assert abs(halfway - drag / 2) < 3.0  # live, while the button is held
+    for point in path[6:]:
+        QTest.mouseMove(view.interactor, point)
+    QTest.mouseRelease(view.interactor, Qt.MouseButton.LeftButton, pos=path[-1])
+    after = window.annotation.frames[joint].copy()
+    assert abs(turn_angle(before, after) - drag) < 3.0
+    np.testing.assert_allclose(after[:, 0], before[:, 0], atol=1e-9)  # the twist axis stays on the bone
+    np.testing.assert_allclose(after, rotate_about_twist(before, turn_angle(before, after)), atol=1e-9)
+    np.testing.assert_allclose(view.interactor.camera.position, camera)  # the camera did not orbit
+    assert window.annotation.set_by[joint] == "manual" and window.isWindowModified()
+    assert "manual" in view.joints.item(joint).text()
+
+    keyboard_to(qtbot, view.interactor)
+    QTest.keyClick(window, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
+    np.testing.assert_allclose(window.annotation.frames[joint], before, atol=1e-12)
+    assert window.annotation.set_by[joint] == "solver" and not window.isWindowModified()
+    QTest.keyClick(window, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier)
+    np.testing.assert_allclose(window.annotation.frames[joint], after, atol=1e-12)
+
+
+def test_second_hand_replaces_the_first_and_a_sidecar_brings_back_who_set_each_frame(window, qtbot, hand_file):
+    window.annotate_file(str(hand_file))
+    first = window.annotation
+    assert first.frames_from == "solver" and np.isfinite(first.confidence).all()  # the solver's, scored
+    window.annotate_view.select(6)
+    window.annotate_view.turn_selected(25)
+    saved_frames = first.frames.copy()
+    assert window.save_annotation().name == "hand.tbs.json"
+
+    iris = ASSETS_DIR / "hands" / "iris.npz"
+    window.annotate_file(str(iris))  # saved: no question; the list is iris's now
+    view = window.annotate_view
+    assert window.annotation.hand.name == "iris" and view.joints.count() == topo.N_ARTICULATED
+    assert view.session is window.annotation and view.selected == 0
+    assert all("from the hand file" in view.joints.item(j).text() for j in range(topo.N_ARTICULATED))
+    np.testing.assert_allclose(view.joint_centres(), to_view(window.annotation.hand,
+                               window.annotation.hand.rest_positions[topo.ARTICULATED_JOINTS]))
+
+    window.annotate_file(str(hand_file))  # reopened: the sidecar's frames, set_by and confidence
+    session = window.annotation
+    assert session.frames_from == "sidecar"
+    assert session.set_by == ["manual" if j == 6 else "solver" for j in range(topo.N_ARTICULATED)]
+    np.testing.assert_allclose(session.confidence, first.confidence, atol=1e-4)
+    np.testing.assert_allclose(session.frames, saved_frames, atol=1e-7)
+    texts = [view.joints.item(j).text() for j in range(topo.N_ARTICULATED)]
+    assert "(manual)" in texts[6] and all(f"{first.confidence[j]:.2f} (solver)" in texts[j]
+                                          for j in range(topo.N_ARTICULATED) if j != 6)
+    assert len(set(texts)) > 2  # not one "1.00 (solver)" line for every joint
+
+
+def test_ctrl_r_asks_before_replacing_manual_frames_and_is_undoable(window, qtbot, hand_file):
+    window.annotate_file(str(hand_file))
+    window.annotate_view.select(3)
+    window.annotate_view.turn_selected(40)
+    manual = window.annotation.frames[3].copy()
+    keyboard_to(qtbot, window.annotate_view.interactor)
+    asked: list[str] = []
+
+    answer(qtbot, "Cancel", asked)
+    QTest.keyClick(window, Qt.Key.Key_R, Qt.KeyboardModifier.ControlModifier)
+    assert asked and topo.ARTICULATED_NAMES[3] in asked[0]
+    np.testing.assert_allclose(window.annotation.frames[3], manual)
+    assert window.undo_stack.count() == 1
+
+    answer(qtbot, "Keep manual frames", asked)
+    with qtbot.waitSignal(window.annotation_ready, timeout=60_000):
+        QTest.keyClick(window, Qt.Key.Key_R, Qt.KeyboardModifier.ControlModifier)
+    np.testing.assert_allclose(window.annotation.frames[3], manual)
+    assert window.annotation.set_by[3] == "manual" and window.undo_stack.count() == 2  # the turn is still there
+
+    answer(qtbot, "Replace all", asked)
+    with qtbot.waitSignal(window.annotation_ready, timeout=60_000):
+        QTest.keyClick(window, Qt.Key.Key_R, Qt.KeyboardModifier.ControlModifier)
+    assert len(asked) == 3 and window.annotation.set_by == ["solver"] * topo.N_ARTICULATED
+    assert np.abs(window.annotation.frames[3] - manual).max() > 1e-3
+    QTest.keyClick(window, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)  # undo the solver run
+    np.testing.assert_allclose(window.annotation.frames[3], manual)
+    assert window.annotation.set_by[3] == "manual"
+
+
+def test_unsaved_edits_are_asked_about_before_another_hand_or_quitting(window, qtbot, hand_file, tmp_path):
+    window.annotate_file(str(hand_file))
+    window.annotate_view.select(5)
+    window.annotate_view.turn_selected(-20)
+    asked: list[str] = []
+    iris = str(ASSETS_DIR / "hands" / "iris.npz")
+
+    answer(qtbot, "Cancel", asked)
+    window.annotate_file(iris)
+    assert len(asked) == 1 and "not saved" in asked[0] and window.annotation.hand.name == "hand"
+
+    answer(qtbot, "Cancel", asked)
+    assert not window.close() and window.isVisible()  # quitting cancelled
+
+    answer(qtbot, "Save", asked)
+    window.annotate_file(iris)
+    assert window.annotation.hand.name == "iris"
+    saved = (tmp_path / "hand.tbs.json").read_text()
+    assert '"set_by": "manual"' in saved
+
+    window.annotate_file(str(hand_file))
+    window.annotate_view.turn_selected(10)
+    answer(qtbot, "Discard", asked)
+    window.annotate_file(iris)
+    assert len(asked) == 4 and window.annotation.hand.name == "iris"
+    assert (tmp_path / "hand.tbs.json").read_text() == saved  # discarded, not written
+
+
+def test_an_edge_on_ring_rolls_under_the_pointer(window, qtbot, hand_file):
+    window.annotate_file(str(hand_file))
+    view = window.annotate_view
+    joint = 7  # middle_pip
+    view.select(joint)
+    frame = to_view(window.annotation.hand, window.annotation.frames[joint].T).T
+    centre = view.joint_centres()[joint]
+    camera = view.interactor.camera  # looking across the bone: the ring is seen edge-on
+    distance = camera.distance
+    camera.focal_point = centre
+    camera.position = centre + distance * frame[:, 2]
+    camera.up = frame[:, 0]
+    view.interactor.render()
+    settle()
+    towards_viewer = -np.array(camera.GetDirectionOfProjection())
+    assert abs(np.dot(frame[:, 0], towards_viewer)) < 0.05
+    radius = RING_RADIUS * window.annotation.hand.hand_length
+    front = centre + radius * frame[:, 2]  # the ring's point nearest the camera
+    before = window.annotation.frames[joint].copy()
+    press = widget_point(view, front)
+    side = widget_point(view, centre + radius * frame[:, 1]) - widget_point(view, centre)
+    step = np.array([side.x(), side.y()], float)
+    step = 12 * step / np.linalg.norm(step)  # 12 pixels along the ring's line on screen
+    target = QPoint(round(press.x() + step[0]), round(press.y() + step[1]))
+    QTest.mousePress(view.interactor, Qt.MouseButton.LeftButton, pos=press)
+    assert view.ring.dragging
+    QTest.mouseMove(view.interactor, target)
+    QTest.mouseRelease(view.interactor, Qt.MouseButton.LeftButton, pos=target)
+    angle = np.radians(turn_angle(before, window.annotation.frames[joint]))
+    assert abs(angle) > np.radians(5)
+    # the grabbed point, turned with the frame, is under the pointer again (within 2 pixels)
+    turned = centre + radius * (np.cos(angle) * frame[:, 2] - np.sin(angle) * frame[:, 1])
+    moved = widget_point(view, turned)
+    assert (moved - target).manhattanLength() <= 3
