@@ -152,3 +152,4 @@ def test_score_retarget_on_itself_is_perfect(sample_hands, rng):
     scores = score_retarget(hand, q, hand, q, reference_q=q)
     assert scores.s_palm == pytest.approx(1.0) and scores.s_finger == pytest.approx(1.0)
     assert scores.mse == pytest.approx(0.0) and scores.contact_precision == 1.0 and scores.contact_recall == 1.0
+    assert scores.palm_contact_recall == 1.0

@@ -12,7 +12,7 @@ from s2h_viewer.hand.kinematics import HandPose, forward_kinematics
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.semantics.anatomy import violation_rate
 from s2h_viewer.semantics.asm import semantic_matrix
-from s2h_viewer.semantics.contacts import contact_precision_recall, detect_contacts
+from s2h_viewer.semantics.contacts import PAD_PAIRS, PALM_PAIRS, contact_precision_recall, detect_contacts
 from s2h_viewer.semantics.similarity import masked_cosine
 
 
@@ -55,8 +55,9 @@ class RetargetScores:
     s_palm: float
     s_finger: float
     s_finger_paper: float  # the official code's S_finger (zero diagonal counted), for the paper's Table 1
-    contact_precision: float
+    contact_precision: float  # fingertip pad pairs (DESIGN.md section 5)
     contact_recall: float
+    palm_contact_recall: float  # fingertips on the palm (our extension; a fist's, say)
     violation_rate: float
     jitter: float
     mse: float | None = None
@@ -75,13 +76,14 @@ def score_retarget(source_hand: HandModel, source_q: np.ndarray | torch.Tensor, 
         tgt_pose = forward_kinematics(target_hand, tgt_q)
         s_palm, s_finger, s_finger_paper = palm_and_finger_scores(semantic_matrix(src_pose),
                                                                   semantic_matrix(tgt_pose))
-        precision, recall = contact_precision_recall(detect_contacts(source_hand, src_pose),
-                                                     detect_contacts(target_hand, tgt_pose))
+        src_contacts, tgt_contacts = detect_contacts(source_hand, src_pose), detect_contacts(target_hand, tgt_pose)
+        precision, recall = contact_precision_recall(src_contacts[:, PAD_PAIRS], tgt_contacts[:, PAD_PAIRS])
+        palm_recall = contact_precision_recall(src_contacts[:, PALM_PAIRS], tgt_contacts[:, PALM_PAIRS])[1]
         mse = None
         if reference_q is not None:
             ref = forward_kinematics(target_hand, torch.as_tensor(np.asarray(reference_q), dtype=torch.float64))
             mse = joint_position_mse(tgt_pose, ref, target_hand.hand_length)
         return RetargetScores(s_palm=s_palm, s_finger=s_finger, s_finger_paper=s_finger_paper,
                               contact_precision=precision,
-                              contact_recall=recall, violation_rate=violation_rate(tgt_q),
+                              contact_recall=recall, palm_contact_recall=palm_recall, violation_rate=violation_rate(tgt_q),
                               jitter=jitter(tgt_pose, target_hand.hand_length), mse=mse)

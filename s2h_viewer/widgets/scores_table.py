@@ -8,7 +8,8 @@ from s2h_viewer.retarget.comparison import Comparison
 from s2h_viewer.retarget.methods import METHODS
 
 COLUMNS = (("Method", None), ("Target", None), ("S_palm", "s_palm"), ("S_finger", "s_finger"),
-           ("Contact P", "contact_precision"), ("Contact R", "contact_recall"), ("Violations", "violation_rate"))
+           ("Contact P", "contact_precision"), ("Contact R", "contact_recall"), ("Palm R", "palm_contact_recall"),
+           ("Violations", "violation_rate"))
 
 
 class ScoresTable(QTableWidget):
