@@ -253,12 +253,7 @@ def save_bvh(path: str | Path, motion: Motion, hand: HandModel) -> Path:
         local = world[:, r] if parent < 0 else world[:, rotating_of_joint[parent]].transpose(0, 2, 1) @ world[:, r]
         euler = Rotation.from_matrix(local).as_euler(WRITE_ORDER, degrees=True)
         data.append(np.concatenate([np.tile(positions[0], (len(local), 1)), euler], 1) if parent < 0 else euler)
-    values = np.concatenate(data, axis=1)
-    lines += ["MOTION", f"Frames: {motion.n_frames}", f"Frame Time: {1.0 / motion.fps:.8f}"]
-    lines += [" ".join(f"{v:.6f}" for v in row) for row in values]
-    with atomic_path(path) as tmp:
-        tmp.write_text("\n".join(lines) + "\n")
-    return path
+    return _write_bvh(path, lines, motion, data)
 
 
 
@@ -333,8 +328,13 @@ def _save_rig_bvh(path: Path, motion: Motion, hand: HandModel, skeleton: RigSkel
         lines.append(f"{pad}}}")
 
     write(wrist, 0)
-    values = np.concatenate(data, axis=1)
-    lines += ["MOTION", f"Frames: {motion.n_frames}", f"Frame Time: {1.0 / motion.fps:.8f}"]
+    return _write_bvh(path, lines, motion, data)
+
+
+def _write_bvh(path: Path, hierarchy: list[str], motion: Motion, channels: list[np.ndarray]) -> Path:
+    """The HIERARCHY lines, then the MOTION section of per-joint channel columns, written atomically."""
+    values = np.concatenate(channels, axis=1)
+    lines = hierarchy + ["MOTION", f"Frames: {motion.n_frames}", f"Frame Time: {1.0 / motion.fps:.8f}"]
     lines += [" ".join(f"{v:.6f}" for v in row) for row in values]
     with atomic_path(path) as tmp:
         tmp.write_text("\n".join(lines) + "\n")
