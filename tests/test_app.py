@@ -11,26 +11,14 @@ pytest.importorskip("pytestqt")
 if not os.environ.get("DISPLAY"):
     pytest.skip("the Qt viewport needs an X display: `make test` runs the suite under Xvfb", allow_module_level=True)
 
-from PySide6.QtCore import QSettings  # noqa: E402
 from PySide6.QtWidgets import QMessageBox  # noqa: E402
 
-from s2h_viewer.app.main_window import CompareSetup, MainWindow  # noqa: E402
-from s2h_viewer.motions.synthesis import synthesize  # noqa: E402
+from compare_window import open_compare_window  # noqa: E402
 
 
 @pytest.fixture
 def window(qtbot, sample_hands, tmp_path):
-    motion = synthesize(["fist", "ok", "v_sign"], sample_hands["birch"], seed=4, name="short")
-    setup = CompareSetup(motion, sample_hands["birch"], [sample_hands["iris"]], ["tbs_copy", "asrn"])
-    settings = QSettings(str(tmp_path / "settings.ini"), QSettings.Format.IniFormat)
-    settings.setValue("compare/methods", ["tbs_copy", "asrn"])
-    win = MainWindow(setup, settings)
-    win.resize(1000, 700)
-    qtbot.addWidget(win, before_close_func=lambda w: w.undo_stack.clear())  # closed without a "save?" question
-    win.show()
-    with qtbot.waitSignal(win.comparison_ready, timeout=120_000):
-        win.start_comparison()
-    return win
+    return open_compare_window(qtbot, sample_hands, tmp_path)
 
 
 def test_compare_mode_shows_two_methods_and_their_scores(window):

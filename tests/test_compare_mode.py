@@ -16,12 +16,11 @@ if not os.environ.get("DISPLAY"):
 
 import imageio.v2 as imageio  # noqa: E402
 from PIL import Image  # noqa: E402
-from PySide6.QtCore import QPoint, QSettings, Qt, QTimer  # noqa: E402
+from PySide6.QtCore import QPoint, Qt, QTimer  # noqa: E402
 from PySide6.QtWidgets import QPushButton  # noqa: E402
 
-from s2h_viewer.app.main_window import CompareSetup, MainWindow  # noqa: E402
+from compare_window import open_compare_window  # noqa: E402
 from s2h_viewer.hand import topology as topo  # noqa: E402
-from s2h_viewer.motions.synthesis import synthesize  # noqa: E402
 from s2h_viewer.render.caption import BAND  # noqa: E402
 from s2h_viewer.retarget.methods import METHODS  # noqa: E402
 from s2h_viewer.samples import ASSETS_DIR  # noqa: E402
@@ -31,16 +30,7 @@ from s2h_viewer.widgets.error_curve import worst_frames  # noqa: E402
 
 @pytest.fixture
 def window(qtbot, sample_hands, tmp_path):
-    motion = synthesize(["fist", "ok", "v_sign"], sample_hands["birch"], seed=4, name="short")
-    setup = CompareSetup(motion, sample_hands["birch"], [sample_hands["iris"]], ["tbs_copy", "asrn"])
-    settings = QSettings(str(tmp_path / "settings.ini"), QSettings.Format.IniFormat)
-    settings.setValue("compare/methods", ["tbs_copy", "asrn"])
-    win = MainWindow(setup, settings)
-    win.resize(1000, 700)
-    qtbot.addWidget(win)
-    win.show()
-    with qtbot.waitSignal(win.comparison_ready, timeout=120_000):
-        win.start_comparison()
+    win = open_compare_window(qtbot, sample_hands, tmp_path)
     yield win
     win.close()
 
