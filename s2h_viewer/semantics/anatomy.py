@@ -19,8 +19,8 @@ import torch
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.rotations import quat_to_tbs_euler
 
-_THUMB_CMC = 0
-_FINGER_MCPS = [3, 6, 9, 12]
+_THUMB_CMC = topo.ARTICULATED_NAMES.index("thumb_cmc")
+_FINGER_MCPS = [topo.ARTICULATED_NAMES.index(f"{f}_mcp") for f in topo.FINGERS[1:]]
 
 
 def _limits() -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:

@@ -26,8 +26,8 @@ SITES: tuple[str, ...] = topo.FINGERS + ("palm",)
 #: all tip-tip pairs then each tip with the palm: 15 pairs of site names.
 CONTACT_PAIRS: tuple[tuple[str, str], ...] = tuple(combinations(topo.FINGERS, 2)) + tuple((f, "palm") for f in topo.FINGERS)
 #: the fingertip pad pairs (DESIGN.md section 5's contacts) and the fingertip-palm pairs (our extension)
-PAD_PAIRS = slice(0, 10)
-PALM_PAIRS = slice(10, 15)
+PAD_PAIRS = slice(0, len(CONTACT_PAIRS) - len(topo.FINGERS))
+PALM_PAIRS = slice(len(CONTACT_PAIRS) - len(topo.FINGERS), len(CONTACT_PAIRS))
 
 
 def pair_index(a: str, b: str) -> int:
