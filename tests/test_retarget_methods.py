@@ -14,7 +14,10 @@ from s2h_viewer.samples import hand_names
 from s2h_viewer.retarget.asrn.dataset import build_training_set, sample_batch
 from s2h_viewer.retarget.asrn.inference import MODELS_DIR, load_network, run_network
 from s2h_viewer.retarget.windows import blend_weights, window_starts
-from s2h_viewer.retarget.asrn.training import TrainConfig, batch_loss, build_model, load_checkpoint, train
+from s2h_viewer.retarget.asrn.training import (TrainConfig, batch_loss, build_model, default_config, load_checkpoint,
+                                               stored_config, train)
+from s2h_viewer.hand.kinematics import forward_kinematics
+from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, contact_gaps
 from s2h_viewer.semantics.metrics import score_retarget
 
 
@@ -91,6 +94,32 @@ def test_damaged_checkpoint_gives_a_clear_error(tmp_path):
     bad.write_bytes(b"not a checkpoint")
     with pytest.raises(InputFileError, match="asrn.pt: not a readable checkpoint"):
         load_checkpoint(bad)
+
+
+def test_shipped_dm_is_the_baseline_without_a_contact_term():
+    assert stored_config(load_checkpoint(MODELS_DIR / "dm.pt")).contact_weight == 0.0
+    assert default_config("dm").contact_weight == 0.0 and default_config("asrn").contact_weight > 0
+
+
+def test_contact_term_sees_each_windows_own_source_contacts(sample_hands):
+    # an untrained network is TBS Copy: on a same-hand batch its pose is the source's, so the gaps the loss
+    # measures on the target equal the gaps stored with the windows (window and source hand line up)
+    hands = [sample_hands["birch"], sample_hands["laurel"]]
+    data = build_training_set("asrn", hands, scripts_per_hand=1, gestures_per_script=6, seed=1)
+    config = default_config("asrn")
+    model = build_model(config)
+    same = sample_batch(data, np.random.default_rng(3), 4, 16, p_same=1.0)
+    pose = forward_kinematics(hands[same.target], same.q_source.reshape(-1, 15, 4))
+    gaps = contact_gaps(hands[same.target], pose) / hands[same.target].hand_length
+    torch.testing.assert_close(gaps.float(), same.source_gaps.reshape(gaps.shape), atol=1e-5, rtol=0)
+    # across hands the copied pose misses contacts the source makes, and the loss says so and pulls on them
+    batches = [sample_batch(data, np.random.default_rng(s), 8, 16, p_same=0.0) for s in range(8)]
+    cross = max(batches, key=lambda b: int((b.source_gaps < CONTACT_TOLERANCE).sum()))
+    assert (cross.source_gaps < CONTACT_TOLERANCE).any()
+    loss, parts = batch_loss(model, data, cross, config)
+    assert parts["contact"] > 0
+    loss.backward()
+    assert model.head.weight.grad.abs().sum() > 0
 
 
 def test_training_on_a_tiny_set_lowers_the_loss(sample_hands):

@@ -75,6 +75,15 @@ def contact_gaps(hand: HandModel, pose: HandPose) -> torch.Tensor:
     return torch.cat([tip_gap, palm], -1)
 
 
+def contact_loss(gaps: torch.Tensor, source_gaps: torch.Tensor, tolerance: float = CONTACT_TOLERANCE) -> torch.Tensor:
+    """Mean over frames of the summed squared misses, both gaps (..., 15) in each hand's lengths: pairs
+    touching in the source are pulled under half the tolerance, pairs apart kept beyond 1.2 times it
+    (margins either side of the threshold, so the detected contacts agree and not only the loss)."""
+    touching = source_gaps < tolerance
+    miss = torch.where(touching, torch.relu(gaps - 0.5 * tolerance), torch.relu(1.2 * tolerance - gaps))
+    return miss.square().sum(-1).mean()
+
+
 def detect_contacts(hand: HandModel, pose: HandPose, tolerance: float = CONTACT_TOLERANCE) -> np.ndarray:
     """(T, 15) bool: pairs whose gap is under ``tolerance`` x hand length."""
     gaps = contact_gaps(hand, pose).detach().cpu().numpy()

@@ -2,7 +2,8 @@
 ``TrainConfig.window`` frames.
 
 Pairs are drawn per batch: one target hand B; with probability ``p_same`` every window comes from B
-itself (the supervised case, A = B), otherwise from the other training hands.
+itself (the supervised case, A = B), otherwise from the other training hands. Each clip keeps its
+source's contact gaps (in hand lengths), from which the contact loss knows which pairs touch.
 """
 
 from __future__ import annotations
@@ -13,11 +14,13 @@ from dataclasses import dataclass
 import numpy as np
 import torch
 
+from s2h_viewer.hand.kinematics import forward_kinematics
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.procedural import generate_hand
 from s2h_viewer.motions.gestures import GESTURES
 from s2h_viewer.motions.synthesis import fit_library, synthesize
 from s2h_viewer.retarget.asrn.features import source_features, target_static
+from s2h_viewer.semantics.contacts import contact_gaps
 
 
 @dataclass
@@ -25,6 +28,7 @@ class Clip:
     hand: int  # index into TrainingSet.hands
     q: torch.Tensor  # (T, 15, 4)
     features: torch.Tensor  # (T, F)
+    gaps: torch.Tensor  # (T, 15) contact gaps on the source hand, in its hand lengths
 
 
 @dataclass
@@ -45,6 +49,7 @@ class Batch:
     same: bool  # A == B for every window
     features: torch.Tensor  # (N, W, F)
     q_source: torch.Tensor  # (N, W, 15, 4)
+    source_gaps: torch.Tensor  # (N, W, 15) contact gaps on each window's source hand, in its hand lengths
 
 
 EXTRA_HAND_FIRST_SEED = 10_000  # far from the shipped hands' seeds (100..), so no test hand is regenerated
@@ -70,7 +75,10 @@ def build_training_set(kind: str, hands: list[HandModel], scripts_per_hand: int 
         for s in range(scripts_per_hand):
             script = list(rng.choice(names, gestures_per_script, replace=False))
             motion = synthesize(script, hand, seed=int(rng.integers(1 << 31)), fitted=fitted)
-            clips.append(Clip(h, torch.as_tensor(motion.q_tbs), source_features(kind, hand, motion.q_tbs)))
+            q = torch.as_tensor(motion.q_tbs)
+            with torch.no_grad():
+                gaps = contact_gaps(hand, forward_kinematics(hand, q)) / hand.hand_length
+            clips.append(Clip(h, q, source_features(kind, hand, motion.q_tbs), gaps.float()))
     return TrainingSet(kind, hands, [target_static(h) for h in hands], clips)
 
 
@@ -79,10 +87,11 @@ def sample_batch(data: TrainingSet, rng: np.random.Generator, size: int, window:
     target = int(rng.integers(len(data.hands)))
     same = bool(rng.random() < p_same)
     pool = [c for c in data.clips if (c.hand == target) == same]
-    feats, qs = [], []
+    feats, qs, gaps = [], [], []
     for _ in range(size):
         clip = pool[int(rng.integers(len(pool)))]
         start = int(rng.integers(len(clip.q) - window + 1))
         feats.append(clip.features[start:start + window])
         qs.append(clip.q[start:start + window])
-    return Batch(target, same, torch.stack(feats), torch.stack(qs))
+        gaps.append(clip.gaps[start:start + window])
+    return Batch(target, same, torch.stack(feats), torch.stack(qs), torch.stack(gaps))

@@ -16,7 +16,7 @@ from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.retarget.asrn.features import source_features, target_static
 from s2h_viewer.retarget.asrn.model import RetargetNet, apply_residual
-from s2h_viewer.retarget.asrn.training import TrainConfig, build_model, load_checkpoint
+from s2h_viewer.retarget.asrn.training import TrainConfig, build_model, load_checkpoint, stored_config
 from s2h_viewer.retarget.methods import on_target, register
 from s2h_viewer.retarget.windows import Progress, stream_windows
 
@@ -58,7 +58,7 @@ def run_network(model: RetargetNet, kind: str, source_hand: HandModel, source_q:
 def load_network(path: str) -> tuple[RetargetNet, TrainConfig]:
     """A trained network from its checkpoint, in eval mode (cached per path)."""
     state = load_checkpoint(path)
-    config = TrainConfig(**state["config"])
+    config = stored_config(state)
     model = build_model(config)
     model.load_state_dict(state["model"])
     return model.eval(), config
