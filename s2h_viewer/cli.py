@@ -96,9 +96,10 @@ def _cmd_train(args: argparse.Namespace) -> int:
     from s2h_viewer.retarget.asrn.inference import MODELS_DIR
     from s2h_viewer.retarget.asrn.training import default_config, train
 
-    changes = {} if args.contact_weight is None else {"contact_weight": args.contact_weight}
+    weights = {name: value for name, value in (("contact_weight", args.contact_weight),
+                                               ("anatomy_weight", args.anatomy_weight)) if value is not None}
     config = default_config(args.kind, steps=args.steps, seed=args.seed, scripts_per_hand=args.scripts,
-                            extra_hands=args.extra_hands, **changes)
+                            extra_hands=args.extra_hands, **weights)
     out = Path(args.out) if args.out else MODELS_DIR / f"{args.kind}.pt"
     history = train(config, samples.load_sample_hands("train"), out, resume=args.resume, show_progress=not args.quiet,
                     stop_at=args.stop_at)
@@ -306,8 +307,10 @@ def build_parser() -> argparse.ArgumentParser:
     tr.add_argument("--out", help="checkpoint path (default: assets/models/<kind>.pt)")
     tr.add_argument("--extra-hands", type=int, default=16, help="unnamed procedural hands added to the 8 shipped "
                                                                  "training hands")
-    tr.add_argument("--contact-weight", type=float, help="weight of the contact loss (default: 400 for asrn, "
-                                                         "0 for dm)")
+    tr.add_argument("--contact-weight", type=float, help="weight of the pad contact loss (shipped: 300 for asrn, "
+                                                         "0 for dm as in the paper)")
+    tr.add_argument("--anatomy-weight", type=float, help="weight of L_ana (shipped: 1.0 for asrn, 0.1 for dm as in "
+                                                         "the paper)")
     tr.add_argument("--resume", action="store_true", help="continue from the checkpoint at --out")
     tr.add_argument("--stop-at", type=int, help="end this run at that step (continue later with --resume)")
     tr.add_argument("--quiet", action="store_true")

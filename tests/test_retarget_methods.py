@@ -17,7 +17,7 @@ from s2h_viewer.retarget.windows import blend_weights, window_starts
 from s2h_viewer.retarget.asrn.training import (TrainConfig, batch_loss, build_model, default_config, load_checkpoint,
                                                stored_config, train)
 from s2h_viewer.hand.kinematics import forward_kinematics
-from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, contact_gaps
+from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, PAD_PAIRS, contact_gaps
 from s2h_viewer.semantics.metrics import score_retarget
 
 
@@ -112,10 +112,10 @@ def test_contact_term_sees_each_windows_own_source_contacts(sample_hands):
     pose = forward_kinematics(hands[same.target], same.q_source.reshape(-1, 15, 4))
     gaps = contact_gaps(hands[same.target], pose) / hands[same.target].hand_length
     torch.testing.assert_close(gaps.float(), same.source_gaps.reshape(gaps.shape), atol=1e-5, rtol=0)
-    # across hands the copied pose misses contacts the source makes, and the loss says so and pulls on them
+    # across hands the copied pose misses pad contacts the source makes, and the loss says so and pulls on them
     batches = [sample_batch(data, np.random.default_rng(s), 8, 16, p_same=0.0) for s in range(8)]
-    cross = max(batches, key=lambda b: int((b.source_gaps < CONTACT_TOLERANCE).sum()))
-    assert (cross.source_gaps < CONTACT_TOLERANCE).any()
+    cross = max(batches, key=lambda b: int((b.source_gaps[..., PAD_PAIRS] < CONTACT_TOLERANCE).sum()))
+    assert (cross.source_gaps[..., PAD_PAIRS] < CONTACT_TOLERANCE).any()
     loss, parts = batch_loss(model, data, cross, config)
     assert parts["contact"] > 0
     loss.backward()
