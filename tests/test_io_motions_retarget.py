@@ -61,9 +61,14 @@ def test_failed_write_leaves_the_old_file_intact(tmp_path, rng, monkeypatch):
     motion = Motion(q_tbs=random_tbs_motion(4, rng).numpy(), name="original")
     save_motion(motion, path)
 
-    def broken(*args, **kwargs):
-        raise OSError("disk full")
-    monkeypatch.setattr(np, "savez_compressed", broken)
+    real_write = np.lib.format.write_array
+
+    def disk_full_at_the_rotations(fp, array, *args, **kwargs):
+        if array.ndim == 3:
+            fp.write(b"\0" * 100)  # part of the rotations written, then the disk is full
+            raise OSError("disk full")
+        real_write(fp, array, *args, **kwargs)
+    monkeypatch.setattr(np.lib.format, "write_array", disk_full_at_the_rotations)
     with pytest.raises(OSError):
         save_motion(Motion(q_tbs=random_tbs_motion(4, rng).numpy(), name="new"), path)
     monkeypatch.undo()
