@@ -220,22 +220,25 @@ def save_motion(motion: Motion, path: str | Path) -> Path:
 
 
 def _write(fh, members: dict) -> None:
-    """A compressed npz of ``members`` (what ``np.savez_compressed`` writes), streamed: an object array of
-    strings (labels) is written as fixed-width text a chunk at a time, never converted whole."""
+    """A compressed npz of ``members`` (what ``np.savez_compressed`` writes), streamed a chunk of rows at a
+    time: neither the rotations nor the labels (an object array of strings, written as fixed-width text)
+    are ever copied whole."""
     with zipfile.ZipFile(fh, "w", compression=zipfile.ZIP_DEFLATED, allowZip64=True) as archive:
         for key, value in members.items():
             value = np.asanyarray(value)
             with archive.open(f"{key}.npy", "w", force_zip64=True) as member:
-                if value.dtype != object:
+                if value.ndim == 0:
                     np.lib.format.write_array(member, value, allow_pickle=False)
                     continue
-                width = max(max(len(str(v)) for v in set(value[first:end].tolist()))
-                            for first, end in frame_chunks(len(value)))
-                text = np.dtype(f"<U{max(width, 1)}")
-                np.lib.format.write_array_header_1_0(member, {"descr": np.lib.format.dtype_to_descr(text),
+                stored = value.dtype
+                if stored == object:
+                    width = max(max(len(str(v)) for v in set(value[first:end].tolist()))
+                                for first, end in frame_chunks(len(value)))
+                    stored = np.dtype(f"<U{max(width, 1)}")
+                np.lib.format.write_array_header_1_0(member, {"descr": np.lib.format.dtype_to_descr(stored),
                                                               "fortran_order": False, "shape": value.shape})
                 for first, end in frame_chunks(len(value)):
-                    member.write(value[first:end].astype(text).tobytes())
+                    member.write(np.ascontiguousarray(value[first:end], dtype=stored).data)
 
 
 def load_motion(path: str | Path) -> Motion:
