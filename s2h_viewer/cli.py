@@ -6,14 +6,14 @@ from __future__ import annotations
 import argparse
 import sys
 import traceback
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from s2h_viewer.errors import S2HError
 
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
-
     from s2h_viewer import samples
     from s2h_viewer.io.npz import load_motion
     from s2h_viewer.retarget.evaluation import evaluate, format_markdown, summarise, write_results
@@ -28,17 +28,32 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
             hands[target] = load_hand_file(target, _rig_options(args))
     methods = args.methods.split(",")
     total = len(motions) * len(targets) * len(methods)
-    with tqdm(total=total, desc="evaluate", unit="clip", file=sys.stderr, disable=args.quiet) as bar:
-        def step(what: str) -> None:
-            bar.set_postfix_str(what)
-            bar.update()
-        rows = evaluate(motions, hands, targets, methods, progress=step)
+    with _progress_bar("evaluate", total, "clip", disable=args.quiet):
+        rows = evaluate(motions, hands, targets, methods)
     summary = summarise(rows)
     print(f"{len(motions)} motions x {len(targets)} held-out hands ({', '.join(targets)})")
     print(format_markdown(summary))
     for path in write_results(rows, summary, args.out):
         print(f"wrote {path}")
     return 0
+
+
+@contextmanager
+def _progress_bar(desc: str, total: int, unit: str, disable: bool | None) -> Iterator[None]:
+    """A tqdm bar on stderr of ``total`` units that follows what the block reports (`retarget.progress`),
+    naming the running stage; ``disable`` None: no bar when stderr is not a terminal."""
+    from tqdm import tqdm
+
+    from s2h_viewer.retarget.progress import reporting
+
+    with tqdm(total=total, desc=desc, unit=unit, unit_scale=True, file=sys.stderr, disable=disable) as bar:
+        def hook(fraction: float, what: str) -> None:
+            if what:
+                bar.set_postfix_str(what, refresh=False)
+            bar.update(round(fraction * total) - bar.n)
+
+        with reporting(hook):
+            yield
 
 
 def _render_comparison(args: argparse.Namespace) -> int:
@@ -54,10 +69,8 @@ def _render_comparison(args: argparse.Namespace) -> int:
     source = rig or samples.load_sample_hand(motion.hand_name)
     targets = [load_hand_file(t, _rig_options(args)) for t in (args.target or ["iris", "laurel"])]
     methods = (args.methods or "tbs_copy,asrn").split(",")
-    with tqdm(total=len(targets) * len(methods), desc="retarget", file=sys.stderr, disable=args.quiet) as bar:
-        comparison = build_comparison(motion, source, targets, methods,
-                                      progress=lambda done, total, what: (bar.set_postfix_str(what),
-                                                                          bar.update(done - bar.n)))
+    with _progress_bar("retarget", len(targets) * len(methods), "retarget", disable=args.quiet):
+        comparison = build_comparison(motion, source, targets, methods)
     with tqdm(total=comparison.n_frames, desc="render", unit="frame", file=sys.stderr, disable=args.quiet) as bar:
         path = render_comparison(comparison, args.out, frame=args.frame,
                                  progress=lambda done, total: bar.update(done - bar.n))
@@ -178,8 +191,6 @@ def _cmd_annotate(args: argparse.Namespace) -> int:
 
 
 def _cmd_retarget(args: argparse.Namespace) -> int:
-    from tqdm import tqdm
-
     from s2h_viewer.io.files import load_hand_file, load_motion_file, save_motion_file
     from s2h_viewer.retarget import retarget
 
@@ -190,10 +201,10 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
         from s2h_viewer.samples import load_sample_hand
         source = load_sample_hand(motion.hand_name)
     target = load_hand_file(args.target, options)
-    with tqdm(total=motion.n_frames, desc=f"retarget ({args.method})", unit="frame", unit_scale=True,
-              file=sys.stderr, disable=args.quiet or None) as bar:  # None: no bar when not on a terminal
-        result = retarget(motion, source, target, args.method, progress=lambda done, total: bar.update(done - bar.n))
-    path = save_motion_file(args.out, result, target)
+    with _progress_bar(f"retarget ({args.method})", motion.n_frames, "frame",
+                       disable=args.quiet or None):  # None: no bar when not on a terminal
+        retargeted = retarget(motion, source, target, args.method)
+    path = save_motion_file(args.out, retargeted, target)
     print(f"{motion.name}: {motion.n_frames} frames, {source.name} -> {target.name} ({args.method}) -> {path}")
     return 0
 

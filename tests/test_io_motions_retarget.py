@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import resource
+import signal
+
 import numpy as np
 import pytest
 import torch
@@ -56,17 +59,20 @@ def test_corrupt_and_malformed_files_give_one_clear_error(tmp_path, rng):
         load_hand(tmp_path / "missing.npz")
 
 
-def test_failed_write_leaves_the_old_file_intact(tmp_path, rng, monkeypatch):
+def test_failed_write_leaves_the_old_file_intact(tmp_path, rng):
     path = tmp_path / "keep.npz"
     motion = Motion(q_tbs=random_tbs_motion(4, rng).numpy(), name="original")
     save_motion(motion, path)
-
-    def broken(*args, **kwargs):
-        raise OSError("disk full")
-    monkeypatch.setattr(np, "savez_compressed", broken)
-    with pytest.raises(OSError):
-        save_motion(Motion(q_tbs=random_tbs_motion(4, rng).numpy(), name="new"), path)
-    monkeypatch.undo()
+    bigger = Motion(q_tbs=random_tbs_motion(4000, rng).numpy(), name="new")  # ~1 MiB, random: incompressible
+    limit = resource.getrlimit(resource.RLIMIT_FSIZE)
+    no_signal = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # a write past the limit fails (EFBIG) instead
+    resource.setrlimit(resource.RLIMIT_FSIZE, (64 * 1024, limit[1]))  # the disk is full after 64 KiB
+    try:
+        with pytest.raises(OSError):
+            save_motion(bigger, path)
+    finally:
+        resource.setrlimit(resource.RLIMIT_FSIZE, limit)
+        signal.signal(signal.SIGXFSZ, no_signal)
     assert load_motion(path).name == "original"
     assert [p.name for p in tmp_path.iterdir()] == ["keep.npz"]  # no temporary left behind
 

@@ -19,6 +19,7 @@ from s2h_viewer.errors import S2HError
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.io.annotation import Annotation
 from s2h_viewer.hand.model import HandModel
+from s2h_viewer.retarget.progress import report
 from s2h_viewer.widgets.annotation_view import AnnotationView
 
 
@@ -148,12 +149,11 @@ class AnnotateMode(QObject):
             keep_manual = choice == 0
         hand = self.session.hand
 
-        def solve(progress):
-            progress(0, 1, f"casting rays at {hand.name}")
+        def solve() -> TbsSolution:
+            report(0.0, f"casting rays at {hand.name}")
             return solve_tbs_frames(hand)
 
-        self.runner.start(solve, "Running the TBS solver...", 1,
-                          lambda solution: self._on_solution(solution, keep_manual))
+        self.runner.start(solve, "Running the TBS solver...", lambda solution: self._on_solution(solution, keep_manual))
 
     def _on_solution(self, solution: TbsSolution, keep_manual: bool) -> None:
         session = self.session

@@ -14,7 +14,7 @@ from s2h_viewer.hand.motion import Motion
 from s2h_viewer.retarget.compare_state import ResultKey
 from s2h_viewer.retarget.comparison import compute_result, source_semantics
 from s2h_viewer.retarget.methods import METHODS
-from s2h_viewer.retarget.progress import Cancelled, reporting
+from s2h_viewer.retarget.progress import Cancelled, report, reporting, stage
 
 Job = tuple[ResultKey, Motion, HandModel, HandModel]  # key, motion, source, target (the key names the method)
 
@@ -81,20 +81,20 @@ class RetargetQueue(QObject):
                 self._cancel.clear()
             what = f"{METHODS[key.method].label if key.method in METHODS else key.method} -> {target.name}"
 
-            def hook(fraction: float, what: str = what) -> None:
+            def hook(fraction: float, what: str) -> None:
                 if self._cancel.is_set():
                     raise Cancelled()
                 self.progress.emit(fraction, what)
 
             try:
-                with reporting(hook):
-                    hook(0.0)
+                with reporting(hook), stage(0.0, 1.0, what):
+                    report(0.0)
                     semantics_key = (key.motion, key.source)
                     if semantics_key not in self._semantics:
                         self._semantics = {semantics_key: source_semantics(motion, source)}
                         self.semantics_ready.emit(semantics_key, self._semantics[semantics_key])
                     result = compute_result(motion, source, self._semantics[semantics_key][1], target, key.method)
-                    hook(1.0)
+                    report(1.0)
                 self.computed.append(key)
                 outcome = (self.result_ready, key, result)
             except Cancelled:

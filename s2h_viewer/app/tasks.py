@@ -1,4 +1,5 @@
-"""Long work off the GUI thread: one job at a time in a QThread behind a progress dialog."""
+"""Long work off the GUI thread: one job at a time in a QThread behind a progress dialog, which hears
+the job's reports (`retarget.progress`)."""
 
 from __future__ import annotations
 
@@ -8,24 +9,29 @@ from PySide6.QtCore import QObject, QThread, Signal
 from PySide6.QtWidgets import QProgressDialog, QWidget
 
 from s2h_viewer.errors import S2HError
+from s2h_viewer.retarget.progress import reporting
 
-Progress = Callable[[int, int, str], None]
+#: steps of the progress dialog's bar
+DIALOG_STEPS = 1000
 
 
 class Task(QObject):
-    """Runs ``fn(progress)`` in a QThread; reports progress, the result, or the error's one-line message."""
+    """Runs ``fn()`` in a QThread; signals its reports (fraction, what), the result, or the error's one-line
+    message."""
 
-    progress = Signal(int, int, str)
+    progress = Signal(float, str)
     finished = Signal(object)
     failed = Signal(str)
 
-    def __init__(self, fn: Callable[[Progress], object]):
+    def __init__(self, fn: Callable[[], object]):
         super().__init__()
         self.fn = fn
 
     def run(self) -> None:
         try:
-            self.finished.emit(self.fn(lambda done, total, what: self.progress.emit(done, total, what)))
+            with reporting(self.progress.emit):
+                result = self.fn()
+            self.finished.emit(result)
         except (S2HError, KeyError, ValueError) as exc:
             self.failed.emit(str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc))
 
@@ -45,16 +51,16 @@ class TaskRunner(QObject):
     def busy(self) -> bool:
         return self._thread is not None
 
-    def start(self, fn: Callable[[Progress], object], label: str, total: int,
-              on_done: Callable[[object], None]) -> None:
-        """Run ``fn(progress)`` off the GUI thread behind a progress dialog; errors become a dialog."""
+    def start(self, fn: Callable[[], object], label: str, on_done: Callable[[object], None]) -> None:
+        """Run ``fn()`` off the GUI thread behind a progress dialog that follows its reports; errors become a
+        dialog."""
         if self._thread is not None:
             return
         self._thread = QThread(self)
         task = Task(fn)
         task.moveToThread(self._thread)
         self._thread.started.connect(task.run)
-        self._progress = QProgressDialog(label, None, 0, total, self._parent)
+        self._progress = QProgressDialog(label, None, 0, DIALOG_STEPS, self._parent)
         self._progress.setWindowTitle("s2h-viewer")
         self._progress.setMinimumDuration(300)
         task.progress.connect(self._on_progress)
@@ -78,12 +84,11 @@ class TaskRunner(QObject):
         self.finish()
         self._on_done(result)
 
-    def _on_progress(self, done: int, total: int, what: str) -> None:
+    def _on_progress(self, fraction: float, what: str) -> None:
         if self._progress is not None:
-            self._progress.setMaximum(total)
-            self._progress.setValue(done)
+            self._progress.setValue(round(fraction * DIALOG_STEPS))
             self._progress.setLabelText(what)
-        self._on_status(f"{done}/{total}: {what}")
+        self._on_status(f"{fraction:.0%}: {what}")
 
     def _on_failure(self, message: str) -> None:
         self.finish()

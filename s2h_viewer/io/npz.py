@@ -25,8 +25,9 @@ from pathlib import Path
 import numpy as np
 
 from s2h_viewer.errors import InputFileError, S2HError, reading, require_readable_file
+from s2h_viewer.hand.chunks import frame_chunks, nonfinite_frames
 from s2h_viewer.hand.model import HandModel, SkinnedMesh
-from s2h_viewer.hand.motion import Motion
+from s2h_viewer.hand.motion import Motion, shared_labels
 from s2h_viewer.io.atomic import atomic_path
 
 HAND_SCHEMA_VERSION = 1
@@ -44,6 +45,10 @@ MAX_MESH_FACES = 4_000_000
 MAX_TEXT_CHARS = 1_000_000
 #: deepest nesting accepted in ``meta_json``
 MAX_JSON_DEPTH = 32
+#: bytes of a member decompressed and converted at once while reading
+READ_CHUNK_BYTES = 4 * 1024 ** 2
+#: how a motion's members are held once read: rotations float32, labels one shared string per label
+MOTION_LOAD_AS = {"q_tbs": (np.float32, None), "labels": (object, shared_labels)}
 
 
 @dataclass(frozen=True)
@@ -100,8 +105,11 @@ def _check_field(path: Path, key: str, field: Field, shape: tuple, dtype: np.dty
             raise InputFileError(path, f"field {key} has shape {shape}, expected {described}")
 
 
-def _open(path: Path, schema: str, fields: dict[str, Field]) -> dict[str, np.ndarray]:
-    """The members of ``path`` named in ``fields``, each checked against its entry before it is read."""
+def _open(path: Path, schema: str, fields: dict[str, Field], load_as: dict[str, tuple] | None = None
+          ) -> dict[str, np.ndarray]:
+    """The members of ``path`` named in ``fields``, each checked against its entry before it is read;
+    ``load_as[key]`` = (dtype, convert) reads that member as ``dtype``, passing each chunk through ``convert``."""
+    load_as = load_as or {}
     require_readable_file(path)
     try:
         with zipfile.ZipFile(path) as archive:
@@ -120,8 +128,7 @@ def _open(path: Path, schema: str, fields: dict[str, Field]) -> dict[str, np.nda
             for key, field in fields.items():
                 if key in members:
                     _check_field(path, key, field, *_header(archive, members[key]), sizes)
-            with np.load(path, allow_pickle=False) as data:
-                arrays = {k: data[k] for k in fields if k in members}
+            arrays = {k: _read(archive, members[k], *load_as.get(k, (None, None))) for k in fields if k in members}
     except InputFileError:
         raise
     except Exception as exc:  # zipfile, zlib, the npy header parser: many types on damaged input
@@ -136,13 +143,44 @@ def _open(path: Path, schema: str, fields: dict[str, Field]) -> dict[str, np.nda
                                    f"from the rig's rest pose, not the canonical pose; re-export it from its "
                                    f"source file (BVH, glTF, FBX) or regenerate it (`make assets`)")
     for key, value in arrays.items():
-        if value.dtype.kind == "f" and not np.isfinite(value).all():
-            if fields[key].shape[:1] == ("T",):
-                bad = ~np.isfinite(value.reshape(len(value), -1)).all(axis=1)
-                raise InputFileError(path, f"field {key} has NaN or infinite values in {int(bad.sum())} frames "
-                                           f"(first at frame {int(np.flatnonzero(bad)[0])})")
+        if value.dtype.kind != "f":
+            continue
+        n_bad, first_bad = nonfinite_frames(np.atleast_1d(value))
+        if n_bad and fields[key].shape[:1] == ("T",):
+            raise InputFileError(path, f"field {key} has NaN or infinite values in {n_bad} frames "
+                                       f"(first at frame {first_bad})")
+        if n_bad:
             raise InputFileError(path, f"field {key} contains NaN or infinite values")
     return arrays
+
+
+def _read(archive: zipfile.ZipFile, member: str, dtype=None, convert=None) -> np.ndarray:
+    """One npy member as ``dtype`` (default: its own), its rows decompressed, converted and copied a chunk
+    at a time, so a clip is never held twice (as stored and as wanted)."""
+    with archive.open(member) as fh:
+        version = np.lib.format.read_magic(fh)
+        shape, fortran, stored = (np.lib.format.read_array_header_1_0(fh) if version == (1, 0)
+                                  else np.lib.format.read_array_header_2_0(fh))
+        if fortran or not shape:  # scalars, and column-major arrays no writer of ours makes: whole
+            size = stored.itemsize * int(np.prod(shape))
+            data = fh.read(size)
+            if len(data) < size:
+                raise ValueError(f"member {member} ends before its {size} bytes")
+            whole = np.frombuffer(data, stored).reshape(shape, order="F" if fortran else "C")
+            return whole.astype(dtype or stored) if convert is None else convert(whole)
+        out = np.empty(shape, dtype or stored)
+        row_bytes = stored.itemsize * int(np.prod(shape[1:]))
+        rows = max(1, READ_CHUNK_BYTES // max(row_bytes, 1))
+        for first in range(0, shape[0], rows):
+            end = min(first + rows, shape[0])
+            data = fh.read((end - first) * row_bytes)
+            if len(data) < (end - first) * row_bytes:
+                raise ValueError(f"member {member} ends after {first} of its {shape[0]} rows")
+            chunk = np.frombuffer(data, stored).reshape(end - first, *shape[1:])
+            out[first:end] = chunk if convert is None else convert(chunk)
+        if fh.read(1):
+            raise ValueError(f"member {member} holds more data than its header declares")
+    return out
 
 
 def _meta(path: Path, arrays: dict[str, np.ndarray]) -> dict:
@@ -175,23 +213,45 @@ def save_motion(motion: Motion, path: str | Path) -> Path:
     """Write a motion npz atomically."""
     path = Path(path)
     with atomic_path(path) as tmp, open(tmp, "wb") as fh:
-        np.savez_compressed(fh, schema="s2h-motion", schema_version=MOTION_SCHEMA_VERSION, q_tbs=motion.q_tbs,
-                            fps=np.float64(motion.fps), name=motion.name, hand_name=motion.hand_name,
-                            labels=motion.labels.astype(str), meta_json=json.dumps(motion.meta))
+        _write(fh, dict(schema="s2h-motion", schema_version=MOTION_SCHEMA_VERSION, q_tbs=motion.q_tbs,
+                        fps=np.float64(motion.fps), name=motion.name, hand_name=motion.hand_name,
+                        labels=motion.labels, meta_json=json.dumps(motion.meta)))
     return path
+
+
+def _write(fh, members: dict) -> None:
+    """A compressed npz of ``members`` (what ``np.savez_compressed`` writes), streamed a chunk of rows at a
+    time: neither the rotations nor the labels (an object array of strings, written as fixed-width text)
+    are ever copied whole."""
+    with zipfile.ZipFile(fh, "w", compression=zipfile.ZIP_DEFLATED, allowZip64=True) as archive:
+        for key, value in members.items():
+            value = np.asanyarray(value)
+            with archive.open(f"{key}.npy", "w", force_zip64=True) as member:
+                if value.ndim == 0:
+                    np.lib.format.write_array(member, value, allow_pickle=False)
+                    continue
+                stored = value.dtype
+                if stored == object:
+                    width = max(max(len(str(v)) for v in set(value[first:end].tolist()))
+                                for first, end in frame_chunks(len(value)))
+                    stored = np.dtype(f"<U{max(width, 1)}")
+                np.lib.format.write_array_header_1_0(member, {"descr": np.lib.format.dtype_to_descr(stored),
+                                                              "fortran_order": False, "shape": value.shape})
+                for first, end in frame_chunks(len(value)):
+                    member.write(np.ascontiguousarray(value[first:end], dtype=stored).data)
 
 
 def load_motion(path: str | Path) -> Motion:
     """Read a motion npz; any problem is an `InputFileError` naming the file."""
     path = Path(path)
     with reading(path, "an s2h motion"):
-        arrays = _open(path, "s2h-motion", MOTION_FIELDS)
+        arrays = _open(path, "s2h-motion", MOTION_FIELDS, MOTION_LOAD_AS)
         if float(arrays["fps"]) <= 0:
             raise InputFileError(path, f"frame rate {float(arrays['fps'])} is not positive")
         try:
             return Motion(q_tbs=arrays["q_tbs"], fps=float(arrays["fps"]), name=str(arrays.get("name", path.stem)),
                           hand_name=str(arrays.get("hand_name", "")),
-                          labels=arrays["labels"].astype(object) if "labels" in arrays else None,
+                          labels=arrays.get("labels"),
                           meta=_meta(path, arrays))
         except S2HError as exc:
             raise InputFileError(path, str(exc)) from None
@@ -206,7 +266,7 @@ def save_hand(hand: HandModel, path: str | Path) -> Path:
     if hand.mesh is not None:
         fields.update(mesh_vertices=hand.mesh.vertices, mesh_faces=hand.mesh.faces, mesh_weights=hand.mesh.weights)
     with atomic_path(path) as tmp, open(tmp, "wb") as fh:
-        np.savez_compressed(fh, **fields)
+        _write(fh, fields)
     return path
 
 

@@ -24,7 +24,7 @@ from s2h_viewer.hand.motion import Motion
 from s2h_viewer.hand.rotations import quat_to_tbs_euler, tbs_euler_to_quat
 from s2h_viewer.retarget.methods import on_target, register
 from s2h_viewer.retarget.progress import report
-from s2h_viewer.retarget.windows import Progress, stream_windows
+from s2h_viewer.retarget.windows import stream_windows
 from s2h_viewer.semantics.anatomy import angle_excess, clamp_bends
 from s2h_viewer.semantics.asm import semantic_matrix
 from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, contact_gaps
@@ -63,8 +63,7 @@ def interpolate_keys(values: torch.Tensor, keys: np.ndarray, n_frames: int) -> t
 
 
 def optimise_asm(source_q: np.ndarray, source_hand: HandModel, target_hand: HandModel,
-                 initial_q: np.ndarray | None = None, config: AsmOptConfig = AsmOptConfig(),
-                 progress: Progress | None = None) -> np.ndarray:
+                 initial_q: np.ndarray | None = None, config: AsmOptConfig = AsmOptConfig()) -> np.ndarray:
     """(T, 15, 4) target TBS rotations whose ASM matches the source's: each chunk of `AsmOptConfig.chunk`
     frames optimised on its own (batched over its frames), chunks cross-faded over ``chunk_overlap``
     frames, so memory stays that of one chunk however long the clip."""
@@ -81,8 +80,7 @@ def optimise_asm(source_q: np.ndarray, source_hand: HandModel, target_hand: Hand
     def finish(first: int, end: int, angles: np.ndarray) -> None:
         out[first:end] = tbs_euler_to_quat(torch.as_tensor(angles, dtype=torch.float32)).numpy()
 
-    stream_windows(n_frames, chunk, min(config.chunk_overlap, chunk - 1), run, finish, windows_per_batch=1,
-                   progress=progress)
+    stream_windows(n_frames, chunk, min(config.chunk_overlap, chunk - 1), run, finish, windows_per_batch=1)
     return out
 
 
@@ -102,7 +100,7 @@ def _optimise_chunk(source_q: np.ndarray, source_hand: HandModel, target_hand: H
     optimiser = torch.optim.Adam([correction], lr=config.learning_rate)
     tol = CONTACT_TOLERANCE
     for step in range(config.steps):
-        report(step / config.steps)  # progress, and where a cancel stops the optimisation
+        report(step / config.steps)  # progress within the chunk's stage, and where a cancel stops it
         angles = start[keys] + correction
         q = tbs_euler_to_quat(angles)
         pose = forward_kinematics(target_hand, q)
@@ -123,7 +121,6 @@ def _optimise_chunk(source_q: np.ndarray, source_hand: HandModel, target_hand: H
 
 
 @register("asm_opt", "ASM-Opt", "optimise the target pose per clip to match the source's semantics (no training)")
-def retarget_asm_opt(motion: Motion, source_hand: HandModel, target_hand: HandModel,
-                     progress: Progress | None = None) -> Motion:
-    q = optimise_asm(motion.q_tbs, source_hand, target_hand, progress=progress)
+def retarget_asm_opt(motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
+    q = optimise_asm(motion.q_tbs, source_hand, target_hand)
     return on_target(motion, target_hand, q, "asm_opt")

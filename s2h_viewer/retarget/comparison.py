@@ -6,7 +6,6 @@ Pure computation (no Qt): the app runs `build_comparison` off the GUI thread and
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -76,17 +75,14 @@ def compute_result(motion: Motion, source: HandModel, source_asm: torch.Tensor, 
     return MethodResult(method, target, moved, pose, cell_error, scores)
 
 
-def build_comparison(motion: Motion, source: HandModel, targets: list[HandModel], methods: list[str],
-                     progress: Callable[[int, int, str], None] | None = None) -> Comparison:
-    """Retarget ``motion`` onto every target with every method; ``progress(done, total, what)``."""
+def build_comparison(motion: Motion, source: HandModel, targets: list[HandModel], methods: list[str]) -> Comparison:
+    """Retarget ``motion`` onto every target with every method, each an equal stage of the progress
+    (``retarget.progress``), named "method -> target"."""
     source_pose, source_asm = source_semantics(motion, source)
-    total = len(targets) * len(methods)
+    jobs = [(target, method) for target in targets for method in methods]
     results = []
-    for target in targets:
-        for method in methods:
-            if progress:
-                progress(len(results), total, f"{method} -> {target.name}")
+    for i, (target, method) in enumerate(jobs):
+        with stage(i / len(jobs), (i + 1) / len(jobs), f"{method} -> {target.name}"):
             results.append(compute_result(motion, source, source_asm, target, method))
-    if progress:
-        progress(total, total, "done")
+    report(1.0, "done")
     return Comparison(source, motion, source_pose, results)

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import csv
 import io
-from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -23,6 +22,7 @@ from s2h_viewer.hand.motion import Motion
 from s2h_viewer.io.atomic import atomic_path
 from s2h_viewer.motions.synthesis import resynthesize
 from s2h_viewer.retarget.methods import METHODS, retarget
+from s2h_viewer.retarget.progress import report, stage
 from s2h_viewer.semantics.metrics import RetargetScores, score_retarget
 
 METRICS = ("mse", "s_palm", "s_finger", "s_finger_paper", "contact_precision", "contact_recall",
@@ -54,9 +54,11 @@ def hand_family(hand: HandModel) -> str:
     return hand.meta.get("params", {}).get("style", "realistic")
 
 
-def evaluate(motions: list[Motion], hands: dict[str, HandModel], targets: list[str], methods: list[str],
-             progress: Callable[[str], None] | None = None) -> list[EvaluationRow]:
-    """Score every (motion, target hand, method); a motion's source hand is ``hands[motion.hand_name]``."""
+def evaluate(motions: list[Motion], hands: dict[str, HandModel], targets: list[str], methods: list[str]
+             ) -> list[EvaluationRow]:
+    """Score every (motion, target hand, method), each an equal stage of the progress (`retarget.progress`);
+    a motion's source hand is ``hands[motion.hand_name]``."""
+    total = len(motions) * len(targets) * len(methods)
     rows = []
     for motion in motions:
         if motion.hand_name not in hands:
@@ -67,11 +69,11 @@ def evaluate(motions: list[Motion], hands: dict[str, HandModel], targets: list[s
             reference = resynthesize(motion, target)
             family = "same" if hand_family(source) == hand_family(target) else "cross"
             for method in methods:
-                if progress:
-                    progress(f"{motion.name} -> {target_name} ({method})")
-                result = retarget(motion, source, target, method)
-                scores = score_retarget(source, motion.q_tbs, target, result.q_tbs,
-                                        reference.q_tbs if reference is not None else None)
+                with stage(len(rows) / total, (len(rows) + 1) / total, f"{motion.name} -> {target_name} ({method})"):
+                    result = retarget(motion, source, target, method)
+                    scores = score_retarget(source, motion.q_tbs, target, result.q_tbs,
+                                            reference.q_tbs if reference is not None else None)
+                report((len(rows) + 1) / total)
                 rows.append(EvaluationRow(method, motion.name, source.name, target_name, family, scores))
     return rows
 

@@ -2,6 +2,7 @@
 
 ``retarget(motion, source_hand, target_hand, method)`` returns the motion in the target's TBS space.
 This module holds the two copy baselines; learned and optimised methods register themselves the same way.
+A method says how far it is, and is cancelled, through `retarget.progress` (the caller installs the hook).
 """
 
 from __future__ import annotations
@@ -10,13 +11,16 @@ import dataclasses
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import numpy as np
+
+from s2h_viewer.hand.chunks import frame_chunks
 from s2h_viewer.hand.kinematics import rig_local_to_tbs, tbs_to_rig_local
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
-from s2h_viewer.retarget.windows import Progress
+from s2h_viewer.retarget.progress import report
 
-#: fn(motion, source hand, target hand, progress=None): long methods report frames done through progress
-RetargetFn = Callable[..., Motion]
+#: fn(motion, source hand, target hand) -> the motion on the target; reports through `retarget.progress`
+RetargetFn = Callable[[Motion, HandModel, HandModel], Motion]
 
 
 @dataclass(frozen=True)
@@ -38,15 +42,14 @@ def register(name: str, label: str, description: str) -> Callable[[RetargetFn], 
     return wrap
 
 
-def retarget(motion: Motion, source_hand: HandModel, target_hand: HandModel, method: str = "tbs_copy",
-             progress: Progress | None = None) -> Motion:
-    """Retarget ``motion`` (posed on ``source_hand``) onto ``target_hand`` with a registered method;
-    ``progress(frames done, frames)`` hears how far it is."""
+def retarget(motion: Motion, source_hand: HandModel, target_hand: HandModel, method: str = "tbs_copy") -> Motion:
+    """Retarget ``motion`` (posed on ``source_hand``) onto ``target_hand`` with a registered method (how far
+    it is goes to the hook of `retarget.progress.reporting`, which may cancel it)."""
     try:
         chosen = METHODS[method]
     except KeyError:
         raise KeyError(f"unknown retargeting method {method!r}; available: {', '.join(METHODS)}") from None
-    return chosen.run(motion, source_hand, target_hand, progress=progress)
+    return chosen.run(motion, source_hand, target_hand)
 
 
 def on_target(motion: Motion, target_hand: HandModel, q_tbs, method: str) -> Motion:
@@ -56,18 +59,17 @@ def on_target(motion: Motion, target_hand: HandModel, q_tbs, method: str) -> Mot
 
 
 @register("copy", "Copy", "copy the rig's local joint rotations (what most tools do)")
-def retarget_copy(motion: Motion, source_hand: HandModel, target_hand: HandModel,
-                  progress: Progress | None = None) -> Motion:
-    q_local = tbs_to_rig_local(source_hand, motion.q_tbs)
-    result = on_target(motion, target_hand, rig_local_to_tbs(target_hand, q_local).numpy(), "copy")
-    if progress is not None:
-        progress(motion.n_frames, motion.n_frames)
-    return result
+def retarget_copy(motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
+    q = np.empty_like(motion.q_tbs)
+    for first, end in frame_chunks(motion.n_frames):  # the conversions' temporaries stay one chunk's
+        q_local = tbs_to_rig_local(source_hand, motion.q_tbs[first:end])
+        q[first:end] = rig_local_to_tbs(target_hand, q_local).numpy()
+        report(end / motion.n_frames)
+    return on_target(motion, target_hand, q, "copy")
 
 
 @register("tbs_copy", "TBS Copy", "copy twist-bend-splay rotations, so a bend stays a bend on any rig")
-def retarget_tbs_copy(motion: Motion, source_hand: HandModel, target_hand: HandModel,
-                      progress: Progress | None = None) -> Motion:
-    if progress is not None:
-        progress(motion.n_frames, motion.n_frames)
-    return on_target(motion, target_hand, motion.q_tbs.copy(), "tbs_copy")
+def retarget_tbs_copy(motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
+    result = on_target(motion, target_hand, motion.q_tbs.copy(), "tbs_copy")
+    report(1.0)
+    return result

@@ -4,7 +4,9 @@ Windows of ``window`` frames start every ``window - overlap`` frames (the last o
 clip's end). A frame covered by one window takes that window's value unchanged; in an overlap the
 two windows' values are cross-faded linearly, so there is no seam at window borders. `stream_windows`
 runs a few windows at a time and hands out each stretch of frames as soon as no later window can
-touch it, so working memory depends on the window and batch sizes, never on the clip's length.
+touch it, so working memory depends on the window and batch sizes, never on the clip's length. It
+reports its progress (`retarget.progress`) after every batch, and each batch runs as a stage of it, so
+a method reporting inside a window (ASM-Opt's steps) moves the same bar and can be cancelled there.
 """
 
 from __future__ import annotations
@@ -13,8 +15,8 @@ from collections.abc import Callable
 
 import numpy as np
 
-#: progress(frames done, frames in all)
-Progress = Callable[[int, int], None]
+from s2h_viewer.retarget.progress import report, stage
+
 #: run(window starts, first frame, end frame) -> (len(starts), window, ...) values of those windows
 RunWindows = Callable[[list[int], int, int], np.ndarray]
 #: finish(first frame, end frame, blended values (end - first, ...)) for frames no later window touches
@@ -49,9 +51,10 @@ def blend_weights(starts: list[int], window: int) -> np.ndarray:
 
 
 def stream_windows(n_frames: int, window: int, overlap: int, run: RunWindows, finish: FinishFrames,
-                   windows_per_batch: int, progress: Progress | None = None) -> None:
+                   windows_per_batch: int) -> None:
     """Cover ``n_frames`` (at least ``window``) with windows, ``windows_per_batch`` at a time through ``run``,
-    and pass every frame's cross-faded value to ``finish`` exactly once, in order."""
+    and pass every frame's cross-faded value to ``finish`` exactly once, in order; reports the share of
+    frames finished (a ``Cancelled`` from the hook stops it between batches)."""
     starts = window_starts(n_frames, window, overlap)
     pending = None  # blended values of frames [pending_start, ...) that later windows may still touch
     pending_start = 0
@@ -59,7 +62,9 @@ def stream_windows(n_frames: int, window: int, overlap: int, run: RunWindows, fi
         hi = min(lo + windows_per_batch, len(starts))
         batch = starts[lo:hi]
         first, end = batch[0], batch[-1] + window
-        values = np.asarray(run(batch, first, end))
+        done = starts[hi] if hi < len(starts) else end  # frames before the next window are final
+        with stage(pending_start / n_frames, min(done, n_frames) / n_frames):
+            values = np.asarray(run(batch, first, end))
         with_neighbours = starts[max(lo - 1, 0):hi + 1]
         weights = blend_weights(with_neighbours, window)[(1 if lo > 0 else 0):][:len(batch)]
         grown = np.zeros((end - pending_start, *values.shape[2:]))
@@ -67,8 +72,6 @@ def stream_windows(n_frames: int, window: int, overlap: int, run: RunWindows, fi
             grown[:len(pending)] = pending
         for start, w, value in zip(batch, weights, values):
             grown[start - pending_start:start - pending_start + window] += w.reshape(-1, *[1] * (value.ndim - 1)) * value
-        done = starts[hi] if hi < len(starts) else end  # frames before the next window are final
         finish(pending_start, done, grown[:done - pending_start])
         pending, pending_start = grown[done - pending_start:], done
-        if progress is not None:
-            progress(min(done, n_frames), n_frames)
+        report(min(done, n_frames) / n_frames)

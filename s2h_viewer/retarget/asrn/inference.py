@@ -2,6 +2,7 @@
 (`retarget.windows`), streamed a batch of windows at a time so a long clip needs no more working
 memory than a short one: the features of one batch are made, run and blended, and the finished frames
 written into the output before the next batch starts. Window length and overlap are the model's.
+Progress and cancellation go through `retarget.progress` (after every batch).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from s2h_viewer.retarget.asrn.features import source_features, target_static
 from s2h_viewer.retarget.asrn.model import RetargetNet, apply_residual
 from s2h_viewer.retarget.asrn.training import TrainConfig, build_model, load_checkpoint, stored_config
 from s2h_viewer.retarget.methods import on_target, register
-from s2h_viewer.retarget.windows import Progress, stream_windows
+from s2h_viewer.retarget.windows import stream_windows
 
 MODELS_DIR = Path(__file__).resolve().parents[3] / "assets" / "models"
 #: source frames whose features are made and run at once: sets the working memory, not the result
@@ -26,8 +27,7 @@ FRAMES_PER_BATCH = 2048
 
 
 def run_network(model: RetargetNet, kind: str, source_hand: HandModel, source_q: np.ndarray,
-                target_hand: HandModel, window: int = 8, overlap: int = 2, progress: Progress | None = None
-                ) -> np.ndarray:
+                target_hand: HandModel, window: int = 8, overlap: int = 2) -> np.ndarray:
     """(T, 15, 4) target TBS rotations for a whole clip (a clip shorter than ``window`` is padded by
     holding its last frame)."""
     q = np.asarray(source_q, dtype=np.float32)
@@ -50,7 +50,7 @@ def run_network(model: RetargetNet, kind: str, source_hand: HandModel, source_q:
                                             torch.as_tensor(rotvec[:end - first], dtype=torch.float32)).numpy()
 
     stream_windows(max(n_frames, window), window, overlap, run, finish,
-                   windows_per_batch=max(1, FRAMES_PER_BATCH // max(window - overlap, 1)), progress=progress)
+                   windows_per_batch=max(1, FRAMES_PER_BATCH // max(window - overlap, 1)))
     return out
 
 
@@ -64,21 +64,18 @@ def load_network(path: str) -> tuple[RetargetNet, TrainConfig]:
     return model.eval(), config
 
 
-def _retarget_with(kind: str, motion: Motion, source_hand: HandModel, target_hand: HandModel,
-                   progress: Progress | None) -> Motion:
+def _retarget_with(kind: str, motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
     model, config = load_network(str(MODELS_DIR / f"{kind}.pt"))
     q = run_network(model, kind, source_hand, motion.q_tbs, target_hand, window=config.window,
-                    overlap=config.window // 4, progress=progress)
+                    overlap=config.window // 4)
     return on_target(motion, target_hand, q, kind)
 
 
 @register("dm", "DM", "the network on distance matrices (Zhang et al. 2023) instead of the ASM")
-def retarget_dm(motion: Motion, source_hand: HandModel, target_hand: HandModel,
-                progress: Progress | None = None) -> Motion:
-    return _retarget_with("dm", motion, source_hand, target_hand, progress)
+def retarget_dm(motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
+    return _retarget_with("dm", motion, source_hand, target_hand)
 
 
 @register("asrn", "ASRN", "the anatomy-based semantic retargeting network (trained, shipped)")
-def retarget_asrn(motion: Motion, source_hand: HandModel, target_hand: HandModel,
-                  progress: Progress | None = None) -> Motion:
-    return _retarget_with("asrn", motion, source_hand, target_hand, progress)
+def retarget_asrn(motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
+    return _retarget_with("asrn", motion, source_hand, target_hand)
