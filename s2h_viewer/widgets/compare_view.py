@@ -1,7 +1,8 @@
 """Compare mode's viewport: the compare grid (`render.compare_scene`) in one render window with
 linked cameras, drawn in VTK's native-window widget (`widgets.vtk_widget`), redrawn on ``show_frame``.
 
-A new frame asks for a repaint (``update``): one render per frame for the whole grid. A double-click
+A new frame asks for a repaint (``update``): one render per frame for the whole grid. While the
+timeline plays, each skin is drawn with fewer faces; paused, the full display mesh. A double-click
 on a hand shows its viewport alone (solo), a second one brings the grid back. ``drawn`` fires after
 every render, so the timeline can show the frames actually drawn per second."""
 
@@ -15,7 +16,8 @@ from PySide6.QtCore import QEvent, QObject, Signal
 from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
-from s2h_viewer.render.compare_scene import PosedHand, ViewOptions, apply_options, grid_layout, populate
+from s2h_viewer.render.compare_scene import (PLAYING_FACES, PosedHand, ViewOptions, apply_options, grid_layout,
+                                             populate)
 from s2h_viewer.retarget.comparison import Comparison
 from s2h_viewer.widgets.vtk_widget import PlotterWidget, window_plotter
 
@@ -38,6 +40,7 @@ class CompareView(QWidget):
         self.solo = -1
         self._viewports: list[tuple[float, ...]] = []
         self.frame = 0
+        self.playing = False
 
     @property
     def opacity(self) -> float:
@@ -53,7 +56,9 @@ class CompareView(QWidget):
         self.plotter.render_window.AddObserver("EndEvent", lambda *_: self.drawn.emit())
         self._layout.addWidget(self.interactor)
         self.interactor.Initialize()
-        self._hands = populate(self.plotter, comparison, self.options.opacity)
+        self._hands = populate(self.plotter, comparison, self.options.opacity, playing_faces=PLAYING_FACES)
+        for hand in self._hands:
+            hand.set_playing(self.playing)
         self._viewports = [tuple(r.GetViewport()) for r in self.plotter.renderers]
         self.solo = -1
         apply_options(self.plotter, self._hands, self.options)
@@ -63,6 +68,14 @@ class CompareView(QWidget):
         self.frame = frame
         for hand in self._hands:
             hand.show(frame)
+        if self.interactor is not None:
+            self.interactor.update()
+
+    def set_playing(self, playing: bool) -> None:
+        """Lighter skins while playing (`render.compare_scene.PLAYING_FACES`), the full ones when paused."""
+        self.playing = playing
+        for hand in self._hands:
+            hand.set_playing(playing)
         if self.interactor is not None:
             self.interactor.update()
 
