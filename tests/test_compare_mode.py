@@ -197,7 +197,7 @@ def test_a_slow_view_drops_frames_to_keep_real_time(window, qtbot):
         assert frame <= first + (when - started) * fps + 1e-6  # never ahead of the clock
 
 
-def test_skins_are_lighter_while_playing_and_full_again_when_paused(window, qtbot):
+def test_skins_are_lighter_while_the_grid_plays_and_full_when_paused_or_alone(window, qtbot):
     from s2h_viewer.hand.skinning import skin_vertices
     from s2h_viewer.render.scene import to_view
     hand = window.view._hands[1]
@@ -208,6 +208,10 @@ def test_skins_are_lighter_while_playing_and_full_again_when_paused(window, qtbo
     qtbot.waitUntil(lambda: window.timeline.frame > 6, timeout=20_000)
     assert light.actor.visibility and not full.actor.visibility
     assert hand.frame == window.view.frame and window.view.playing
+    window.view.set_solo(1)  # shown alone: full detail even while playing
+    assert full.actor.visibility and not light.actor.visibility
+    window.view.set_solo(-1)
+    assert light.actor.visibility and not full.actor.visibility
     window.timeline.set_playing(False)
     frame = window.timeline.frame
     assert full.actor.visibility and not light.actor.visibility and not window.view.playing

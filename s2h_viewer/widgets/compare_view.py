@@ -2,7 +2,8 @@
 linked cameras, drawn in VTK's native-window widget (`widgets.vtk_widget`), redrawn on ``show_frame``.
 
 A new frame asks for a repaint (``update``): one render per frame for the whole grid. While the
-timeline plays, each skin is drawn with fewer faces; paused, the full display mesh. A double-click
+timeline plays, each skin of the grid is drawn with fewer faces; paused or shown alone, the full
+display mesh. A double-click
 on a hand shows its viewport alone (solo), a second one brings the grid back. ``drawn`` fires after
 every render, so the timeline can show the frames actually drawn per second."""
 
@@ -57,10 +58,9 @@ class CompareView(QWidget):
         self._layout.addWidget(self.interactor)
         self.interactor.Initialize()
         self._hands = populate(self.plotter, comparison, self.options.opacity, playing_faces=PLAYING_FACES)
-        for hand in self._hands:
-            hand.set_playing(self.playing)
         self._viewports = [tuple(r.GetViewport()) for r in self.plotter.renderers]
         self.solo = -1
+        self._choose_skins()
         apply_options(self.plotter, self._hands, self.options)
         self.show_frame(min(self.frame, comparison.n_frames - 1))
 
@@ -72,12 +72,16 @@ class CompareView(QWidget):
             self.interactor.update()
 
     def set_playing(self, playing: bool) -> None:
-        """Lighter skins while playing (`render.compare_scene.PLAYING_FACES`), the full ones when paused."""
         self.playing = playing
-        for hand in self._hands:
-            hand.set_playing(playing)
+        self._choose_skins()
         if self.interactor is not None:
             self.interactor.update()
+
+    def _choose_skins(self) -> None:
+        """Lighter skins (`render.compare_scene.PLAYING_FACES`) while the grid plays; the full ones when
+        paused, and for a hand shown alone (one hand draws fast enough at full detail)."""
+        for hand in self._hands:
+            hand.set_playing(self.playing and self.solo < 0)
 
     def set_options(self, **changes) -> None:
         """Change the camera preset, overlays or opacity (``ViewOptions`` fields) and redraw."""
@@ -110,6 +114,7 @@ class CompareView(QWidget):
         for renderer, viewport in zip(self.plotter.renderers, self._viewports):
             renderer.SetViewport(*((0.0, 0.0, 1.0, 1.0) if renderer is solo else viewport))
             renderer.SetDraw(solo is None or renderer is solo)
+        self._choose_skins()
         self.solo_changed.emit(index)
         self.interactor.update()
 
