@@ -3,9 +3,9 @@ linked cameras, drawn in VTK's native-window widget (`widgets.vtk_widget`), redr
 
 A new frame asks for a repaint (``update``): one render per frame for the whole grid. While the
 timeline plays, each skin of the grid is drawn with fewer faces; paused or shown alone, the full
-display mesh. A double-click
-on a hand shows its viewport alone (solo), a second one brings the grid back. ``drawn`` fires after
-every render, so the timeline can show the frames actually drawn per second."""
+display mesh. A double-click on a hand shows its viewport alone (solo), a second one brings the grid
+back. ``drawn`` fires after every render, so the timeline can show the frames actually drawn per
+second."""
 
 from __future__ import annotations
 
