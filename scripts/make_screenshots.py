@@ -15,7 +15,7 @@ import shutil
 import tempfile
 from pathlib import Path
 
-from s2h_viewer.app.scripted import screen_image, scripted_window, settle, wait_for
+from s2h_viewer.app.scripted import screen_image, scripted_window, wait_for
 from s2h_viewer.samples import ASSETS_DIR
 
 DOCS = Path(__file__).resolve().parent.parent / "docs"
@@ -36,8 +36,7 @@ def main() -> None:
         window.run_solver()
         wait_for(window.annotation_ready)
         window.annotate_view.select(7)  # middle_pip
-        settle()
-        window.grab().save(str(DOCS / "annotation_mode.png"))
+        screen_image(window, DOCS / "annotation_mode.png")
     print(f"wrote {DOCS / 'compare_mode.png'}, {DOCS / 'compare_solo.png'} and {DOCS / 'annotation_mode.png'}")
 
 

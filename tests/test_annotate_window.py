@@ -53,7 +53,7 @@ def widget_point(view, point: np.ndarray) -> QPoint:
     coordinate = vtkCoordinate()
     coordinate.SetCoordinateSystemToWorld()
     coordinate.SetValue(*point)
-    x, y = coordinate.GetComputedDoubleDisplayValue(view.interactor.renderer)
+    x, y = coordinate.GetComputedDoubleDisplayValue(view.plotter.renderer)
     scale = view.interactor.devicePixelRatioF()
     return QPoint(round(x / scale), round(view.interactor.height() - 1 - y / scale))
 
@@ -111,7 +111,7 @@ def test_click_a_joint_drag_its_ring_and_undo(window, qtbot, hand_file):
     gaps = np.linalg.norm(on_screen[:, None] - on_screen[None], axis=2) + np.eye(len(on_screen)) * 1e9
     ring_px = np.linalg.norm(on_screen[0] - np.array([widget_point(view, ring_point(view, 0, 0)).x(),
                                                       widget_point(view, ring_point(view, 0, 0)).y()]))
-    towards_viewer = -np.array(view.interactor.camera.GetDirectionOfProjection())
+    towards_viewer = -np.array(view.plotter.camera.GetDirectionOfProjection())
     frames = to_view(window.annotation.hand, window.annotation.frames.transpose(0, 2, 1)).transpose(0, 2, 1)
     facing = np.abs(frames[:, :, 0] @ towards_viewer)  # rings that face the camera follow the pointer exactly
     candidates = [j for j in np.argsort(-gaps.min(axis=1)) if j != 0 and gaps[j, 0] > 2 * ring_px and facing[j] > 0.5]
@@ -125,7 +125,7 @@ def test_click_a_joint_drag_its_ring_and_undo(window, qtbot, hand_file):
                            widget_point(view, ring_point(view, joint, a + 50))).manhattanLength() > 25)
     path = [widget_point(view, ring_point(view, joint, start + t)) for t in np.linspace(0, drag, 11)]
     before = window.annotation.frames[joint].copy()
-    camera = np.array(view.interactor.camera.position)
+    camera = np.array(view.plotter.camera.position)
     QTest.mousePress(view.interactor, Qt.MouseButton.LeftButton, pos=path[0])
     assert view.ring.dragging  # the ring, not the camera, took the press
     for point in path[1:6]:
@@ -139,7 +139,7 @@ def test_click_a_joint_drag_its_ring_and_undo(window, qtbot, hand_file):
     assert abs(turn_angle(before, after) - drag) < 3.0
     np.testing.assert_allclose(after[:, 0], before[:, 0], atol=1e-9)  # the twist axis stays on the bone
     np.testing.assert_allclose(after, rotate_about_twist(before, turn_angle(before, after)), atol=1e-9)
-    np.testing.assert_allclose(view.interactor.camera.position, camera)  # the camera did not orbit
+    np.testing.assert_allclose(view.plotter.camera.position, camera)  # the camera did not orbit
     assert window.annotation.set_by[joint] == "manual" and window.isWindowModified()
     assert "manual" in view.joints.item(joint).text()
 
@@ -246,7 +246,7 @@ def test_an_edge_on_ring_rolls_under_the_pointer(window, qtbot, hand_file):
     view.select(joint)
     frame = to_view(window.annotation.hand, window.annotation.frames[joint].T).T
     centre = view.joint_centres()[joint]
-    camera = view.interactor.camera  # looking across the bone: the ring is seen edge-on
+    camera = view.plotter.camera  # looking across the bone: the ring is seen edge-on
     distance = camera.distance
     camera.focal_point = centre
     camera.position = centre + distance * frame[:, 2]

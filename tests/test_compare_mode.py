@@ -179,6 +179,45 @@ def test_playback_follows_the_clock(window, qtbot):
         assert frame >= first + (when - started) * fps - fps * 0.25 - 1  # at most a tick and a draw behind
 
 
+def test_a_slow_view_drops_frames_to_keep_real_time(window, qtbot):
+    slow = 0.3  # seconds each draw takes here: at 30 frames/s about 9 clip frames pass during one
+    window.view.drawn.connect(lambda: time.sleep(slow) if window.timeline.playing else None)
+    shown = []
+    window.timeline.frame_changed.connect(lambda f: shown.append((time.perf_counter(), f)))
+    window.timeline.set_frame(0)
+    shown.clear()
+    window.timeline.set_playing(True)
+    started, first = window.timeline._anchor
+    qtbot.waitUntil(lambda: len(shown) >= 4, timeout=20_000)
+    window.timeline.set_playing(False)
+    fps = window.timeline.clip_fps
+    frames = [frame for _, frame in shown[:4]]
+    assert all(b - a >= slow * fps * 0.5 for a, b in zip(frames, frames[1:])), frames  # frames were dropped
+    for when, frame in shown[:4]:
+        assert frame <= first + (when - started) * fps + 1e-6  # never ahead of the clock
+
+
+def test_skins_are_lighter_while_the_grid_plays_and_full_when_paused_or_alone(window, qtbot):
+    from s2h_viewer.hand.skinning import skin_vertices
+    from s2h_viewer.render.scene import to_view
+    hand = window.view._hands[1]
+    full, light = hand.levels  # the display mesh and the lighter one
+    assert light.mesh.n_cells < full.mesh.n_cells / 2
+    window.timeline.set_frame(2)
+    window.timeline.set_playing(True)
+    qtbot.waitUntil(lambda: window.timeline.frame > 6, timeout=20_000)
+    assert light.actor.visibility and not full.actor.visibility
+    assert hand.frame == window.view.frame and window.view.playing
+    window.view.set_solo(1)  # shown alone: full detail even while playing
+    assert full.actor.visibility and not light.actor.visibility
+    window.view.set_solo(-1)
+    assert light.actor.visibility and not full.actor.visibility
+    window.timeline.set_playing(False)
+    frame = window.timeline.frame
+    assert full.actor.visibility and not light.actor.visibility and not window.view.playing
+    np.testing.assert_allclose(full.mesh.points, to_view(full.hand, skin_vertices(full.hand, hand.pose, frame)))
+
+
 def test_playback_keys_reach_the_shortcuts_with_the_frame_box_focused(window, qtbot):
     window.activateWindow()
     qtbot.waitUntil(lambda: window.isActiveWindow(), timeout=5000)

@@ -95,7 +95,7 @@ class CompareMode(QWidget):
         layout.addWidget(self.curve)
         self.timeline.frame_changed.connect(self.show_frame)
         self.view.drawn.connect(self.timeline.note_drawn)
-        self.timeline.play_button.toggled.connect(lambda playing: playing or self.show_frame(self.timeline.frame))
+        self.timeline.play_button.toggled.connect(self._playing_changed)
         self.curve.frame_clicked.connect(self.timeline.set_frame)
         self.heatmap_choice.currentIndexChanged.connect(self._choice_changed)
         self.scores.currentCellChanged.connect(lambda row, *_: self._select_row(row))
@@ -281,6 +281,12 @@ class CompareMode(QWidget):
     def _show_selected_curve(self) -> None:
         result = self.selected_result()
         self.curve.set_curve(result.frame_error, label(result))
+
+    def _playing_changed(self, playing: bool) -> None:
+        """Lighter skins while playing; paused, the full ones and the heatmap at the frame shown."""
+        self.view.set_playing(playing)
+        if not playing:
+            self.show_frame(self.timeline.frame)
 
     def show_frame(self, frame: int) -> None:
         if self.comparison is None:

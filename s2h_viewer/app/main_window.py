@@ -362,6 +362,7 @@ class MainWindow(QMainWindow):
         self.settings.setValue("window/geometry", self.saveGeometry())
         self.runner.finish()
         self.compare.shutdown()
+        self.annotate.view.interactor.close_plotter()
         if self.video_export is not None:
             self.video_export.cancel()
             self.video_export.thread.join()

@@ -32,8 +32,9 @@ def settle() -> None:
 
 def screen_image(window, path: str | Path) -> None:
     """Save what the X server shows of ``window`` (the 3D view is a native GL window: Qt's own
-    ``grab`` would leave it black)."""
+    ``grab`` would leave it black), once the X server's expose events (a dialog just closed) are drawn."""
     from PIL import ImageGrab
+    wait_for(seconds=0.5)
     settle()
     top_left = window.mapToGlobal(window.rect().topLeft())
     ImageGrab.grab(bbox=(top_left.x(), top_left.y(), top_left.x() + window.width(),

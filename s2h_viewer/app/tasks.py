@@ -74,6 +74,7 @@ class TaskRunner(QObject):
         """Close the dialog and wait for the thread (on completion, failure or window close)."""
         if self._progress is not None:
             self._progress.close()
+            self._progress.deleteLater()  # destroyed, its X window goes too (hidden, it stayed mapped under Xvfb)
             self._progress = None
         if self._thread is not None:
             self._thread.quit()

@@ -28,6 +28,7 @@ from s2h_viewer.semantics.contacts import CONTACT_PAIRS, SITES, detect_contacts,
 ERROR_RANGE = (0.0, 0.1)  # 1 - cosine; 0.1 is already a clearly different pose
 ERROR_COLOURMAP = "plasma"
 DISPLAY_FACES = 10_000
+PLAYING_FACES = 3_000  # while the window plays: a third of the triangles, a quarter less time per frame
 COLOUR_BAR_SHARE = 0.065  # of the grid's width: the colour bar's column, however many hand columns
 CONTACT_COLOUR = "#1a9850"
 LOST_COLOUR = "#ff1f1f"
@@ -35,49 +36,96 @@ LOST_COLOUR = "#ff1f1f"
 PAIR_SITES = np.array([[SITES.index(a), SITES.index(b)] for a, b in CONTACT_PAIRS], dtype=np.int64)
 
 
+@dataclass
+class Skin:
+    """One level of detail of a hand's skin: the model it comes from, its posed surface, the actor."""
+
+    hand: HandModel
+    mesh: pv.PolyData
+    actor: pv.Actor
+    closed: bool
+
+
 class PosedHand:
-    """The pyvista data of one hand in one subplot, updated in place each frame."""
+    """The pyvista data of one hand in one subplot, updated in place each frame. Given a ``playing_hand``
+    (the same hand with fewer faces), that one is drawn while playing and the full one when paused."""
 
     def __init__(self, plotter: pv.Plotter, hand: HandModel, pose: HandPose, joint_error: np.ndarray | None,
-                 opacity: float):
+                 opacity: float, playing_hand: HandModel | None = None):
         self.hand, self.pose, self.joint_error = hand, pose, joint_error
-        self.error_actor = self.mesh = None
         self.overlay: Overlays | None = None
         self.renderer = plotter.renderer  # the subplot it is drawn in
+        self.frame, self.playing = 0, False
+        self.levels: list[Skin] = []  # the full skin, then the one drawn while playing (if any)
         if hand.mesh is not None:
-            self.mesh = surface(hand, to_view(hand, skin_vertices(hand, pose, 0)))
-            self.closed = is_closed_outward(self.mesh)
-            if joint_error is None:
-                self.mesh_actor = plotter.add_mesh(self.mesh, color=SKIN_COLOUR, specular=0.2, reset_camera=False)
-            else:
-                self.mesh["error"] = np.zeros(self.mesh.n_points)
-                self.mesh_actor = self.error_actor = plotter.add_mesh(
-                    self.mesh, scalars="error", cmap=ERROR_COLOURMAP, clim=ERROR_RANGE, specular=0.2,
-                    show_scalar_bar=False, reset_camera=False)
+            models = [hand] + ([playing_hand] if playing_hand is not None and playing_hand is not hand else [])
+            self.levels = [self._add_skin(plotter, model) for model in models]
             self.set_opacity(opacity)
         else:  # a skeleton-only hand (BVH): bones as tubes
             self.bones = skeleton(hand, pose, 0)
             plotter.add_mesh(self.bones, color=BONE_COLOUR, line_width=4, reset_camera=False)
+        self._show_levels()
+
+    def _add_skin(self, plotter: pv.Plotter, hand: HandModel) -> Skin:
+        mesh = surface(hand, to_view(hand, skin_vertices(hand, self.pose, 0)))
+        if self.joint_error is None:
+            actor = plotter.add_mesh(mesh, color=SKIN_COLOUR, specular=0.2, reset_camera=False)
+        else:
+            mesh["error"] = np.zeros(mesh.n_points)
+            actor = plotter.add_mesh(mesh, scalars="error", cmap=ERROR_COLOURMAP, clim=ERROR_RANGE, specular=0.2,
+                                     show_scalar_bar=False, reset_camera=False)
+        return Skin(hand, mesh, actor, is_closed_outward(mesh))
+
+    @property
+    def skin(self) -> Skin | None:
+        """The level drawn now: the lighter one while playing, if there is one."""
+        return self.levels[-1 if self.playing else 0] if self.levels else None
+
+    @property
+    def mesh(self) -> pv.PolyData | None:
+        return self.skin.mesh if self.levels else None
+
+    @property
+    def mesh_actor(self) -> pv.Actor | None:
+        return self.skin.actor if self.levels else None
+
+    @property
+    def error_actor(self) -> pv.Actor | None:
+        """The full skin's actor when it is coloured by the error (its mapper feeds the colour bar)."""
+        return self.levels[0].actor if self.levels and self.joint_error is not None else None
+
+    def set_playing(self, playing: bool) -> None:
+        """Draw the lighter skin while playing, the full one when paused (posed at the current frame)."""
+        if playing != self.playing:
+            self.playing = playing
+            self._show_levels()
+            self.show(self.frame)
+
+    def _show_levels(self) -> None:
+        for level in self.levels:
+            level.actor.visibility = level is self.skin
 
     def show(self, frame: int) -> None:
+        self.frame = frame
         if self.overlay is not None:
             self.overlay.show(frame)
-        if self.mesh is None:
+        if not self.levels:
             self.bones.points = to_view(self.hand, self.pose.positions[frame].numpy().astype(np.float64))
             return
-        self.mesh.points[:] = to_view(self.hand, skin_vertices(self.hand, self.pose, frame))  # in place: no new
-        self.mesh.GetPoints().Modified()  # VTK arrays per frame
+        skin = self.skin
+        skin.mesh.points[:] = to_view(skin.hand, skin_vertices(skin.hand, self.pose, frame))  # in place: no new
+        skin.mesh.GetPoints().Modified()  # VTK arrays per frame
         if self.joint_error is not None:
             per_rotating = np.zeros(topo.N_ROTATING)  # wrist 0, then each articulated joint's ASM row
             per_rotating[1:] = np.nan_to_num(self.joint_error[frame, topo.ARTICULATED_JOINTS - 1])
-            self.mesh.point_data["error"][:] = self.hand.mesh.weights @ per_rotating
-            self.mesh.point_data.GetArray("error").Modified()
+            skin.mesh.point_data["error"][:] = skin.hand.mesh.weights @ per_rotating
+            skin.mesh.point_data.GetArray("error").Modified()
 
     def set_opacity(self, opacity: float) -> None:
         """See-through below 1; an opaque closed skin skips its back faces (about a third of the drawing)."""
-        if self.mesh is not None:
-            self.mesh_actor.prop.opacity = opacity
-            self.mesh_actor.prop.culling = "back" if self.closed and opacity >= 1.0 else "none"
+        for level in self.levels:
+            level.actor.prop.opacity = opacity
+            level.actor.prop.culling = "back" if level.closed and opacity >= 1.0 else "none"
 
 
 def is_closed_outward(mesh: pv.PolyData) -> bool:
@@ -104,23 +152,24 @@ def source_cell_below(comparison: Comparison) -> tuple[int, int] | None:
 
 
 def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
-             display_faces: int | None = DISPLAY_FACES) -> list[PosedHand]:
-    """Fill a plotter made with ``**grid_layout(comparison)``; returns the hands to update per frame."""
-    displayed: dict[int, HandModel] = {}
+             display_faces: int | None = DISPLAY_FACES, playing_faces: int | None = None) -> list[PosedHand]:
+    """Fill a plotter made with ``**grid_layout(comparison)``; returns the hands to update per frame.
+    ``playing_faces``: each skin also at that many faces, drawn while playing (`PosedHand.set_playing`)."""
+    lighter: dict[tuple[int, int | None], HandModel] = {}
 
-    def shown(hand: HandModel) -> HandModel:
-        if display_faces is None:
+    def light(hand: HandModel, faces: int | None) -> HandModel:
+        if faces is None:
             return hand
-        if id(hand) not in displayed:
-            displayed[id(hand)] = display_hand(hand, display_faces)
-        return displayed[id(hand)]
+        if (id(hand), faces) not in lighter:
+            lighter[id(hand), faces] = display_hand(hand, faces)
+        return lighter[id(hand), faces]
 
     source_contacts = detect_contacts(comparison.source, comparison.source_pose)
-    panels = [((0, 0), shown(comparison.source), comparison.source_pose, None, None,
+    panels = [((0, 0), comparison.source, comparison.source_pose, None, None,
                f"source: {comparison.source.name}")]
     for row, target in enumerate(dict.fromkeys(id(r.target) for r in comparison.results)):
         results = [r for r in comparison.results if id(r.target) == target]
-        panels += [((row, 1 + k), shown(r.target), r.pose, r.joint_error, source_contacts,
+        panels += [((row, 1 + k), r.target, r.pose, r.joint_error, source_contacts,
                     f"{METHODS[r.method].label} -> {r.target.name}\nS_palm {r.scores.s_palm:.3f}  "
                     f"S_finger {r.scores.s_finger:.3f}") for k, r in enumerate(results)]
     hands = []
@@ -129,7 +178,8 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
         plotter.set_background("white")
         plotter.renderer.remove_all_lights()  # one light that follows the camera: a quarter of the
         plotter.renderer.add_light(pv.Light(light_type="headlight"))  # shading cost of pyvista's five-light kit
-        posed = PosedHand(plotter, hand, pose, error, opacity)
+        posed = PosedHand(plotter, light(hand, display_faces), pose, error, opacity,
+                          playing_hand=None if playing_faces is None else light(hand, playing_faces))
         posed.overlay = Overlays(plotter, hand, pose, expected)
         posed.renderer = plotter.renderer
         hands.append(posed)

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import numpy as np
 import pyvista as pv
-from pyvistaqt import QtInteractor
 from PySide6.QtCore import Signal
 from PySide6.QtWidgets import QDial, QHBoxLayout, QLabel, QListWidget, QSplitter, QVBoxLayout, QWidget
 
@@ -16,6 +15,7 @@ from s2h_viewer.hand import topology as topo
 from s2h_viewer.render.scene import (AXIS_COLOURS, BONE_COLOUR, SKIN_COLOUR, display_hand, pose_frame, skeleton,
                                      surface, to_view)
 from s2h_viewer.widgets.rotation_handle import RotationRing
+from s2h_viewer.widgets.vtk_widget import PlotterWidget, window_plotter
 
 LEGEND = ("TBS frames: twist (along the bone) red, bend green, splay (out of the back) blue. Drag the "
           "selected joint's ring (or the dial) to turn its frame about the twist axis.")
@@ -46,7 +46,8 @@ class AnnotationView(QWidget):
         self.session: AnnotationSession | None = None
         self.selected = 0
         self._drag_base: np.ndarray | None = None
-        self.interactor = QtInteractor(self, multi_samples=0, auto_update=False)
+        self.plotter = window_plotter()
+        self.interactor = PlotterWidget(self.plotter, self)
         self.ring = RotationRing(self.interactor, self._begin_drag, self._turn_to, self._end_drag, self._clicked)
         self.joints = QListWidget()
         self.dial = QDial()
@@ -67,6 +68,7 @@ class AnnotationView(QWidget):
         layout = QHBoxLayout(self)
         layout.setContentsMargins(0, 0, 0, 0)
         layout.addWidget(splitter)
+        self.interactor.Initialize()
         self.joints.currentRowChanged.connect(self.select)
         self.dial.sliderPressed.connect(self._begin_drag)
         self.dial.valueChanged.connect(self._dial_turned)
@@ -78,7 +80,7 @@ class AnnotationView(QWidget):
         self.session = session
         self.selected = 0
         self._drag_base = None
-        plotter = self.interactor
+        plotter = self.plotter
         plotter.clear()
         plotter.set_background("white")
         hand = display_hand(session.hand)
@@ -105,7 +107,7 @@ class AnnotationView(QWidget):
         """A click in 3D (VTK display pixels) selects the joint nearest to it on screen, if one is near."""
         if self.session is None:
             return
-        renderer = self.interactor.renderer
+        renderer = self.plotter.renderer
         on_screen = []
         for point in self.joint_centres():
             renderer.SetWorldPoint(*point, 1.0)

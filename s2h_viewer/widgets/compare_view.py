@@ -1,12 +1,11 @@
 """Compare mode's viewport: the compare grid (`render.compare_scene`) in one render window with
-linked cameras, no multisampling (software OpenGL pays 3-4x for it), redrawn on ``show_frame``.
+linked cameras, drawn in VTK's native-window widget (`widgets.vtk_widget`), redrawn on ``show_frame``.
 
-The render window draws straight into a native widget (VTK's own ``QVTKRenderWindowInteractor``)
-rather than into pyvistaqt's ``QOpenGLWidget``, whose frame Qt copies and composes into the window
-on every paint: measured with `benchmarks/bench_window_playback.py`, the native widget draws as fast
-as off screen. The widget renders in its own paint, so a new frame asks for a repaint (``update``). A double-click on a hand shows its
-viewport alone (solo), a second one brings the grid back. ``drawn`` fires after every render, so
-the timeline can show the frames actually drawn per second."""
+A new frame asks for a repaint (``update``): one render per frame for the whole grid. While the
+timeline plays, each skin of the grid is drawn with fewer faces; paused or shown alone, the full
+display mesh. A double-click on a hand shows its viewport alone (solo), a second one brings the grid
+back. ``drawn`` fires after every render, so the timeline can show the frames actually drawn per
+second."""
 
 from __future__ import annotations
 
@@ -15,28 +14,13 @@ import dataclasses
 import numpy as np
 import pyvista as pv
 from PySide6.QtCore import QEvent, QObject, Signal
-from vtkmodules.qt.QVTKRenderWindowInteractor import QVTKRenderWindowInteractor
-from vtkmodules.vtkInteractionStyle import vtkInteractorStyleTrackballCamera
 from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
-from s2h_viewer.render.compare_scene import PosedHand, ViewOptions, apply_options, grid_layout, populate
+from s2h_viewer.render.compare_scene import (PLAYING_FACES, PosedHand, ViewOptions, apply_options, grid_layout,
+                                             populate)
 from s2h_viewer.retarget.comparison import Comparison
-
-
-class _GridWidget(QVTKRenderWindowInteractor):
-    """VTK's native-window widget that stops painting once its render window is finalized (a paint
-    already queued when the grid is replaced would otherwise render into a freed window)."""
-
-    alive = True
-
-    def paintEvent(self, event) -> None:
-        if self.alive:
-            super().paintEvent(event)
-
-    def resizeEvent(self, event) -> None:
-        if self.alive:
-            super().resizeEvent(event)
+from s2h_viewer.widgets.vtk_widget import PlotterWidget, window_plotter
 
 
 class CompareView(QWidget):
@@ -49,7 +33,7 @@ class CompareView(QWidget):
         super().__init__(parent)
         self._layout = QVBoxLayout(self)
         self._layout.setContentsMargins(0, 0, 0, 0)
-        self.interactor: _GridWidget | None = None
+        self.interactor: PlotterWidget | None = None
         self.plotter: pv.Plotter | None = None
         self.comparison: Comparison | None = None
         self._hands: list[PosedHand] = []
@@ -57,6 +41,7 @@ class CompareView(QWidget):
         self.solo = -1
         self._viewports: list[tuple[float, ...]] = []
         self.frame = 0
+        self.playing = False
 
     @property
     def opacity(self) -> float:
@@ -66,17 +51,16 @@ class CompareView(QWidget):
         """Lay out one subplot per hand: the source, then a row per target, a column per method."""
         self.comparison = comparison
         self.close_grid()  # pyvista fixes the subplot layout at construction: start afresh
-        self.plotter = pv.Plotter(off_screen=False, **grid_layout(comparison))
-        self.plotter.render_window.SetMultiSamples(0)
-        self.interactor = _GridWidget(self, rw=self.plotter.render_window)
-        self.interactor.GetRenderWindow().GetInteractor().SetInteractorStyle(vtkInteractorStyleTrackballCamera())
+        self.plotter = window_plotter(**grid_layout(comparison))
+        self.interactor = PlotterWidget(self.plotter, self)
         self.interactor.installEventFilter(self)
         self.plotter.render_window.AddObserver("EndEvent", lambda *_: self.drawn.emit())
         self._layout.addWidget(self.interactor)
         self.interactor.Initialize()
-        self._hands = populate(self.plotter, comparison, self.options.opacity)
+        self._hands = populate(self.plotter, comparison, self.options.opacity, playing_faces=PLAYING_FACES)
         self._viewports = [tuple(r.GetViewport()) for r in self.plotter.renderers]
         self.solo = -1
+        self._choose_skins()
         apply_options(self.plotter, self._hands, self.options)
         self.show_frame(min(self.frame, comparison.n_frames - 1))
 
@@ -86,6 +70,18 @@ class CompareView(QWidget):
             hand.show(frame)
         if self.interactor is not None:
             self.interactor.update()
+
+    def set_playing(self, playing: bool) -> None:
+        self.playing = playing
+        self._choose_skins()
+        if self.interactor is not None:
+            self.interactor.update()
+
+    def _choose_skins(self) -> None:
+        """Lighter skins (`render.compare_scene.PLAYING_FACES`) while the grid plays; the full ones when
+        paused, and for a hand shown alone (one hand draws fast enough at full detail)."""
+        for hand in self._hands:
+            hand.set_playing(self.playing and self.solo < 0)
 
     def set_options(self, **changes) -> None:
         """Change the camera preset, overlays or opacity (``ViewOptions`` fields) and redraw."""
@@ -118,6 +114,7 @@ class CompareView(QWidget):
         for renderer, viewport in zip(self.plotter.renderers, self._viewports):
             renderer.SetViewport(*((0.0, 0.0, 1.0, 1.0) if renderer is solo else viewport))
             renderer.SetDraw(solo is None or renderer is solo)
+        self._choose_skins()
         self.solo_changed.emit(index)
         self.interactor.update()
 
@@ -144,11 +141,9 @@ class CompareView(QWidget):
     def close_grid(self) -> None:
         """Free the render window and its widget (a new grid, or the window closing)."""
         if self.interactor is not None:
-            self.interactor.alive = False
             self.interactor.hide()
             self._layout.removeWidget(self.interactor)
-            self.interactor.Finalize()
-            self.plotter.close()
+            self.interactor.close_plotter()
             self.interactor.deleteLater()
             self.interactor = self.plotter = None
             self._hands = []

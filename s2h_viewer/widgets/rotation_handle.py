@@ -41,13 +41,14 @@ class Grab:
 
 
 class RotationRing(QObject):
-    """The ring in ``plotter``: ``on_begin()``, ``on_turn(degrees since the grab)``, ``on_end()`` for a drag,
+    """The ring in ``widget``'s plotter (a `widgets.vtk_widget.PlotterWidget`): ``on_begin()``,
+    ``on_turn(degrees since the grab)``, ``on_end()`` for a drag,
     ``on_click(x, y)`` (VTK display pixels) for a click that missed the ring."""
 
-    def __init__(self, plotter, on_begin: Callable[[], None], on_turn: Callable[[float], None],
+    def __init__(self, widget, on_begin: Callable[[], None], on_turn: Callable[[float], None],
                  on_end: Callable[[], None], on_click: Callable[[int, int], None]):
-        super().__init__(plotter)
-        self.plotter = plotter
+        super().__init__(widget)
+        self.widget, self.plotter = widget, widget.plotter
         self.on_begin, self.on_turn, self.on_end, self.on_click = on_begin, on_turn, on_end, on_click
         self.mesh = pv.PolyData()
         self.actor = None
@@ -63,7 +64,7 @@ class RotationRing(QObject):
         self._picker = vtkCellPicker()
         self._picker.PickFromListOn()
         self._picker.SetTolerance(0.004)
-        plotter.installEventFilter(self)
+        widget.installEventFilter(self)
 
     def eventFilter(self, watched, event) -> bool:
         """The 3D widget's left-button presses, releases and all moves; True keeps one from the camera."""
@@ -76,9 +77,9 @@ class RotationRing(QObject):
             handler = self._released
         else:
             return False
-        scale = self.plotter.devicePixelRatioF()  # VTK's display pixels: device pixels, y up
+        scale = self.widget.devicePixelRatioF()  # VTK's display pixels: device pixels, y up
         position = event.position()
-        return handler(round(position.x() * scale), round((self.plotter.height() - position.y() - 1) * scale))
+        return handler(round(position.x() * scale), round((self.widget.height() - position.y() - 1) * scale))
 
     def attach(self) -> None:
         """Add the ring's actor to the plotter (again after ``plotter.clear()``)."""
@@ -142,7 +143,7 @@ class RotationRing(QObject):
         if on != self._hovered and self.actor is not None:
             self._hovered = on
             self.actor.prop.color = ACTIVE_COLOUR if on else RING_COLOUR
-            self.plotter.render()
+            self.widget.render()
 
     # --- mouse events (VTK display pixels); True swallows the event ---
     def _pressed(self, x: int, y: int) -> bool:

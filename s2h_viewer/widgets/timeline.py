@@ -25,6 +25,12 @@ class _LeaveShortcutKeys(QObject):
         return event.type() == QEvent.Type.ShortcutOverride and event.key() in PASSED_KEYS
 
 
+def fixed_size(label: QLabel, widest: str) -> None:
+    """Size ``label`` for its widest text once: a label whose size may change asks the whole window to
+    lay out and repaint on every new text (every frame, while playing)."""
+    label.setFixedSize(label.fontMetrics().horizontalAdvance(widest) + 8, label.sizeHint().height())
+
+
 class Timeline(QWidget):
     """Emits ``frame_changed(frame)``; the clip's own fps times playback, scaled by the speed."""
 
@@ -50,6 +56,7 @@ class Timeline(QWidget):
         self.speed.setCurrentIndex(SPEEDS.index(1.0))
         self.fps_label = QLabel("-- fps")
         self.fps_label.setToolTip("frames drawn per second while playing")
+        fixed_size(self.fps_label, "888 fps")
         layout = QHBoxLayout(self)
         for widget in (self.play_button, self.slider, self.spin, self.readout, self.loop, self.speed, self.fps_label):
             layout.addWidget(widget)
@@ -81,6 +88,7 @@ class Timeline(QWidget):
             widget.setRange(0, self.n_frames - 1)
             widget.setValue(0)
             widget.blockSignals(False)
+        fixed_size(self.readout, self._readout_text(self.n_frames - 1))
         self._show_readout(0)
         self.frame_changed.emit(0)
 
@@ -120,9 +128,12 @@ class Timeline(QWidget):
     def _restart_clock(self) -> None:
         self._anchor = (time.perf_counter(), self.frame)
 
-    def _show_readout(self, frame: int) -> None:
+    def _readout_text(self, frame: int) -> str:
         total = self.n_frames - 1
-        self.readout.setText(f"{frame}/{total}  {frame / self.clip_fps:5.2f} s / {total / self.clip_fps:.2f} s")
+        return f"{frame}/{total}  {frame / self.clip_fps:5.2f} s / {total / self.clip_fps:.2f} s"
+
+    def _show_readout(self, frame: int) -> None:
+        self.readout.setText(self._readout_text(frame))
 
     def _set_from_widget(self, frame: int) -> None:
         for widget in (self.slider, self.spin):
