@@ -1,9 +1,10 @@
 """ASM-Opt: per-sequence gradient optimisation of the target's TBS rotations (DESIGN.md section 6).
 
 Variables: a correction of the per-joint TBS Euler angles (twist, bend, splay) on every
-``keyframe_step``-th frame, added to the warm start (TBS Copy) and interpolated linearly in between,
-so the warm start's detail is kept and the loss is evaluated on the keyframes only (a third of the
-work at the default step). Loss: -L_sem (match the source's ASM) + L_ana (stay anatomical) +
+``keyframe_step``-th frame and on every frame where the source has a contact (a touch shorter than
+the step must not fall between keyframes), added to the warm start (TBS Copy) and interpolated
+linearly in between, so the warm start's detail is kept and the loss is evaluated on the keyframes
+only. Loss: -L_sem (match the source's ASM) + L_ana (stay anatomical) +
 temporal smoothness of the correction + a contact term that goes beyond the paper: pairs touching in
 the source are pulled to touch on the target and pairs apart are kept apart, gaps measured in each
 hand's own length. The anatomy term is taken on the angles themselves (smooth past a 90 deg bend)
