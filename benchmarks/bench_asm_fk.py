@@ -10,7 +10,9 @@ of several repeats; nothing here is asserted, so CI never depends on machine spe
 from __future__ import annotations
 
 import argparse
+import os
 import platform
+import statistics
 import time
 
 import numpy as np
@@ -36,6 +38,17 @@ def skin_per_joint_loop(hand, pose) -> np.ndarray:
     return out
 
 
+def median_cpu_seconds(fn, repeats: int) -> float:
+    """Median process CPU time of ``fn``: with one thread, what it costs on a core that others share too."""
+    fn()
+    times = []
+    for _ in range(repeats):
+        t0 = time.process_time()
+        fn()
+        times.append(time.process_time() - t0)
+    return statistics.median(times)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=10_000)
@@ -48,7 +61,8 @@ def main() -> None:
     q = np.resize(clips, (args.frames, 15, 4)).astype(np.float32)
     q32 = torch.as_tensor(q)
     print(f"machine: {platform.processor() or platform.machine()}, torch {torch.__version__}, "
-          f"{torch.get_num_threads()} threads; hand {hand.name}, {args.frames} frames")
+          f"{torch.get_num_threads()} threads (OMP_NUM_THREADS={os.environ.get('OMP_NUM_THREADS', 'unset')}); "
+          f"hand {hand.name}, {args.frames} frames; load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs")
 
     def batched():
         with torch.no_grad():
@@ -61,9 +75,10 @@ def main() -> None:
     t_batched = median_seconds(batched, args.repeats)
     t_fk = median_seconds(fk_only, args.repeats)
     n_ref = min(args.reference_frames, args.frames)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     reference = asm_sequence(hand, q[:n_ref].astype(np.float64))
-    t_ref = time.perf_counter() - t0
+    t_ref, c_ref = time.perf_counter() - t0, time.process_time() - c0
+    c_batched = median_cpu_seconds(batched, args.repeats)
     error = np.abs(batched().numpy()[:n_ref] - reference).max()
 
     fps_batched = args.frames / t_batched
@@ -72,7 +87,10 @@ def main() -> None:
           f"{args.frames}; FK alone {t_fk * 1e3:.1f} ms)")
     print(f"FK + ASM, per-frame numpy loop  : {fps_ref:12,.0f} frames/s  ({t_ref:.2f} s for {n_ref})")
     print(f"ratio batched / loop            : {fps_batched / fps_ref:12.1f} x   (target >= 50 x); "
-          f"max |difference| {error:.1e} m")
+          f"max |difference| {error:.1e} palm lengths; load average now {os.getloadavg()[0]:.2f}")
+    print(f"in CPU time (all threads)       : batched {args.frames / c_batched:,.0f} frames/s, loop "
+          f"{n_ref / c_ref:,.0f} frames/s, ratio {(args.frames / c_batched) / (n_ref / c_ref):.1f} x "
+          f"(steadier than wall time on a shared machine with one thread)")
 
     pose = forward_kinematics(hand, torch.as_tensor(q[:1], dtype=torch.float64))
     t_skin = median_seconds(lambda: skin_vertices(hand, pose), 20)

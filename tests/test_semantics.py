@@ -16,7 +16,7 @@ from s2h_viewer.hand.rotations import tbs_euler_to_quat
 from s2h_viewer.motions.fitting import fit_gesture_angles
 from s2h_viewer.motions.gestures import GESTURES
 from s2h_viewer.semantics.anatomy import anatomical_loss, violation_rate
-from s2h_viewer.semantics.asm import distance_matrix, semantic_matrix
+from s2h_viewer.semantics.asm import SELF_CELLS, asm_columns, distance_matrix, palm_unit, semantic_matrix
 from s2h_viewer.semantics.contacts import contact_precision_recall, detect_contacts, pair_index
 from s2h_viewer.semantics.metrics import palm_and_finger_scores, score_retarget
 from s2h_viewer.semantics.reference import asm_sequence
@@ -28,6 +28,39 @@ def test_batched_asm_equals_the_per_frame_reference(skeleton_hands, rng):
     for hand in skeleton_hands:
         np.testing.assert_allclose(semantic_matrix(forward_kinematics(hand, q)).numpy(), asm_sequence(hand, q.numpy()),
                                    atol=1e-12)
+
+
+def plain_semantic_matrix(pose: HandPose) -> torch.Tensor:
+    """DESIGN.md section 4 as plainly as torch writes it, ``(x_m - x_k) @ M_k / u`` with the diagonal masked:
+    the formulation `semantic_matrix` replaced by a faster one with the same values and gradients."""
+    x, frames = pose.finger_positions, pose.finger_frames
+    seen = (asm_columns(pose)[:, None, :, None, :] - x[:, :, None, None, :]) @ frames[:, :, None]
+    return (seen[..., 0, :] / palm_unit(pose)[:, :, None, None]).masked_fill(SELF_CELLS[None, :, :, None], 0.0)
+
+
+@pytest.mark.parametrize("dtype", [torch.float64, torch.float32])
+def test_asm_values_and_gradients_equal_the_plain_formulation(sample_hands, rng, dtype):
+    """ASM-Opt and ASRN training backpropagate through the ASM: the fast product must give the plain
+    formulation's gradients on random poses, through FK to the rotations and straight to the pose."""
+    tol = dict(rtol=1e-10, atol=1e-12) if dtype == torch.float64 else dict(rtol=1e-4, atol=1e-5)
+    for name in ("birch", "laurel"):
+        q = random_tbs_motion(7, rng, max_deg=90.0).to(dtype).requires_grad_()
+        pose = forward_kinematics(sample_hands[name], q)
+        weights = torch.randn(7, 20, 29, 3, generator=rng, dtype=torch.float64).to(dtype)
+        fast, plain = semantic_matrix(pose), plain_semantic_matrix(pose)
+        torch.testing.assert_close(fast, plain, **tol)
+        inputs = (q, pose.positions, pose.frames)
+        grads_fast = torch.autograd.grad((fast * weights).sum(), inputs, retain_graph=True)
+        grads_plain = torch.autograd.grad((plain * weights).sum(), inputs)
+        for got, want in zip(grads_fast, grads_plain):
+            assert want.abs().max() > 0
+            torch.testing.assert_close(got, want, **tol)
+
+
+def test_asm_gradient_matches_finite_differences(sample_hands, rng):
+    hand = sample_hands["juniper"]
+    q = random_tbs_motion(2, rng).requires_grad_()
+    assert torch.autograd.gradcheck(lambda q: semantic_matrix(forward_kinematics(hand, q)), (q,))
 
 
 def test_asm_of_a_rigidly_moved_and_rotated_hand_is_unchanged(skeleton_hands, rng):

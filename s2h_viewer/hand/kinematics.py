@@ -14,14 +14,16 @@ canonical-pose TBS frames (``HandModel.canonical_frames``; wrist = I):
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
 import torch
+from scipy.spatial.transform import Rotation
 
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
-from s2h_viewer.hand.rotations import canonical_quat, matrix_to_quat, quat_conjugate, quat_multiply, quat_to_matrix
+from s2h_viewer.hand.rotations import canonical_quat, matrix_to_quat, quat_conjugate, quat_multiply
 
 
 @dataclass
@@ -46,52 +48,113 @@ def _as_tensor(x: np.ndarray | torch.Tensor, dtype: torch.dtype) -> torch.Tensor
     return x if isinstance(x, torch.Tensor) else torch.as_tensor(np.asarray(x), dtype=dtype)
 
 
-def _chain_rest(hand: HandModel) -> tuple[np.ndarray, np.ndarray]:
-    """Per finger and level: the canonical TBS frame relative to the parent's (5, 3, 3, 3) and each
-    joint's offset in its parent's TBS rest frame (5, 4, 3); the wrist frame is I."""
-    canonical = hand.canonical_frames
-    parent_frames = np.concatenate([np.eye(3)[None], canonical])[topo.ARTICULATED_PARENT_ROTATING]
-    local_rot = parent_frames.transpose(0, 2, 1) @ canonical
-    offsets = hand.offsets[1:].reshape(5, 4, 3)
-    finger_frames = hand.rest_frames.reshape(5, 3, 3, 3)
-    local_off = offsets.copy()
-    local_off[:, 1:] = np.einsum("flba,flb->fla", finger_frames, offsets[:, 1:])
-    return local_rot.reshape(5, 3, 3, 3), local_off
+def _quat_product_table() -> np.ndarray:
+    """(4, 16) ``P`` with ``a * b = P @ outer(a, b).ravel()`` for (w, x, y, z) quaternions (Hamilton)."""
+    table = np.zeros((4, 4, 4))  # (out, a, b)
+    for out, terms in enumerate((
+            ((0, 0, 1), (1, 1, -1), (2, 2, -1), (3, 3, -1)),
+            ((0, 1, 1), (1, 0, 1), (2, 3, 1), (3, 2, -1)),
+            ((0, 2, 1), (1, 3, -1), (2, 0, 1), (3, 1, 1)),
+            ((0, 3, 1), (1, 2, 1), (2, 1, -1), (3, 0, 1)))):
+        for a, b, sign in terms:
+            table[out, a, b] = sign
+    return table.reshape(4, 16)
+
+
+def _quat_matrix_table() -> np.ndarray:
+    """(9, 16) ``P`` with ``R(q).ravel() = P @ outer(q, q).ravel()`` for a unit (w, x, y, z) quaternion."""
+    w, x, y, z = range(4)
+    table = np.zeros((3, 3, 4, 4))
+    for row, squares in enumerate(((1, 1, -1, -1), (1, -1, 1, -1), (1, -1, -1, 1))):
+        for i, sign in enumerate(squares):
+            table[row, row, i, i] = sign
+    for row, col, (i, j), (k, l), sign in ((0, 1, (x, y), (w, z), -1), (1, 0, (x, y), (w, z), 1),
+                                           (0, 2, (x, z), (w, y), 1), (2, 0, (x, z), (w, y), -1),
+                                           (1, 2, (y, z), (w, x), -1), (2, 1, (y, z), (w, x), 1)):
+        table[row, col, [i, j], [j, i]] = 1.0  # 2 x y as x y + y x
+        table[row, col, [k, l], [l, k]] = sign
+    return table.reshape(9, 16)
+
+
+_QUAT_PRODUCT = _quat_product_table()
+_QUAT_MATRIX = _quat_matrix_table()
+
+
+@dataclass(frozen=True)
+class _Chain:
+    """A hand's FK constants in one dtype, laid out with the frame axis last (see `forward_kinematics`)."""
+
+    left_products: torch.Tensor  # (3 levels, 4, 4, 5 fingers): ``C_p^T C_j`` as a quaternion's product matrix
+    offsets: torch.Tensor  # (4 levels, 3, 5 fingers): each joint's offset in its parent's TBS rest frame
+    quat_product: torch.Tensor  # (4, 16) `_quat_product_table`
+    quat_matrix: torch.Tensor  # (9, 16) `_quat_matrix_table`
+
+
+#: per hand: (the geometry the constants were made from, {dtype: _Chain}); a re-annotated hand is rebuilt
+_CHAINS: weakref.WeakKeyDictionary[HandModel, tuple[bytes, dict[torch.dtype, _Chain]]] = weakref.WeakKeyDictionary()
+
+
+def _chain(hand: HandModel, dtype: torch.dtype) -> _Chain:
+    """The FK constants of ``hand`` (cached per hand and dtype, so no call converts numpy arrays)."""
+    key = hand.offsets.tobytes() + hand.rest_frames.tobytes()
+    cached = _CHAINS.get(hand)
+    if cached is None or cached[0] != key:
+        cached = _CHAINS[hand] = (key, {})
+    if dtype not in cached[1]:
+        canonical = hand.canonical_frames
+        parent_frames = np.concatenate([np.eye(3)[None], canonical])[topo.ARTICULATED_PARENT_ROTATING]
+        local = Rotation.from_matrix(parent_frames.transpose(0, 2, 1) @ canonical).as_quat(scalar_first=True)
+        left = np.einsum("ja,oab->job", local, _QUAT_PRODUCT.reshape(4, 4, 4))  # (l * r) = left @ r
+        offsets = hand.offsets[1:].reshape(5, 4, 3).copy()
+        offsets[:, 1:] = np.einsum("flba,flb->fla", hand.rest_frames.reshape(5, 3, 3, 3), offsets[:, 1:])
+        cached[1][dtype] = _Chain(
+            *(torch.as_tensor(np.ascontiguousarray(a), dtype=dtype) for a in (
+                left.reshape(5, 3, 4, 4).transpose(1, 2, 3, 0), offsets.transpose(1, 2, 0), _QUAT_PRODUCT,
+                _QUAT_MATRIX)))
+    return cached[1][dtype]
+
+
+def _outer_map(table: torch.Tensor, a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
+    """``table @ outer(a, b)`` over (4, ...) component-first tensors -> (len(table), ...)."""
+    outer = (a[:, None] * b[None, :]).reshape(16, -1)
+    return (table @ outer).reshape(len(table), *a.shape[1:])
 
 
 def forward_kinematics(hand: HandModel, q_tbs: torch.Tensor | np.ndarray) -> HandPose:
     """(T, 15, 4) TBS quaternions (w, x, y, z) -> joint positions and global TBS frames.
 
-    Vectorised over frames and fingers; loops only over the 4 levels of a finger chain.
+    Vectorised over frames and fingers; loops only over the levels of a finger chain, composing
+    quaternions (``g_j = g_p * l_j * r_j``) and making matrices once. The work is laid out component
+    first with the frames last (``(4, level, finger, T)``), so every kernel runs over long contiguous
+    rows, not over trailing axes of 3 or 4; the result is transposed into `HandPose`'s layout once.
     Differentiable in ``q_tbs``; dtype follows ``q_tbs`` (float32 for numpy input).
     """
     q = _as_tensor(q_tbs, torch.float32)
     if q.ndim != 3 or q.shape[1:] != (topo.N_ARTICULATED, 4):
         raise ValueError(f"q_tbs must have shape (T, 15, 4), got {tuple(q.shape)}")
     n_frames = q.shape[0]
-    local_rot_np, local_off_np = _chain_rest(hand)
-    local_rot = torch.as_tensor(local_rot_np, dtype=q.dtype)
-    local_off = torch.as_tensor(local_off_np, dtype=q.dtype)
-    rot = quat_to_matrix(q).reshape(n_frames, 5, 3, 3, 3)
+    chain = _chain(hand, q.dtype)
+    q = q / q.norm(dim=-1, keepdim=True).clamp_min(1e-12)
+    rot = q.reshape(n_frames, 5, 3, 4).permute(2, 3, 1, 0)  # (level, 4, finger, T)
+    local = (chain.left_products[..., None] * rot[:, None]).sum(2)  # l_j * r_j: (level, 4, finger, T)
+    turns = [local[0]]
+    for level in (1, 2):
+        turns.append(_outer_map(chain.quat_product, turns[-1], local[level]))
+    turn = torch.stack(turns, 1)  # (4, level, finger, T)
+    frames = _outer_map(chain.quat_matrix, turn, turn).reshape(3, 3, 3, 5, n_frames)  # (a, b, level, finger, T)
+    bones = (frames * chain.offsets[1:].transpose(0, 1)[..., None]).sum(1)  # M_p offset_j: (3, level, finger, T)
+    first = chain.offsets[0][:, None, :, None]
+    chain_positions = torch.cat([first.expand(3, 1, 5, n_frames), first + bones.cumsum(1)], 1)
 
-    frame = torch.eye(3, dtype=q.dtype).expand(n_frames, 5, 3, 3)
-    pos = q.new_zeros(n_frames, 5, 3)
-    positions, frames = [], []
-    for level in range(3):
-        pos = pos + (frame @ local_off[:, level, :, None])[..., 0]
-        frame = frame @ local_rot[:, level] @ rot[:, :, level]
-        positions.append(pos)
-        frames.append(frame)
-    positions.append(pos + (frame @ local_off[:, 3, :, None])[..., 0])
-    frames.append(frame)
-
-    finger_pos = torch.stack(positions, 2).reshape(n_frames, topo.N_FINGER_JOINTS, 3)
-    finger_frames = torch.stack(frames, 2).reshape(n_frames, topo.N_FINGER_JOINTS, 3, 3)
-    wrist_frame = torch.eye(3, dtype=q.dtype).expand(n_frames, 1, 3, 3)
-    return HandPose(
-        positions=torch.cat([q.new_zeros(n_frames, 1, 3), finger_pos], 1),
-        frames=torch.cat([wrist_frame, finger_frames], 1),
-    )
+    positions = q.new_zeros(n_frames, topo.N_JOINTS, 3)
+    positions[:, 1:] = chain_positions.permute(3, 2, 1, 0).reshape(n_frames, topo.N_FINGER_JOINTS, 3)
+    out_frames = q.new_empty(n_frames, topo.N_JOINTS, 3, 3)
+    out_frames[:, 0] = torch.eye(3, dtype=q.dtype)
+    by_finger = out_frames[:, 1:].view(n_frames, 5, 4, 3, 3)
+    by_level = frames.permute(4, 3, 2, 0, 1)  # (T, finger, level, 3, 3)
+    by_finger[:, :, :3] = by_level
+    by_finger[:, :, 3] = by_level[:, :, 2]  # a tip takes its parent's frame
+    return HandPose(positions=positions, frames=out_frames)
 
 
 def _tbs_in_parent_rig_frame(hand: HandModel, dtype: torch.dtype) -> torch.Tensor:

@@ -79,8 +79,15 @@ def matrix_to_tbs_euler(r: torch.Tensor) -> torch.Tensor:
 
 
 def tbs_euler_to_quat(angles: torch.Tensor) -> torch.Tensor:
-    """(..., 3) angles (twist, bend, splay) in radians -> (..., 4) quaternions (w, x, y, z)."""
-    return matrix_to_quat(tbs_euler_to_matrix(angles[..., 0], angles[..., 1], angles[..., 2]))
+    """(..., 3) angles (twist, bend, splay) in radians -> (..., 4) quaternions (w, x, y, z), ``w >= 0``.
+
+    The product ``qx(twist) qy(bend) qz(splay)`` in closed form: a handful of elementwise ops (ASM-Opt
+    calls it at every step, through autograd), not a matrix built and decomposed again.
+    """
+    c, s = torch.cos(0.5 * angles).unbind(-1), torch.sin(0.5 * angles).unbind(-1)
+    q = torch.stack([c[0] * c[1] * c[2] - s[0] * s[1] * s[2], s[0] * c[1] * c[2] + c[0] * s[1] * s[2],
+                     c[0] * s[1] * c[2] - s[0] * c[1] * s[2], c[0] * c[1] * s[2] + s[0] * s[1] * c[2]], -1)
+    return torch.where(q[..., :1] < 0, -q, q)
 
 
 def quat_to_tbs_euler(q: torch.Tensor) -> torch.Tensor:

@@ -1,9 +1,10 @@
 """ASM-Opt: per-sequence gradient optimisation of the target's TBS rotations (DESIGN.md section 6).
 
 Variables: a correction of the per-joint TBS Euler angles (twist, bend, splay) on every
-``keyframe_step``-th frame, added to the warm start (TBS Copy) and interpolated linearly in between,
-so the warm start's detail is kept and the loss is evaluated on the keyframes only (a third of the
-work at the default step). Loss: -L_sem (match the source's ASM) + L_ana (stay anatomical) +
+``keyframe_step``-th frame and on every frame where the source has a contact (a touch shorter than
+the step must not fall between keyframes), added to the warm start (TBS Copy) and interpolated
+linearly in between, so the warm start's detail is kept and the loss is evaluated on the keyframes
+only. Loss: -L_sem (match the source's ASM) + L_ana (stay anatomical) +
 temporal smoothness of the correction + a contact term that goes beyond the paper: pairs touching in
 the source are pulled to touch on the target and pairs apart are kept apart, gaps measured in each
 hand's own length. The anatomy term is taken on the angles themselves (smooth past a 90 deg bend)
@@ -13,12 +14,14 @@ cross-faded at the seams (`retarget.windows`). No training.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
 import torch
 
-from s2h_viewer.hand.kinematics import forward_kinematics
+from s2h_viewer.hand.kinematics import HandPose, forward_kinematics
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.hand.rotations import quat_to_tbs_euler, tbs_euler_to_quat
@@ -27,8 +30,8 @@ from s2h_viewer.retarget.progress import report
 from s2h_viewer.retarget.windows import stream_windows
 from s2h_viewer.semantics.anatomy import angle_excess, clamp_bends
 from s2h_viewer.semantics.asm import semantic_matrix
-from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, contact_gaps
-from s2h_viewer.semantics.similarity import semantic_similarity
+from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, contact_gaps, contact_loss
+from s2h_viewer.semantics.similarity import _EPS, semantic_weights, valid_mask
 
 
 @dataclass(frozen=True)
@@ -41,13 +44,20 @@ class AsmOptConfig:
     smoothness_weight: float = 20.0
     contact_weight: float = 2e3
     prior_weight: float = 0.01  # pull toward the warm start (TBS Copy), keeps the unconstrained DOF put
-    chunk: int = 512  # frames optimised together; a longer clip goes in chunks (memory of one chunk)
+    chunk: int = 2048  # frames optimised together; a longer clip goes in chunks (memory of one chunk). A step
+    # costs mostly per-op overhead, so one long chunk is faster than several short ones
     chunk_overlap: int = 64  # frames two chunks share, cross-faded so there is no seam
 
 
 def keyframes(n_frames: int, step: int) -> np.ndarray:
     """Every ``step``-th frame index, and the last frame."""
     return np.unique(np.r_[np.arange(0, n_frames, step), n_frames - 1])
+
+
+def contact_keyframes(touching: np.ndarray, step: int) -> np.ndarray:
+    """`keyframes`, and every frame where the source has a contact ((T, pairs) bools): a touch shorter
+    than the keyframe step would otherwise be met on no keyframe and lost in the interpolation."""
+    return np.union1d(keyframes(len(touching), step), np.flatnonzero(touching.any(-1)))
 
 
 def interpolate_keys(values: torch.Tensor, keys: np.ndarray, n_frames: int) -> torch.Tensor:
@@ -84,34 +94,73 @@ def optimise_asm(source_q: np.ndarray, source_hand: HandModel, target_hand: Hand
     return out
 
 
+@dataclass(frozen=True)
+class _SourceSemantics:
+    """What L_sem needs of the source, fixed over the optimisation: its ASM directions and weights."""
+
+    directions: torch.Tensor  # (K, 20, 29, 3) unit vectors, zero where masked
+    weights: torch.Tensor  # (K, 20, 29) `semantic_weights`, zero where masked
+
+    @classmethod
+    def of(cls, d_source: torch.Tensor) -> _SourceSemantics:
+        norm = d_source.norm(dim=-1, keepdim=True).clamp_min(_EPS)
+        return cls(directions=d_source / norm * valid_mask(d_source)[..., None], weights=semantic_weights(d_source))
+
+    def similarity(self, d_target: torch.Tensor) -> torch.Tensor:
+        """`semantic_similarity` of the source and ``d_target``, with the source's part computed once."""
+        norm = d_target.norm(dim=-1)
+        weights = self.weights * (norm > _EPS)
+        cos = (self.directions * d_target).sum(-1) / norm.clamp_min(_EPS)
+        return ((weights * cos).sum((-1, -2)) / weights.sum((-1, -2)).clamp_min(_EPS)).mean()
+
+
+@contextmanager
+def _threads(n: int) -> Iterator[None]:
+    """Run torch on ``n`` threads, then restore: small batches gain nothing from a second thread, and
+    threads that spin waiting for each other are many times slower on a busy machine."""
+    before = torch.get_num_threads()
+    torch.set_num_threads(n)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(before)
+
+
 def _optimise_chunk(source_q: np.ndarray, source_hand: HandModel, target_hand: HandModel, initial_q: np.ndarray,
                     config: AsmOptConfig) -> np.ndarray:
     """(T, 15, 3) optimised TBS Euler angles of one chunk, warm-started from ``initial_q``; batched over
     its keyframes."""
+    with _threads(1):
+        return _optimise_keyframes(source_q, source_hand, target_hand, initial_q, config)
+
+
+def _optimise_keyframes(source_q: np.ndarray, source_hand: HandModel, target_hand: HandModel,
+                        initial_q: np.ndarray, config: AsmOptConfig) -> np.ndarray:
+    """`_optimise_chunk` on the current thread settings."""
     n_frames = len(source_q)
-    keys = keyframes(n_frames, config.keyframe_step)
     with torch.no_grad():
-        src_pose = forward_kinematics(source_hand, torch.as_tensor(source_q[keys], dtype=torch.float32))
-        d_source = semantic_matrix(src_pose)
-        src_gaps = contact_gaps(source_hand, src_pose) / source_hand.hand_length
-        touching = src_gaps < CONTACT_TOLERANCE
+        src_pose = forward_kinematics(source_hand, torch.as_tensor(source_q, dtype=torch.float32))
+        source_gaps = contact_gaps(source_hand, src_pose) / source_hand.hand_length
+        keys = contact_keyframes((source_gaps < CONTACT_TOLERANCE).numpy(), config.keyframe_step)
+        source_gaps = source_gaps[keys]
+        src_pose = HandPose(src_pose.positions[keys], src_pose.frames[keys])
+        source = _SourceSemantics.of(semantic_matrix(src_pose))
         start = quat_to_tbs_euler(torch.as_tensor(initial_q, dtype=torch.float32))
+        start_keys = start[keys]
     correction = torch.zeros(len(keys), *start.shape[1:], requires_grad=True)
     optimiser = torch.optim.Adam([correction], lr=config.learning_rate)
-    tol = CONTACT_TOLERANCE
     for step in range(config.steps):
         report(step / config.steps)  # progress within the chunk's stage, and where a cancel stops it
-        angles = start[keys] + correction
-        q = tbs_euler_to_quat(angles)
-        pose = forward_kinematics(target_hand, q)
-        sem = semantic_similarity(d_source, semantic_matrix(pose))
+        angles = start_keys + correction
+        pose = forward_kinematics(target_hand, tbs_euler_to_quat(angles))
+        sem = source.similarity(semantic_matrix(pose))
         gaps = contact_gaps(target_hand, pose) / target_hand.hand_length
-        contact = torch.where(touching, torch.relu(gaps - 0.5 * tol), torch.relu(1.2 * tol - gaps)).square()
+        contact = contact_loss(gaps, source_gaps)
         smooth = (correction[2:] - 2 * correction[1:-1] + correction[:-2]).square().sum((-1, -2)).mean() \
             if len(keys) > 2 else correction.new_zeros(())
         anatomy = angle_excess(angles).square().sum((-1, -2)).mean()
         loss = (-config.semantic_weight * sem + config.anatomy_weight * anatomy
-                + config.smoothness_weight * smooth + config.contact_weight * contact.sum(-1).mean()
+                + config.smoothness_weight * smooth + config.contact_weight * contact
                 + config.prior_weight * correction.square().sum((-1, -2)).mean())
         optimiser.zero_grad()
         loss.backward()

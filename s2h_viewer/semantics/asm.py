@@ -46,21 +46,24 @@ def semantic_matrix(pose: HandPose) -> torch.Tensor:
     """ASM ``D[t, k, m] = M_k^T (x_m - x_k) / |x_middle_mcp - x_wrist|``: (T, 20, 29, 3), each column
     point seen from joint k's frame, in units of the palm length.
 
-    Invariant to moving, rotating or scaling the whole hand; ``D[:, k, k]`` is zero (callers mask it).
-    Computed in homogeneous form, ``[x_m, 1] @ [[M_k], [-x_k^T M_k]]``, as one (29 x 4) @ (4 x 60)
-    product per frame: BLAS does that far faster than 580 tiny 3 x 3 products, and the output is
-    written once. Rounding leaves about 1e-8 on the diagonal in float32, so it is set to exact zero.
+    Invariant to moving, rotating or scaling the whole hand; ``D[:, k, k]`` is exactly zero (callers mask it).
+    One batched product per frame writes the result in its final layout, once:
+    ``D[k, (m, a)] = sum_(b, c) [M_k / u, -x_k^T M_k / u][k, (b, c)] * ([x_m, 1][m, b] I[c, a])``, a
+    (20 x 12) @ (12 x 87) product. The unit division, the shift and the layout are folded into the small
+    (20 x 12) factor, so the big output is never divided, masked or transposed afterwards.
     """
     x, frames = pose.finger_positions, pose.finger_frames
     n_frames = x.shape[0]
-    width = 3 * topo.N_FINGER_JOINTS
-    rotate = frames.permute(0, 2, 1, 3).reshape(n_frames, 3, width)
-    shift = -torch.einsum("tkb,tkba->tka", x, frames).reshape(n_frames, 1, width)
+    scaled = frames / palm_unit(pose)[:, :, None, None]
+    rows = torch.cat([scaled.reshape(n_frames, topo.N_FINGER_JOINTS, 9),
+                      -(x[..., :, None] * scaled).sum(-2)], -1)
     columns = torch.cat([asm_columns(pose), x.new_ones(n_frames, topo.N_ASM_COLUMNS, 1)], -1)
-    seen = torch.bmm(columns, torch.cat([rotate, shift], 1))
-    d = seen.reshape(n_frames, topo.N_ASM_COLUMNS, topo.N_FINGER_JOINTS, 3).transpose(1, 2)
-    d = d / palm_unit(pose)[:, :, None, None]
-    return d.masked_fill(SELF_CELLS[None, :, :, None], 0.0)
+    spread = x.new_zeros(n_frames, 4, 3, topo.N_ASM_COLUMNS, 3)  # [x_m, 1][m, b] I[c, a] at [b, c, m, a]
+    spread.diagonal(dim1=2, dim2=4).copy_(columns.transpose(1, 2)[..., None])
+    d = torch.bmm(rows, spread.view(n_frames, 12, 3 * topo.N_ASM_COLUMNS))
+    d = d.view(n_frames, topo.N_FINGER_JOINTS, topo.N_ASM_COLUMNS, 3)
+    d.diagonal(dim1=1, dim2=2).zero_()  # rounding leaves ~1e-8 at m == k in float32
+    return d
 
 
 def distance_matrix(pose: HandPose) -> torch.Tensor:

@@ -5,7 +5,8 @@ with the paper's (1.0, 0.1) as `TrainConfig`'s defaults. DM replaces L_sem by th
 difference of the two distance matrices. The shipped ASRN (`SHIPPED`) goes beyond the paper: a contact
 loss over the fingertip pad pairs (`contact_loss`: pads touching in the source touch on the target,
 pads apart stay apart), because L_sem alone lets a few millimetres open between pads that must touch,
-and L_ana weighted 1.0 so that the pull toward contacts does not buy them with broken limits.
+L_ana weighted 1.0 so that the pull toward contacts does not buy them with broken limits, and half
+the batches supervised (A = B) so that a hand retargeted onto itself stays itself.
 Fingertip-on-palm pairs are left to L_sem: on long-fingered hands the palm is out of reach within
 the bend limits. The shipped DM, the baseline of Zhang et al., keeps the paper's loss.
 The learning rate follows a cosine decay to zero (computed from the step, so resuming needs no
@@ -60,7 +61,7 @@ class TrainConfig:
 
 
 #: how the shipped networks were trained, beyond `TrainConfig`'s (the paper's) defaults
-SHIPPED: dict[str, dict] = {"asrn": {"contact_weight": 300.0, "anatomy_weight": 1.0}, "dm": {}}
+SHIPPED: dict[str, dict] = {"asrn": {"contact_weight": 300.0, "anatomy_weight": 1.0, "p_same": 0.5}, "dm": {}}
 
 
 def default_config(kind: str, **changes) -> TrainConfig:
