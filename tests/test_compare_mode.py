@@ -112,6 +112,30 @@ def test_add_and_remove_a_target(window, qtbot):
     assert window.scores.rowCount() == 2 and len(window.view._hands) == 3
 
 
+def test_playback_pauses_for_a_new_retarget_and_plays_on_after_it(window, qtbot):
+    window.timeline.set_playing(True)
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.add_target_file(str(ASSETS_DIR / "hands" / "laurel.npz"))
+        assert not window.timeline.playing  # paused while laurel is retargeted
+    assert window.timeline.playing
+    frame = window.timeline.frame
+    qtbot.waitUntil(lambda: window.timeline.frame != frame, timeout=10_000)  # and the frames move on
+
+
+def test_playback_plays_on_after_a_cancelled_retarget(window, qtbot):
+    window.timeline.set_playing(True)
+    window.method_actions["asm_opt"].trigger()
+    assert not window.timeline.playing
+    wait_until_running(window, qtbot, "asm_opt")
+    with qtbot.waitSignal(window.compare.queue.job_cancelled, timeout=60_000):
+        click_cancel(window.compare._progress, qtbot)
+    assert window.timeline.playing and grid_methods(window) == ["tbs_copy", "asrn"]
+    window.timeline.set_playing(False)
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.method_actions["dm"].trigger()  # a paused timeline stays paused after the job
+    assert not window.timeline.playing
+
+
 def test_video_export_runs_in_the_background_while_the_timeline_plays(window, qtbot, tmp_path):
     fired, frames = [], []
     timer = QTimer()

@@ -70,6 +70,7 @@ class CompareMode(QWidget):
         self.comparison: Comparison | None = None
         self.queue = RetargetQueue(self)
         self._done_in_batch = 0
+        self._resume_playing = False  # the timeline played when retargets paused it: it plays on after
         self._progress: QProgressDialog | None = None
         self._heatmap_at = 0.0
         self.view = CompareView()
@@ -131,6 +132,7 @@ class CompareMode(QWidget):
 
     def load(self, motion: Motion, source: HandModel) -> None:
         self.state.motion, self.state.source = motion, source
+        self._resume_playing = False  # a new clip starts paused
         self.timeline.set_playing(False)
         self._sync()
 
@@ -182,10 +184,12 @@ class CompareMode(QWidget):
         if missing:
             if not was_busy:
                 self._done_in_batch = 0
+            self._resume_playing |= self.timeline.playing
             self.timeline.set_playing(False)
             self._show_progress()
         else:
             self._close_progress()
+            self._resume_playback()
             self._show_state()
 
     def _on_semantics(self, key: tuple[int, int], semantics: tuple) -> None:
@@ -198,7 +202,14 @@ class CompareMode(QWidget):
             self._done_in_batch += 1
         if not self.state.missing():
             self._close_progress()
+            self._resume_playback()
             self._show_state()
+
+    def _resume_playback(self) -> None:
+        """Play on if the retargets just finished or cancelled paused the timeline."""
+        if self._resume_playing:
+            self._resume_playing = False
+            self.timeline.set_playing(True)
 
     def _on_failure(self, key: ResultKey, message: str) -> None:
         self.cancel()
