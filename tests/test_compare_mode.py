@@ -259,6 +259,46 @@ def test_playback_keys_reach_the_shortcuts_with_the_frame_box_focused(window, qt
     assert window.timeline.readout.text().startswith(f"{window.timeline.frame}/{window.timeline.n_frames - 1}")
 
 
+def test_ctrl_shortcuts_reach_the_window_with_the_frame_box_focused(window, qtbot, tmp_path):
+    from PySide6.QtWidgets import QFileDialog
+    window.settings.setValue("files/last_dir", str(tmp_path))
+    window.activateWindow()
+    qtbot.waitUntil(lambda: window.isActiveWindow(), timeout=5000)
+    window.timeline.spin.setFocus()
+    qtbot.waitUntil(lambda: window.timeline.spin.hasFocus(), timeout=5000)
+    box = window.timeline.spin.lineEdit()
+    qtbot.keyClick(box, Qt.Key.Key_K, Qt.KeyboardModifier.ControlModifier)
+    assert window.skeleton_overlay.isChecked()  # Ctrl+K: the skeleton overlay
+    qtbot.keyClick(box, Qt.Key.Key_M, Qt.KeyboardModifier.ControlModifier)
+    assert window.view.solo > 0  # Ctrl+M: solo
+    qtbot.keyClick(box, Qt.Key.Key_M, Qt.KeyboardModifier.ControlModifier)
+    assert window.view.solo < 0
+    asked = []
+
+    def answer_dialog() -> None:  # the export's file dialog opened: note its title, then close it
+        dialog = next((w for w in window.findChildren(QFileDialog) if w.isVisible()), None)
+        if dialog is None:
+            QTimer.singleShot(50, answer_dialog)
+            return
+        asked.append(dialog.windowTitle())
+        dialog.reject()
+
+    for key, title in ((Qt.Key.Key_E, "Export video"), (Qt.Key.Key_S, "Export screenshot")):
+        window.timeline.spin.setFocus()
+        qtbot.waitUntil(lambda: window.timeline.spin.hasFocus(), timeout=5000)
+        QTimer.singleShot(0, answer_dialog)
+        qtbot.keyClick(box, key, Qt.KeyboardModifier.ControlModifier)
+        qtbot.waitUntil(lambda: len(asked) == [Qt.Key.Key_E, Qt.Key.Key_S].index(key) + 1, timeout=10_000)
+        assert asked[-1] == title
+    assert window.video_export is None and not list(tmp_path.glob("*.mp4"))
+    window.timeline.spin.setFocus()
+    qtbot.waitUntil(lambda: window.timeline.spin.hasFocus(), timeout=5000)
+    box.selectAll()
+    qtbot.keyClicks(box, "5")  # the box still takes its own keys
+    qtbot.keyClick(box, Qt.Key.Key_Return)
+    assert window.timeline.frame == 5
+
+
 def test_double_click_solos_a_viewport_and_back(window, qtbot):
     with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
         window.add_target_file(str(ASSETS_DIR / "hands" / "laurel.npz"))  # two rows: cells != renderers
