@@ -96,6 +96,35 @@ def test_cancel_a_retarget_goes_back_to_the_grid_and_the_menu_follows(window, qt
     assert window.settings.value("compare/methods") == ["tbs_copy", "asrn"]  # remembered as shown
 
 
+def test_cancel_the_first_retarget_keeps_the_targets_and_ticking_a_method_computes_it(qtbot, sample_hands,
+                                                                                      tmp_path):
+    window = open_compare_window(qtbot, sample_hands, tmp_path, methods=("asm_opt",), compute=False)
+    window.start_comparison()
+    wait_until_running(window, qtbot, "asm_opt")
+    with qtbot.waitSignal(window.compare.queue.job_cancelled, timeout=60_000):
+        click_cancel(window.compare._progress, qtbot)
+    assert ticked(window) == window.setup.methods == [] and window.comparison is None  # menus say what is shown
+    assert [t.name for t in window.setup.targets] == ["iris"]  # the targets stay
+    assert window.targets_menu.isEnabled() and [a.text() for a in window.targets_menu.actions()] == ["Remove iris"]
+    assert window.compare._progress is None
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.method_actions["tbs_copy"].trigger()
+    assert ticked(window) == window.setup.methods == grid_methods(window) == ["tbs_copy"]
+    assert [r.target.name for r in window.comparison.results] == ["iris"] and len(window.view._hands) == 2
+    window.close()
+
+
+def test_cancel_the_first_retarget_shows_the_methods_already_computed(qtbot, sample_hands, tmp_path):
+    window = open_compare_window(qtbot, sample_hands, tmp_path, methods=("tbs_copy", "asm_opt"), compute=False)
+    window.start_comparison()
+    wait_until_running(window, qtbot, "asm_opt")  # TBS Copy is computed by now
+    with qtbot.waitSignal(window.comparison_ready, timeout=60_000):
+        click_cancel(window.compare._progress, qtbot)
+    assert ticked(window) == window.setup.methods == grid_methods(window) == ["tbs_copy"]
+    assert [r.target.name for r in window.comparison.results] == ["iris"]
+    window.close()
+
+
 def test_add_and_remove_a_target(window, qtbot):
     computed = len(window.compare.queue.computed)
     with qtbot.waitSignal(window.comparison_ready, timeout=120_000):

@@ -5,7 +5,8 @@ All of it follows one ``CompareState``, changed only through this class's action
 remove a target, load a motion, select, cancel). Each action queues the retargets it lacks or cancels
 running ones it no longer needs (``RetargetQueue``); results are cached per (motion, source, target,
 method), so ticking a method computes that method alone. The grid shows the state once everything it
-asks for is computed; Cancel goes back to what the grid showed, and the menus follow."""
+asks for is computed; Cancel goes back to what the grid showed, and the menus follow (before the
+first grid, to the methods computed for every target: none ticked, an empty grid, if none is)."""
 
 from __future__ import annotations
 
@@ -158,9 +159,10 @@ class CompareMode(QWidget):
             motion, source, targets, methods = self._shown
             self.state.motion, self.state.source = motion, source
             self.state.targets, self.state.methods = list(targets), list(methods)
-        else:
-            self.state.targets = []
-        self.status("retargeting cancelled")
+        else:  # nothing shown yet (the first comparison): keep the targets, tick what is computed for all
+            self.state.methods = [m for m in self.state.methods
+                                  if all(self.state.key(t, m) in self.state.results for t in self.state.targets)]
+        self.status("retargeting cancelled" if self.state.methods else "retargeting cancelled: tick a method")
         self._sync()
 
     # --- keeping the queue and the screen on the state ---
