@@ -159,9 +159,10 @@ def test_playback_plays_on_after_a_cancelled_retarget(window, qtbot):
     with qtbot.waitSignal(window.compare.queue.job_cancelled, timeout=60_000):
         click_cancel(window.compare._progress, qtbot)
     assert window.timeline.playing and grid_methods(window) == ["tbs_copy", "asrn"]
-    window.timeline.set_playing(False)
     with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
-        window.method_actions["dm"].trigger()  # a paused timeline stays paused after the job
+        window.method_actions["dm"].trigger()
+        window.timeline.toggle()  # the user plays, then pauses during the job: paused it stays
+        window.timeline.toggle()
     assert not window.timeline.playing
 
 

@@ -297,6 +297,8 @@ class CompareMode(QWidget):
 
     def _playing_changed(self, playing: bool) -> None:
         """Lighter skins while playing; paused, the full ones and the heatmap at the frame shown."""
+        if playing:
+            self._resume_playing = False  # played during the retargets: the user's play / pause stands
         self.view.set_playing(playing)
         if not playing:
             self.show_frame(self.timeline.frame)
