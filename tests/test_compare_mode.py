@@ -96,6 +96,35 @@ def test_cancel_a_retarget_goes_back_to_the_grid_and_the_menu_follows(window, qt
     assert window.settings.value("compare/methods") == ["tbs_copy", "asrn"]  # remembered as shown
 
 
+def test_cancel_the_first_retarget_keeps_the_targets_and_ticking_a_method_computes_it(qtbot, sample_hands,
+                                                                                      tmp_path):
+    window = open_compare_window(qtbot, sample_hands, tmp_path, methods=("asm_opt",), compute=False)
+    window.start_comparison()
+    wait_until_running(window, qtbot, "asm_opt")
+    with qtbot.waitSignal(window.compare.queue.job_cancelled, timeout=60_000):
+        click_cancel(window.compare._progress, qtbot)
+    assert ticked(window) == window.setup.methods == [] and window.comparison is None  # menus say what is shown
+    assert [t.name for t in window.setup.targets] == ["iris"]  # the targets stay
+    assert window.targets_menu.isEnabled() and [a.text() for a in window.targets_menu.actions()] == ["Remove iris"]
+    assert window.compare._progress is None
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.method_actions["tbs_copy"].trigger()
+    assert ticked(window) == window.setup.methods == grid_methods(window) == ["tbs_copy"]
+    assert [r.target.name for r in window.comparison.results] == ["iris"] and len(window.view._hands) == 2
+    window.close()
+
+
+def test_cancel_the_first_retarget_shows_the_methods_already_computed(qtbot, sample_hands, tmp_path):
+    window = open_compare_window(qtbot, sample_hands, tmp_path, methods=("tbs_copy", "asm_opt"), compute=False)
+    window.start_comparison()
+    wait_until_running(window, qtbot, "asm_opt")  # TBS Copy is computed by now
+    with qtbot.waitSignal(window.comparison_ready, timeout=60_000):
+        click_cancel(window.compare._progress, qtbot)
+    assert ticked(window) == window.setup.methods == grid_methods(window) == ["tbs_copy"]
+    assert [r.target.name for r in window.comparison.results] == ["iris"]
+    window.close()
+
+
 def test_add_and_remove_a_target(window, qtbot):
     computed = len(window.compare.queue.computed)
     with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
@@ -110,6 +139,31 @@ def test_add_and_remove_a_target(window, qtbot):
     assert all(a is b for a, b in zip(window.comparison.results, laurel_results))  # kept, not recomputed
     assert [a.text() for a in window.targets_menu.actions()] == ["Remove laurel"]
     assert window.scores.rowCount() == 2 and len(window.view._hands) == 3
+
+
+def test_playback_pauses_for_a_new_retarget_and_plays_on_after_it(window, qtbot):
+    window.timeline.set_playing(True)
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.add_target_file(str(ASSETS_DIR / "hands" / "laurel.npz"))
+        assert not window.timeline.playing  # paused while laurel is retargeted
+    assert window.timeline.playing
+    frame = window.timeline.frame
+    qtbot.waitUntil(lambda: window.timeline.frame != frame, timeout=10_000)  # and the frames move on
+
+
+def test_playback_plays_on_after_a_cancelled_retarget(window, qtbot):
+    window.timeline.set_playing(True)
+    window.method_actions["asm_opt"].trigger()
+    assert not window.timeline.playing
+    wait_until_running(window, qtbot, "asm_opt")
+    with qtbot.waitSignal(window.compare.queue.job_cancelled, timeout=60_000):
+        click_cancel(window.compare._progress, qtbot)
+    assert window.timeline.playing and grid_methods(window) == ["tbs_copy", "asrn"]
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.method_actions["dm"].trigger()
+        window.timeline.toggle()  # the user plays, then pauses during the job: paused it stays
+        window.timeline.toggle()
+    assert not window.timeline.playing
 
 
 def test_video_export_runs_in_the_background_while_the_timeline_plays(window, qtbot, tmp_path):
@@ -233,6 +287,46 @@ def test_playback_keys_reach_the_shortcuts_with_the_frame_box_focused(window, qt
     qtbot.keyClick(window.timeline.spin.lineEdit(), Qt.Key.Key_Space)
     assert not window.timeline.playing
     assert window.timeline.readout.text().startswith(f"{window.timeline.frame}/{window.timeline.n_frames - 1}")
+
+
+def test_ctrl_shortcuts_reach_the_window_with_the_frame_box_focused(window, qtbot, tmp_path):
+    from PySide6.QtWidgets import QFileDialog
+    window.settings.setValue("files/last_dir", str(tmp_path))
+    window.activateWindow()
+    qtbot.waitUntil(lambda: window.isActiveWindow(), timeout=5000)
+    window.timeline.spin.setFocus()
+    qtbot.waitUntil(lambda: window.timeline.spin.hasFocus(), timeout=5000)
+    box = window.timeline.spin.lineEdit()
+    qtbot.keyClick(box, Qt.Key.Key_K, Qt.KeyboardModifier.ControlModifier)
+    assert window.skeleton_overlay.isChecked()  # Ctrl+K: the skeleton overlay
+    qtbot.keyClick(box, Qt.Key.Key_M, Qt.KeyboardModifier.ControlModifier)
+    assert window.view.solo > 0  # Ctrl+M: solo
+    qtbot.keyClick(box, Qt.Key.Key_M, Qt.KeyboardModifier.ControlModifier)
+    assert window.view.solo < 0
+    asked = []
+
+    def answer_dialog() -> None:  # the export's file dialog opened: note its title, then close it
+        dialog = next((w for w in window.findChildren(QFileDialog) if w.isVisible()), None)
+        if dialog is None:
+            QTimer.singleShot(50, answer_dialog)
+            return
+        asked.append(dialog.windowTitle())
+        dialog.reject()
+
+    for key, title in ((Qt.Key.Key_E, "Export video"), (Qt.Key.Key_S, "Export screenshot")):
+        window.timeline.spin.setFocus()
+        qtbot.waitUntil(lambda: window.timeline.spin.hasFocus(), timeout=5000)
+        QTimer.singleShot(0, answer_dialog)
+        qtbot.keyClick(box, key, Qt.KeyboardModifier.ControlModifier)
+        qtbot.waitUntil(lambda: len(asked) == [Qt.Key.Key_E, Qt.Key.Key_S].index(key) + 1, timeout=10_000)
+        assert asked[-1] == title
+    assert window.video_export is None and not list(tmp_path.glob("*.mp4"))
+    window.timeline.spin.setFocus()
+    qtbot.waitUntil(lambda: window.timeline.spin.hasFocus(), timeout=5000)
+    box.selectAll()
+    qtbot.keyClicks(box, "5")  # the box still takes its own keys
+    qtbot.keyClick(box, Qt.Key.Key_Return)
+    assert window.timeline.frame == 5
 
 
 def test_double_click_solos_a_viewport_and_back(window, qtbot):

@@ -5,7 +5,8 @@ All of it follows one ``CompareState``, changed only through this class's action
 remove a target, load a motion, select, cancel). Each action queues the retargets it lacks or cancels
 running ones it no longer needs (``RetargetQueue``); results are cached per (motion, source, target,
 method), so ticking a method computes that method alone. The grid shows the state once everything it
-asks for is computed; Cancel goes back to what the grid showed, and the menus follow."""
+asks for is computed; Cancel goes back to what the grid showed, and the menus follow (before the
+first grid, to the methods computed for every target: none ticked, an empty grid, if none is)."""
 
 from __future__ import annotations
 
@@ -70,6 +71,7 @@ class CompareMode(QWidget):
         self.comparison: Comparison | None = None
         self.queue = RetargetQueue(self)
         self._done_in_batch = 0
+        self._resume_playing = False  # the timeline played when retargets paused it: it plays on after
         self._progress: QProgressDialog | None = None
         self._heatmap_at = 0.0
         self.view = CompareView()
@@ -131,6 +133,7 @@ class CompareMode(QWidget):
 
     def load(self, motion: Motion, source: HandModel) -> None:
         self.state.motion, self.state.source = motion, source
+        self._resume_playing = False  # a new clip starts paused
         self.timeline.set_playing(False)
         self._sync()
 
@@ -156,9 +159,10 @@ class CompareMode(QWidget):
             motion, source, targets, methods = self._shown
             self.state.motion, self.state.source = motion, source
             self.state.targets, self.state.methods = list(targets), list(methods)
-        else:
-            self.state.targets = []
-        self.status("retargeting cancelled")
+        else:  # nothing shown yet (the first comparison): keep the targets, tick what is computed for all
+            self.state.methods = [m for m in self.state.methods
+                                  if all(self.state.key(t, m) in self.state.results for t in self.state.targets)]
+        self.status("retargeting cancelled" if self.state.methods else "retargeting cancelled: tick a method")
         self._sync()
 
     # --- keeping the queue and the screen on the state ---
@@ -182,10 +186,12 @@ class CompareMode(QWidget):
         if missing:
             if not was_busy:
                 self._done_in_batch = 0
+            self._resume_playing |= self.timeline.playing
             self.timeline.set_playing(False)
             self._show_progress()
         else:
             self._close_progress()
+            self._resume_playback()
             self._show_state()
 
     def _on_semantics(self, key: tuple[int, int], semantics: tuple) -> None:
@@ -198,7 +204,14 @@ class CompareMode(QWidget):
             self._done_in_batch += 1
         if not self.state.missing():
             self._close_progress()
+            self._resume_playback()
             self._show_state()
+
+    def _resume_playback(self) -> None:
+        """Play on if the retargets just finished or cancelled paused the timeline."""
+        if self._resume_playing:
+            self._resume_playing = False
+            self.timeline.set_playing(True)
 
     def _on_failure(self, key: ResultKey, message: str) -> None:
         self.cancel()
@@ -284,6 +297,8 @@ class CompareMode(QWidget):
 
     def _playing_changed(self, playing: bool) -> None:
         """Lighter skins while playing; paused, the full ones and the heatmap at the frame shown."""
+        if playing:
+            self._resume_playing = False  # played during the retargets: the user's play / pause stands
         self.view.set_playing(playing)
         if not playing:
             self.show_frame(self.timeline.frame)

@@ -3,8 +3,8 @@ frame rate actually drawn.
 
 Playback runs against the clock: each tick shows the frame that real time (times the speed) has
 reached since play started, so a view that draws slower than the clip drops frames instead of
-slowing the clip down. Space and the arrow keys stay the window's shortcuts even when the frame box
-has the focus (it would take them for its text cursor otherwise)."""
+slowing the clip down. Space, the arrow keys and the Ctrl shortcuts (Ctrl+E, Ctrl+S, ...) stay the
+window's shortcuts even when the frame box has the focus (its line edit would take them otherwise)."""
 
 from __future__ import annotations
 
@@ -19,10 +19,12 @@ PASSED_KEYS = (Qt.Key.Key_Space, Qt.Key.Key_Left, Qt.Key.Key_Right, Qt.Key.Key_H
 
 
 class _LeaveShortcutKeys(QObject):
-    """Refuses the frame box's claim (ShortcutOverride) on the playback keys: the shortcuts get them."""
+    """Refuses the frame box's claim (ShortcutOverride) on the playback keys and Ctrl combinations: the
+    window's shortcuts get them (a Ctrl key no shortcut takes still reaches the box)."""
 
     def eventFilter(self, watched: QObject, event: QEvent) -> bool:
-        return event.type() == QEvent.Type.ShortcutOverride and event.key() in PASSED_KEYS
+        return event.type() == QEvent.Type.ShortcutOverride and (
+            event.key() in PASSED_KEYS or bool(event.modifiers() & Qt.KeyboardModifier.ControlModifier))
 
 
 def fixed_size(label: QLabel, widest: str) -> None:
