@@ -217,13 +217,19 @@ def test_png_export_carries_a_caption_of_the_selected_retarget(window, tmp_path)
     assert bvh.read_text().startswith("HIERARCHY")
 
 
-def test_playback_follows_the_clock(window, qtbot):
+def start_recorded_playback(window) -> tuple[list[tuple[float, int]], float, int]:
+    """Play from frame 0, recording (time, frame) of every frame shown; also the clock's anchor."""
     shown = []
     window.timeline.frame_changed.connect(lambda f: shown.append((time.perf_counter(), f)))
     window.timeline.set_frame(0)
     shown.clear()
     window.timeline.set_playing(True)
     started, first = window.timeline._anchor
+    return shown, started, first
+
+
+def test_playback_follows_the_clock(window, qtbot):
+    shown, started, first = start_recorded_playback(window)
     qtbot.wait(1500)
     window.timeline.set_playing(False)
     fps = window.timeline.clip_fps
@@ -236,12 +242,7 @@ def test_playback_follows_the_clock(window, qtbot):
 def test_a_slow_view_drops_frames_to_keep_real_time(window, qtbot):
     slow = 0.3  # seconds each draw takes here: at 30 frames/s about 9 clip frames pass during one
     window.view.drawn.connect(lambda: time.sleep(slow) if window.timeline.playing else None)
-    shown = []
-    window.timeline.frame_changed.connect(lambda f: shown.append((time.perf_counter(), f)))
-    window.timeline.set_frame(0)
-    shown.clear()
-    window.timeline.set_playing(True)
-    started, first = window.timeline._anchor
+    shown, started, first = start_recorded_playback(window)
     qtbot.waitUntil(lambda: len(shown) >= 4, timeout=20_000)
     window.timeline.set_playing(False)
     fps = window.timeline.clip_fps
