@@ -205,8 +205,12 @@ def _truncated(src, dst, keep=0.5):
 
 def test_corrupt_glb_fbx_bvh_give_clear_errors(tmp_path, sample_hands, motion_on_birch):
     glb = _truncated(WEBXR / "generic-hand-right.glb", tmp_path / "broken.glb")
-    with pytest.raises(InputFileError, match=r"broken\.glb: "):
+    size = (WEBXR / "generic-hand-right.glb").stat().st_size
+    with pytest.raises(InputFileError, match=rf"broken\.glb: truncated GLB: its header declares {size} bytes"):
         load_gltf_hand(glb)
+    stub = _truncated(WEBXR / "generic-hand-right.glb", tmp_path / "stub.glb", keep=10 / size)
+    with pytest.raises(InputFileError, match=r"stub\.glb: not a GLB file: it does not start with a GLB header"):
+        load_gltf_hand(stub)
     fbx = tmp_path / "broken.fbx"
     fbx.write_bytes(b"Kaydara FBX Binary  \x00\x1a\x00" + bytes(range(256)) * 4)
     with pytest.raises(InputFileError, match=r"broken\.fbx: not a readable FBX file"):

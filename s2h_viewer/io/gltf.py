@@ -61,11 +61,29 @@ def _numbers(path: Path, value, length: int, what: str) -> np.ndarray:
     return array
 
 
+GLB_HEADER_BYTES = 12
+
+
+def _check_glb_header(path: Path) -> None:
+    """Refuse, in words a user can act on, a GLB that is not one or is shorter than its header says."""
+    size = path.stat().st_size
+    with open(path, "rb") as f:
+        header = f.read(GLB_HEADER_BYTES)
+    if len(header) < GLB_HEADER_BYTES or header[:4] != b"glTF":
+        raise InputFileError(path, f"not a GLB file: it does not start with a GLB header ({size} bytes)")
+    declared = int.from_bytes(header[8:12], "little")
+    if size < declared:
+        raise InputFileError(path, f"truncated GLB: its header declares {declared} bytes, the file has {size} "
+                                   f"(an interrupted download or copy?)")
+
+
 class _Document:
     """A parsed glTF with its binary data in one blob, and the scene graph at rest."""
 
     def __init__(self, path: Path):
         self.path = require_readable_file(path)
+        if self.path.suffix.lower() == ".glb":
+            _check_glb_header(self.path)
         try:
             self.gltf = pygltflib.GLTF2().load(str(path))
             if self.gltf is None:
