@@ -31,7 +31,7 @@ from s2h_viewer.retarget.windows import stream_windows
 from s2h_viewer.semantics.anatomy import angle_excess, clamp_bends
 from s2h_viewer.semantics.asm import semantic_matrix
 from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, contact_gaps, contact_loss
-from s2h_viewer.semantics.similarity import _EPS, semantic_weights, valid_mask
+from s2h_viewer.semantics.similarity import SourceSemantics
 
 
 @dataclass(frozen=True)
@@ -94,26 +94,6 @@ def optimise_asm(source_q: np.ndarray, source_hand: HandModel, target_hand: Hand
     return out
 
 
-@dataclass(frozen=True)
-class _SourceSemantics:
-    """What L_sem needs of the source, fixed over the optimisation: its ASM directions and weights."""
-
-    directions: torch.Tensor  # (K, 20, 29, 3) unit vectors, zero where masked
-    weights: torch.Tensor  # (K, 20, 29) `semantic_weights`, zero where masked
-
-    @classmethod
-    def of(cls, d_source: torch.Tensor) -> _SourceSemantics:
-        norm = d_source.norm(dim=-1, keepdim=True).clamp_min(_EPS)
-        return cls(directions=d_source / norm * valid_mask(d_source)[..., None], weights=semantic_weights(d_source))
-
-    def similarity(self, d_target: torch.Tensor) -> torch.Tensor:
-        """`semantic_similarity` of the source and ``d_target``, with the source's part computed once."""
-        norm = d_target.norm(dim=-1)
-        weights = self.weights * (norm > _EPS)
-        cos = (self.directions * d_target).sum(-1) / norm.clamp_min(_EPS)
-        return ((weights * cos).sum((-1, -2)) / weights.sum((-1, -2)).clamp_min(_EPS)).mean()
-
-
 @contextmanager
 def _threads(n: int) -> Iterator[None]:
     """Run torch on ``n`` threads, then restore: small batches gain nothing from a second thread, and
@@ -144,7 +124,7 @@ def _optimise_keyframes(source_q: np.ndarray, source_hand: HandModel, target_han
         keys = contact_keyframes((source_gaps < CONTACT_TOLERANCE).numpy(), config.keyframe_step)
         source_gaps = source_gaps[keys]
         src_pose = HandPose(src_pose.positions[keys], src_pose.frames[keys])
-        source = _SourceSemantics.of(semantic_matrix(src_pose))
+        source = SourceSemantics.of(semantic_matrix(src_pose))
         start = quat_to_tbs_euler(torch.as_tensor(initial_q, dtype=torch.float32))
         start_keys = start[keys]
     correction = torch.zeros(len(keys), *start.shape[1:], requires_grad=True)

@@ -8,6 +8,8 @@ softmax adding 1), so it lies in [-1, 1] and loss weights do not depend on the m
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import torch
 
 from s2h_viewer.hand import topology as topo
@@ -49,9 +51,28 @@ def semantic_weights(d_source: torch.Tensor) -> torch.Tensor:
     return weights * valid
 
 
+@dataclass(frozen=True)
+class SourceSemantics:
+    """What L_sem needs of the source ASM, computed once: its unit directions and weights (ASM-Opt
+    compares one source with many targets)."""
+
+    directions: torch.Tensor  # (..., 20, 29, 3) unit vectors, zero where masked
+    weights: torch.Tensor  # (..., 20, 29) `semantic_weights`, zero where masked
+
+    @classmethod
+    def of(cls, d_source: torch.Tensor) -> SourceSemantics:
+        norm = d_source.norm(dim=-1, keepdim=True).clamp_min(_EPS)
+        return cls(directions=d_source / norm * valid_mask(d_source)[..., None], weights=semantic_weights(d_source))
+
+    def similarity(self, d_target: torch.Tensor) -> torch.Tensor:
+        """L_sem against ``d_target``: weighted mean cosine over the cells valid on both sides, averaged
+        over frames (scalar)."""
+        norm = d_target.norm(dim=-1)
+        weights = self.weights * (norm > _EPS)
+        cos = (self.directions * d_target).sum(-1) / norm.clamp_min(_EPS)
+        return ((weights * cos).sum((-1, -2)) / weights.sum((-1, -2)).clamp_min(_EPS)).mean()
+
+
 def semantic_similarity(d_source: torch.Tensor, d_target: torch.Tensor) -> torch.Tensor:
     """L_sem: the weighted mean cosine between source and target ASMs, averaged over frames (scalar)."""
-    cos, valid = masked_cosine(d_source, d_target)
-    w = semantic_weights(d_source) * valid
-    per_frame = (w * cos).sum(dim=(-1, -2)) / w.sum(dim=(-1, -2)).clamp_min(_EPS)
-    return per_frame.mean()
+    return SourceSemantics.of(d_source).similarity(d_target)
