@@ -18,7 +18,9 @@ from s2h_viewer.hand.motion import Motion
 from s2h_viewer.retarget.asrn.features import source_features, target_static
 from s2h_viewer.retarget.asrn.model import RetargetNet, apply_residual
 from s2h_viewer.retarget.asrn.training import TrainConfig, build_model, load_checkpoint, stored_config
+from s2h_viewer.retarget.contact_fit import fit_contacts
 from s2h_viewer.retarget.methods import on_target, register
+from s2h_viewer.retarget.progress import stage
 from s2h_viewer.retarget.windows import stream_windows
 
 MODELS_DIR = Path(__file__).resolve().parents[3] / "assets" / "models"
@@ -64,18 +66,23 @@ def load_network(path: str) -> tuple[RetargetNet, TrainConfig]:
     return model.eval(), config
 
 
-def _retarget_with(kind: str, motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
+def network_retarget(kind: str, source_q: np.ndarray, source_hand: HandModel, target_hand: HandModel) -> np.ndarray:
+    """(T, 15, 4) target TBS rotations from the shipped network ``kind`` ("asrn" or "dm") alone."""
     model, config = load_network(str(MODELS_DIR / f"{kind}.pt"))
-    q = run_network(model, kind, source_hand, motion.q_tbs, target_hand, window=config.window,
-                    overlap=config.window // 4)
-    return on_target(motion, target_hand, q, kind)
+    return run_network(model, kind, source_hand, source_q, target_hand, window=config.window,
+                       overlap=config.window // 4)
 
 
 @register("dm", "DM", "the network on distance matrices (Zhang et al. 2023) instead of the ASM")
 def retarget_dm(motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
-    return _retarget_with("dm", motion, source_hand, target_hand)
+    return on_target(motion, target_hand, network_retarget("dm", motion.q_tbs, source_hand, target_hand), "dm")
 
 
-@register("asrn", "ASRN", "the anatomy-based semantic retargeting network (trained, shipped)")
+@register("asrn", "ASRN", "the anatomy-based semantic retargeting network (trained, shipped), its fingertip "
+                          "contacts then fitted to the source's")
 def retarget_asrn(motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
-    return _retarget_with("asrn", motion, source_hand, target_hand)
+    with stage(0.0, 0.1, "network"):
+        q = network_retarget("asrn", motion.q_tbs, source_hand, target_hand)
+    with stage(0.1, 1.0, "contact fit"):
+        q = fit_contacts(motion.q_tbs, source_hand, target_hand, q)
+    return on_target(motion, target_hand, q, "asrn")

@@ -1,0 +1,136 @@
+"""Contact fit: close on the target the fingertip-pad contacts the source has, and open those it lacks,
+changing a retarget only around the frames where the two disagree (beyond the paper).
+
+A network trained on procedural hands brings pads close on a hand it never saw, but not always within
+the 1.5% tolerance that makes a touch (DESIGN.md section 5). This pass takes its output as given and
+optimises a correction of the TBS Euler angles on the frames where a pad pair is touching on one hand and
+apart on the other, and on ``reach`` frames either side, where the correction fades to zero (a
+smoothness term ties each run's ends to zero): elsewhere the retarget is returned bit for bit. Loss:
+the contact term (`semantics.contacts.contact_loss`), L_ana on the angles, smoothness, and a pull to the
+network's pose; bends are clamped into their limits. All runs of a clip are optimised together in one
+batch, a bounded number of frames at a time.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from s2h_viewer.hand.chunks import frame_chunks
+from s2h_viewer.hand.kinematics import forward_kinematics
+from s2h_viewer.hand.model import HandModel
+from s2h_viewer.hand.rotations import quat_to_tbs_euler, tbs_euler_to_quat
+from s2h_viewer.retarget.progress import report, stage
+from s2h_viewer.semantics.anatomy import angle_excess, clamp_bends
+from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, PAD_PAIRS, contact_gaps, contact_loss
+
+
+@dataclass(frozen=True)
+class ContactFitConfig:
+    steps: int = 60
+    learning_rate: float = 0.03
+    contact_weight: float = 2e3
+    anatomy_weight: float = 10.0
+    smoothness_weight: float = 100.0
+    prior_weight: float = 1.0  # pull toward the network's pose: the degrees of freedom contacts leave free stay put
+    reach: int = 4  # frames either side of a disagreement over which the correction fades in and out
+    batch_frames: int = 4096  # frames optimised at once (memory of one batch)
+
+
+def pad_gaps(hand: HandModel, q_tbs: np.ndarray) -> np.ndarray:
+    """(T, 10) fingertip-pad gaps in units of the hand's length."""
+    with torch.no_grad():
+        pose = forward_kinematics(hand, torch.as_tensor(q_tbs, dtype=torch.float32))
+        return (contact_gaps(hand, pose)[:, PAD_PAIRS] / hand.hand_length).numpy()
+
+
+def disagreement(source_hand: HandModel, source_q: np.ndarray, target_hand: HandModel, target_q: np.ndarray
+                 ) -> np.ndarray:
+    """(T,) bool: frames where some pad pair touches on one hand and not on the other (one bool per frame
+    is all that is kept of a long clip's gaps)."""
+    out = np.empty(len(source_q), dtype=bool)
+    for first, end in frame_chunks(len(source_q)):
+        touching_source = pad_gaps(source_hand, source_q[first:end]) < CONTACT_TOLERANCE
+        touching_target = pad_gaps(target_hand, target_q[first:end]) < CONTACT_TOLERANCE
+        out[first:end] = (touching_source != touching_target).any(-1)
+    return out
+
+
+def runs_around(frames: np.ndarray, reach: int) -> list[tuple[int, int]]:
+    """(first, end) runs of the frames within ``reach`` of a true frame of ``frames`` ((T,) bool); runs
+    closer than two frames are merged."""
+    runs: list[tuple[int, int]] = []
+    for f in np.flatnonzero(frames):
+        first, end = max(f - reach, 0), min(f + reach + 1, len(frames))
+        if runs and first <= runs[-1][1] + 2:
+            runs[-1] = (runs[-1][0], end)
+        else:
+            runs.append((int(first), int(end)))
+    return runs
+
+
+def fit_contacts(source_q: np.ndarray, source_hand: HandModel, target_hand: HandModel, target_q: np.ndarray,
+                 config: ContactFitConfig = ContactFitConfig()) -> np.ndarray:
+    """(T, 15, 4) ``target_q`` with its pad contacts made to agree with the source's, changed only in runs
+    around the frames where they disagree (progress through `retarget.progress`). A float32 ``target_q``
+    is changed in place (a long clip's rotations are not copied)."""
+    source_q = np.asarray(source_q)
+    out = np.asarray(target_q, dtype=np.float32)
+    batches = _batches(runs_around(disagreement(source_hand, source_q, target_hand, out), config.reach),
+                       config.batch_frames)
+    for i, batch in enumerate(batches):
+        frames = np.concatenate([np.arange(a, b) for a, b in batch])
+        with stage(i / len(batches), (i + 1) / len(batches)):
+            out[frames] = _fit_runs(out[frames], pad_gaps(source_hand, source_q[frames]), [b - a for a, b in batch],
+                                    target_hand, config)
+    report(1.0)
+    return out
+
+
+def _batches(runs: list[tuple[int, int]], batch_frames: int) -> list[list[tuple[int, int]]]:
+    """Runs grouped so a group holds at most ``batch_frames`` frames; a longer run is cut into pieces (each
+    piece's correction fades to zero at the cut: rare, a disagreement thousands of frames long)."""
+    pieces = [(a, min(a + batch_frames, end)) for first, end in runs for a in range(first, end, batch_frames)]
+    batches: list[list[tuple[int, int]]] = []
+    size = batch_frames
+    for piece in pieces:
+        length = piece[1] - piece[0]
+        if size + length > batch_frames:
+            batches.append([])
+            size = 0
+        batches[-1].append(piece)
+        size += length
+    return batches
+
+
+def _fit_runs(q: np.ndarray, source_gaps: np.ndarray, lengths: list[int], hand: HandModel,
+              config: ContactFitConfig) -> np.ndarray:
+    """(F, 15, 4) rotations of the concatenated runs (``lengths`` frames each) after the fit."""
+    with torch.no_grad():
+        start = quat_to_tbs_euler(torch.as_tensor(q, dtype=torch.float32))
+    source = torch.as_tensor(source_gaps)
+    # each run's correction sits between two zero frames: second differences across them tie its ends
+    # to zero, and no difference spans two runs
+    offsets = np.cumsum([0] + [n + 2 for n in lengths[:-1]])
+    slots = torch.as_tensor(np.concatenate([o + 1 + np.arange(n) for o, n in zip(offsets, lengths)]))
+    padded_len = int(offsets[-1] + lengths[-1] + 2)
+    correction = torch.zeros(len(q), *start.shape[1:], requires_grad=True)
+    optimiser = torch.optim.Adam([correction], lr=config.learning_rate)
+    for step in range(config.steps):
+        report(step / config.steps)  # and where a cancel stops the fit
+        angles = start + correction
+        pose = forward_kinematics(hand, tbs_euler_to_quat(angles))
+        gaps = contact_gaps(hand, pose)[:, PAD_PAIRS] / hand.hand_length
+        padded = correction.new_zeros(padded_len, *correction.shape[1:]).index_copy(0, slots, correction)
+        smooth = (padded[2:] - 2 * padded[1:-1] + padded[:-2]).square().sum((-1, -2)).mean()
+        loss = (config.contact_weight * contact_loss(gaps, source)
+                + config.anatomy_weight * angle_excess(angles).square().sum((-1, -2)).mean()
+                + config.smoothness_weight * smooth
+                + config.prior_weight * correction.square().sum((-1, -2)).mean())
+        optimiser.zero_grad()
+        loss.backward()
+        optimiser.step()
+    with torch.no_grad():
+        return tbs_euler_to_quat(clamp_bends(start + correction)).numpy()
