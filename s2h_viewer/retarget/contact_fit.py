@@ -23,6 +23,7 @@ from s2h_viewer.hand.kinematics import forward_kinematics
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.rotations import quat_to_tbs_euler, tbs_euler_to_quat
 from s2h_viewer.retarget.progress import report, stage
+from s2h_viewer.retarget.threads import torch_threads
 from s2h_viewer.semantics.anatomy import angle_excess, clamp_bends
 from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, PAD_PAIRS, contact_gaps, contact_loss
 
@@ -82,7 +83,7 @@ def fit_contacts(source_q: np.ndarray, source_hand: HandModel, target_hand: Hand
                        config.batch_frames)
     for i, batch in enumerate(batches):
         frames = np.concatenate([np.arange(a, b) for a, b in batch])
-        with stage(i / len(batches), (i + 1) / len(batches)):
+        with stage(i / len(batches), (i + 1) / len(batches)), torch_threads(1):
             out[frames] = _fit_runs(out[frames], pad_gaps(source_hand, source_q[frames]), [b - a for a, b in batch],
                                     target_hand, config)
     report(1.0)
