@@ -1,52 +1,164 @@
-"""A pyvista plotter drawn in VTK's own native-window Qt widget (``QVTKRenderWindowInteractor``), the
-3D widget of both modes.
+"""A pyvista plotter rendered off screen and shown as an image in a plain Qt widget, the 3D widget of both
+modes; the mouse turns the camera through VTK's interactor as in VTK's own Qt widget.
 
-Not pyvistaqt's ``QtInteractor``: that is a ``QOpenGLWidget``, and one of those anywhere in a window
-makes Qt compose the whole window through OpenGL on every repaint (under software OpenGL, the window
-drew compare-mode playback at 0.7x the rate it draws without one, `benchmarks/bench_window_playback.py`).
-The native widget renders straight into its own X window, in its paint: ``update()`` asks for a frame,
-``render()`` draws one now."""
+Why not a window on screen: under software OpenGL (llvmpipe on X) a VTK window pays for presenting each
+frame (glX swap: ~7 ms a frame at 900 x 700) on top of the off-screen drawing; and pyvistaqt's
+``QOpenGLWidget`` makes Qt compose the whole window through OpenGL on every repaint. Off screen, VTK
+draws into its framebuffer (the path `s2h render` and the off-screen benchmark take), the widget reads
+it back once (one copy) and Qt paints it with the rest of the window
+(`benchmarks/bench_window_playback.py` compares the two). ``update()`` asks for a frame, drawn in the
+next paint; ``render()`` draws one now. A paint with nothing new (a dialog moved over the view) shows the
+last frame again without rendering."""
 
 from __future__ import annotations
 
+import numpy as np
 import pyvista as pv
-from PySide6.QtWidgets import QWidget
-from vtkmodules.qt.QVTKRenderWindowInteractor import QVTKRenderWindowInteractor
+from PySide6.QtCore import QEvent, QPointF, Qt
+from PySide6.QtGui import QImage, QMouseEvent, QPainter, QWheelEvent
+from PySide6.QtWidgets import QSizePolicy, QWidget
+from vtkmodules.util.numpy_support import vtk_to_numpy
+from vtkmodules.vtkCommonCore import vtkUnsignedCharArray
 from vtkmodules.vtkInteractionStyle import vtkInteractorStyleTrackballCamera
+from vtkmodules.vtkRenderingUI import vtkGenericRenderWindowInteractor
+
+WHEEL_STEP = 120  # Qt's angle delta of one wheel notch: one VTK zoom step
 
 
 def window_plotter(**plotter_options) -> pv.Plotter:
-    """A pyvista plotter for a native widget, without multisampling (software OpenGL pays 3-4x for it)."""
-    plotter = pv.Plotter(off_screen=False, **plotter_options)
+    """An off-screen pyvista plotter for a `PlotterWidget`, without multisampling (software OpenGL pays
+    3-4x for it)."""
+    plotter = pv.Plotter(off_screen=True, **plotter_options)
     plotter.render_window.SetMultiSamples(0)
     return plotter
 
 
-class PlotterWidget(QVTKRenderWindowInteractor):
-    """``plotter``'s render window in a native widget, the camera turned by the mouse (trackball)."""
+class PlotterWidget(QWidget):
+    """``plotter``'s off-screen render window shown in a widget, the camera turned by the mouse (trackball:
+    left drag rotates, Shift+left or middle drag pans, right drag or the wheel zooms)."""
 
     def __init__(self, plotter: pv.Plotter, parent: QWidget | None = None):
-        super().__init__(parent, rw=plotter.render_window)
+        super().__init__(parent)
         self.plotter = plotter
         self.alive = True
-        self.GetRenderWindow().GetInteractor().SetInteractorStyle(vtkInteractorStyleTrackballCamera())
+        self._window = plotter.render_window
+        self._interactor = vtkGenericRenderWindowInteractor()
+        self._interactor.SetRenderWindow(self._window)
+        self._interactor.SetInteractorStyle(vtkInteractorStyleTrackballCamera())
+        self._interactor.EnableRenderOff()  # the camera style's renders become requests for a paint
+        self._interactor.AddObserver("RenderEvent", lambda *_: self.update())
+        self._pixels = vtkUnsignedCharArray()
+        self._image: QImage | None = None
+        self._stale = True  # the scene changed since the last render
+        self._button = Qt.MouseButton.NoButton
+        self._wheel = 0
+        self.setAttribute(Qt.WidgetAttribute.WA_OpaquePaintEvent)  # the image covers the widget: no background
+        self.setMouseTracking(True)
+        self.setFocusPolicy(Qt.FocusPolicy.WheelFocus)
+        self.setSizePolicy(QSizePolicy.Policy.Expanding, QSizePolicy.Policy.Expanding)
+
+    def Initialize(self) -> None:
+        """Start the interactor (the render window gets its context on the first render)."""
+        self._interactor.Initialize()
+
+    def GetRenderWindow(self):
+        return self._window
+
+    def update(self, *area) -> None:
+        """Ask for a new frame, drawn in the next paint (several requests before it make one render)."""
+        self._stale = True
+        super().update(*area)
 
     def render(self) -> None:
-        """Draw now (pyvista's own ``render`` waits for a ``show`` that a widget never calls)."""
+        """Draw now (what picking and a drag's live feedback read), shown in the next paint."""
         if self.alive:
-            self.GetRenderWindow().Render()
+            self._render()
+            super().update()
+
+    def _size(self) -> tuple[int, int]:
+        scale = self.devicePixelRatioF()
+        return max(1, round(self.width() * scale)), max(1, round(self.height() * scale))
+
+    def _render(self) -> None:
+        """Render off screen and read the frame back into ``_image`` (top row first)."""
+        width, height = self._size()
+        if tuple(self._window.GetSize()) != (width, height):
+            self._window.SetSize(width, height)
+            self._interactor.SetSize(width, height)
+        self._window.Render()
+        self._window.GetRGBACharPixelData(0, 0, width - 1, height - 1, 0, self._pixels)
+        rows = vtk_to_numpy(self._pixels).reshape(height, width, 4)[::-1]  # OpenGL's rows run bottom up
+        self._rows = np.ascontiguousarray(rows)
+        self._image = QImage(self._rows.data, width, height, 4 * width, QImage.Format.Format_RGBX8888)
+        self._image.setDevicePixelRatio(self.devicePixelRatioF())
+        self._stale = False
 
     def paintEvent(self, event) -> None:
-        if self.alive:  # a paint queued before ``close_plotter`` would render into a freed window
-            super().paintEvent(event)
+        if not self.alive:  # a paint queued before ``close_plotter`` would render into a freed window
+            return
+        if self._stale or self._image is None or (self._image.width(), self._image.height()) != self._size():
+            self._render()
+        QPainter(self).drawImage(0, 0, self._image)
 
     def resizeEvent(self, event) -> None:
         if self.alive:
-            super().resizeEvent(event)
+            width, height = self._size()
+            self._window.SetSize(width, height)
+            self._interactor.SetSize(width, height)
+            self._interactor.ConfigureEvent()
+            self.update()
+
+    # --- the mouse, as VTK's interactor hears it (display pixels, y up) ---
+    def _tell(self, position: QPointF, modifiers, repeat: int = 0) -> None:
+        scale = self.devicePixelRatioF()
+        self._interactor.SetEventInformation(round(position.x() * scale), round((self.height() - position.y() - 1) * scale),
+                                             int(bool(modifiers & Qt.KeyboardModifier.ControlModifier)),
+                                             int(bool(modifiers & Qt.KeyboardModifier.ShiftModifier)), "\0", repeat)
+
+    def mousePressEvent(self, event: QMouseEvent) -> None:
+        self._tell(event.position(), event.modifiers(), int(event.type() == QEvent.Type.MouseButtonDblClick))
+        self._button = event.button()
+        press = {Qt.MouseButton.LeftButton: self._interactor.LeftButtonPressEvent,
+                 Qt.MouseButton.RightButton: self._interactor.RightButtonPressEvent,
+                 Qt.MouseButton.MiddleButton: self._interactor.MiddleButtonPressEvent}.get(self._button)
+        if press is not None:
+            press()
+
+    mouseDoubleClickEvent = mousePressEvent
+
+    def mouseReleaseEvent(self, event: QMouseEvent) -> None:
+        self._tell(event.position(), event.modifiers())
+        release = {Qt.MouseButton.LeftButton: self._interactor.LeftButtonReleaseEvent,
+                   Qt.MouseButton.RightButton: self._interactor.RightButtonReleaseEvent,
+                   Qt.MouseButton.MiddleButton: self._interactor.MiddleButtonReleaseEvent}.get(self._button)
+        self._button = Qt.MouseButton.NoButton
+        if release is not None:
+            release()
+
+    def mouseMoveEvent(self, event: QMouseEvent) -> None:
+        self._tell(event.position(), event.modifiers())
+        self._interactor.MouseMoveEvent()
+
+    def wheelEvent(self, event: QWheelEvent) -> None:
+        self._wheel += event.angleDelta().y()
+        self._tell(event.position(), event.modifiers())
+        if self._wheel >= WHEEL_STEP:
+            self._interactor.MouseWheelForwardEvent()
+            self._wheel = 0
+        elif self._wheel <= -WHEEL_STEP:
+            self._interactor.MouseWheelBackwardEvent()
+            self._wheel = 0
+
+    def enterEvent(self, event) -> None:
+        self._interactor.EnterEvent()
+
+    def leaveEvent(self, event) -> None:
+        self._interactor.LeaveEvent()
 
     def close_plotter(self) -> None:
         """Free the render window; the widget draws nothing after this."""
         if self.alive:
             self.alive = False
-            self.Finalize()
+            self._image = None
+            self._interactor.SetRenderWindow(None)
             self.plotter.close()
