@@ -406,3 +406,18 @@ def test_camera_presets_turn_the_one_shared_camera(window):
                                    atol=1e-9)
         cameras = {id(h.renderer.GetActiveCamera()) for h in window.view._hands}
         assert len(cameras) == 1  # every hand seen through the same camera: one scale
+
+
+def test_heatmap_shows_the_frame_the_view_draws_at_4x(window, qtbot):
+    from s2h_viewer.widgets.timeline import SPEEDS
+    results = window.comparison.results
+    window.scores.selectRow(1)  # ASRN -> iris: the heatmap follows the selection
+    seen = []  # at every draw: the view's frame, and whether the heatmap holds that frame's matrix
+    window.view.drawn.connect(lambda: seen.append((window.view.frame, np.array_equal(
+        window.heatmap.current, results[1].cell_error[window.view.frame], equal_nan=True))))
+    window.timeline.speed.setCurrentIndex(SPEEDS.index(4.0))
+    window.timeline.set_playing(True)
+    qtbot.waitUntil(lambda: len({f for f, _ in seen}) >= 8, timeout=30_000)
+    window.timeline.set_playing(False)
+    assert all(same for _, same in seen), seen
+    assert window.heatmap.frame == window.view.frame == window.timeline.frame

@@ -10,7 +10,6 @@ first grid, to the methods computed for every target: none ticked, an empty grid
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -30,7 +29,6 @@ from s2h_viewer.widgets.scores_table import ScoresTable
 from s2h_viewer.widgets.timeline import Timeline
 
 PROGRESS_STEPS = 1000
-HEATMAP_PERIOD_PLAYING = 0.25  # seconds: Qt repaints the labelled matrix in software, so not every frame
 
 
 @dataclass
@@ -73,7 +71,6 @@ class CompareMode(QWidget):
         self._done_in_batch = 0
         self._resume_playing = False  # the timeline played when retargets paused it: it plays on after
         self._progress: QProgressDialog | None = None
-        self._heatmap_at = 0.0
         self.view = CompareView()
         self.timeline = Timeline()
         self.curve = ErrorCurve()
@@ -294,6 +291,7 @@ class CompareMode(QWidget):
     def _show_selected_curve(self) -> None:
         result = self.selected_result()
         self.curve.set_curve(result.frame_error, label(result))
+        self.heatmap.set_title(f"ASM error, {label(result)}")
 
     def _playing_changed(self, playing: bool) -> None:
         """Lighter skins while playing; paused, the full ones and the heatmap at the frame shown."""
@@ -308,11 +306,7 @@ class CompareMode(QWidget):
             return
         self.view.show_frame(frame)
         self.curve.set_frame(frame)
-        now = time.perf_counter()
-        if not self.timeline.playing or now - self._heatmap_at >= HEATMAP_PERIOD_PLAYING:
-            self._heatmap_at = now  # while playing, the heatmap follows at a few frames a second
-            result = self.selected_result()
-            self.heatmap.show_matrix(result.cell_error[frame], f"ASM error, {label(result)}, frame {frame}")
+        self.heatmap.show_matrix(self.selected_result().cell_error[frame], frame)  # every frame: it is cheap
 
     def set_see_through(self, checked: bool) -> None:
         self.view.set_options(opacity=0.4 if checked else 1.0)
