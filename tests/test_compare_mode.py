@@ -421,3 +421,57 @@ def test_heatmap_shows_the_frame_the_view_draws_at_4x(window, qtbot):
     window.timeline.set_playing(False)
     assert all(same for _, same in seen), seen
     assert window.heatmap.frame == window.view.frame == window.timeline.frame
+
+
+def save_clip(sample_hands, path, gestures: tuple[str, ...] = ("thumbs_up", "fist")):
+    """A short clip on birch written as a motion file, for loading through the window."""
+    from s2h_viewer.io.npz import save_motion
+    from s2h_viewer.motions.synthesis import synthesize
+    save_motion(synthesize(list(gestures), sample_hands["birch"], seed=5, name=path.stem), path)
+    return path
+
+
+def recent(window) -> list[str]:
+    return [a.text() for a in window.recent_menu.actions()]
+
+
+def test_a_loaded_motion_keeps_the_selection_and_only_a_shown_load_is_recent(window, qtbot, sample_hands, tmp_path):
+    window.scores.selectRow(1)  # ASRN -> iris
+    clip = save_clip(sample_hands, tmp_path / "other.npz")
+    shown = window.comparison
+    window.load_motion(str(clip))
+    with qtbot.waitSignal(window.comparison_ready, timeout=60_000):
+        window.compare.cancel()  # what the progress dialog's Cancel does
+    assert window.comparison is shown and "other.npz (motion)" not in recent(window)
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.load_motion(str(clip))
+    assert window.comparison.motion.name == "other" and recent(window)[0] == "other.npz (motion)"
+    selected = window.compare.selected_result()
+    assert (selected.method, selected.target.name) == ("asrn", "iris")
+    assert window.heatmap_choice.currentIndex() == 1 and window.scores.currentRow() == 1
+    np.testing.assert_array_equal(window.compare.curve.error, selected.frame_error)
+
+
+def test_a_cancelled_target_is_not_recent(window, qtbot):
+    laurel = str(ASSETS_DIR / "hands" / "laurel.npz")
+    window.add_target_file(laurel)
+    with qtbot.waitSignal(window.comparison_ready, timeout=60_000):
+        window.compare.cancel()
+    assert "laurel.npz (target)" not in recent(window) and len(window.comparison.results) == 2
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.add_target_file(laurel)
+    assert recent(window) == ["laurel.npz (target)"]
+
+
+def test_double_click_solo_selects_that_retarget(window, qtbot):
+    view = window.view
+    hand = 2  # ASRN -> iris
+    x0, y0, x1, y1 = view.hand_viewports()[hand]
+    w, h = view.interactor.width(), view.interactor.height()
+    assert window.compare.selected_result() is window.comparison.results[0]
+    qtbot.mouseDClick(view.interactor, Qt.MouseButton.LeftButton,
+                      pos=QPoint(int((x0 + x1) / 2 * w), int((1 - (y0 + y1) / 2) * h)))
+    assert view.solo == hand
+    assert window.compare.selected_result() is window.comparison.results[1]
+    assert window.heatmap_choice.currentIndex() == 1 and window.scores.currentRow() == 1
+    np.testing.assert_array_equal(window.heatmap.current, window.comparison.results[1].cell_error[window.timeline.frame])

@@ -96,6 +96,7 @@ class CompareMode(QWidget):
         self.view.drawn.connect(self.timeline.note_drawn)
         self.timeline.play_button.toggled.connect(self._playing_changed)
         self.curve.frame_clicked.connect(self.timeline.set_frame)
+        self.view.solo_changed.connect(self._solo_changed)
         self.heatmap_choice.currentIndexChanged.connect(self._choice_changed)
         self.scores.currentCellChanged.connect(lambda row, *_: self._select_row(row))
         self.queue.result_ready.connect(self._on_result)
@@ -191,6 +192,12 @@ class CompareMode(QWidget):
             self._resume_playback()
             self._show_state()
 
+    def _same_retarget(self, key: ResultKey | None) -> ResultKey:
+        """The shown retarget with ``key``'s target and method (a new clip keeps the selection), else the first."""
+        keys = self._shown_keys()
+        return next((k for k in keys if key is not None and (k.target, k.method) == (key.target, key.method)),
+                    keys[0])
+
     def _on_semantics(self, key: tuple[int, int], semantics: tuple) -> None:
         if key == (id(self.state.motion), id(self.state.source)):
             self.state.semantics[key] = semantics
@@ -239,8 +246,7 @@ class CompareMode(QWidget):
         self.heatmap_choice.blockSignals(False)
         if new_clip:
             self.timeline.set_clip(comparison.n_frames, comparison.motion.fps)
-        keys = self._shown_keys()
-        self.select(self.state.selected if self.state.selected in keys else keys[0])
+        self.select(self._same_retarget(self.state.selected))
         self.status(f"{comparison.motion.name}: {comparison.n_frames} frames, {len(comparison.results)} retargets")
         self.comparison_ready.emit()
 
@@ -287,6 +293,11 @@ class CompareMode(QWidget):
     def _select_row(self, row: int) -> None:
         if self.comparison is not None and 0 <= row < len(self.comparison.results):
             self.select(self._shown_keys()[row])
+
+    def _solo_changed(self, hand: int) -> None:
+        """A retarget shown alone (double-click, Ctrl+M) is the selected one; the source alone changes nothing."""
+        if self.comparison is not None and hand >= 1:
+            self.select(self._shown_keys()[hand - 1])
 
     def _show_selected_curve(self) -> None:
         result = self.selected_result()
