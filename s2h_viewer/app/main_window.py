@@ -43,8 +43,10 @@ class MainWindow(QMainWindow):
         self.runner = TaskRunner(self, self.error, self.statusBar().showMessage)
         self.compare = CompareMode(setup, self.error, lambda text: self.statusBar().showMessage(text, 5000))
         self.video_export: exports.VideoExport | None = None
+        self._loading: list[tuple[str, str, object]] = []  # (kind, path, motion or hand) the grid does not show yet
         self.annotate = AnnotateMode(self.runner, self.error, lambda text: self.statusBar().showMessage(text, 5000),
                                      self)
+        self.compare.comparison_ready.connect(self._remember_shown)
         self.compare.comparison_ready.connect(self.comparison_ready)
         self.compare.state_changed.connect(self._state_changed)
         self.annotate.annotation_ready.connect(self.annotation_ready)
@@ -235,16 +237,25 @@ class MainWindow(QMainWindow):
         if path:
             then(path)
 
-    def _load_hand(self, path: str, kind: str) -> HandModel | None:
-        """The hand in ``path`` (remembered as a recent ``kind``), or None after an error dialog."""
+    def _load_hand(self, path: str) -> HandModel | None:
+        """The hand in ``path`` (its folder remembered), or None after an error dialog."""
         from s2h_viewer.io.files import load_hand_file
         try:
             hand = load_hand_file(path)
         except S2HError as exc:
             self.error(str(exc))
             return None
-        self._remember(path, kind)
+        self._remember(path)
         return hand
+
+    def _remember_shown(self) -> None:
+        """Loads the grid now shows become recent files; loads it does not show (cancelled, failed) never do."""
+        comparison = self.comparison
+        shown = {id(comparison.motion)} | {id(r.target) for r in comparison.results} if comparison else set()
+        for kind, path, loaded in self._loading:
+            if id(loaded) in shown:
+                self._remember(path, kind)
+        self._loading = []
 
     def open_motion(self) -> None:
         self._ask_to_open("Open motion", "Motions (*.npz *.bvh *.glb *.gltf *.fbx)", self.load_motion)
@@ -258,16 +269,18 @@ class MainWindow(QMainWindow):
         except (S2HError, KeyError) as exc:
             self.error(str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc))
             return
-        self._remember(path, "motion")
+        self._remember(path)
+        self._loading.append(("motion", path, motion))
         self.compare.load(motion, source)
 
     def add_target(self) -> None:
         self._ask_to_open("Add target hand", "Hands (*.glb *.gltf *.fbx *.npz *.bvh)", self.add_target_file)
 
     def add_target_file(self, path: str) -> None:
-        hand = self._load_hand(path, "target")
+        hand = self._load_hand(path)
         if hand is None:
             return
+        self._loading.append(("target", path, hand))
         self.compare.add_target(hand)
 
     # --- exports ---
@@ -329,9 +342,10 @@ class MainWindow(QMainWindow):
         edits of the last hand are saved or dropped first, as the user says."""
         if not self.annotate.confirm_discard("opening another hand"):
             return
-        hand = self._load_hand(path, "annotate")
+        hand = self._load_hand(path)
         if hand is None:
             return
+        self._remember(path, "annotate")
         self.annotate.open(hand, path)
         self.tabs.setCurrentWidget(self.annotate.view)
 
