@@ -21,15 +21,14 @@ from s2h_viewer.retarget.methods import METHODS
 __all__ = ["CompareSetup", "MainWindow", "default_setup", "run"]
 
 RECENT_FILES = 8
-SHORTCUTS = (("Space", "play / pause"), ("Left / Right", "previous / next frame"), ("Home / End", "first / last frame"),
-             ("double-click a hand / Ctrl+M", "show it alone / the grid again"), ("Ctrl+K / Ctrl+J", "skeleton / "
-             "contact overlay"), ("Ctrl+1 / 2 / 3 / 0", "camera: palm / back / side / reset"),
-             ("Ctrl+O", "open a motion"), ("Ctrl+T", "add a target hand"), ("Ctrl+S", "export a screenshot"),
-             ("Ctrl+E", "export a video"), ("Ctrl+Shift+O", "open a hand to annotate"), ("Ctrl+R", "run the TBS solver"),
-             ("Ctrl+Shift+S", "save the annotation sidecar"),
-             ("Ctrl+Z / Ctrl+Shift+Z", "undo / redo a frame turn or a solver run"),
-             ("click a joint in 3D / the list", "select it"),
-             ("drag the ring in 3D / the dial", "turn the selected joint's frame about its twist axis"))
+#: hand files a target can be (a BVH holds a motion on a skeleton, no mesh to colour: not offered)
+TARGET_HAND_FILTER = "Hands (*.glb *.gltf *.fbx *.npz)"
+#: what the mouse does (the keys are listed from the menus' own actions, `MainWindow.shortcut_lines`)
+MOUSE_GESTURES = (("double-click a hand", "show it alone and select it / the grid again"),
+                  ("drag in a 3D view", "turn the camera (every hand of the grid turns with it)"),
+                  ("click the error curve", "jump to that frame"),
+                  ("click a joint in 3D / the list (Annotate)", "select it"),
+                  ("drag the ring in 3D / the dial (Annotate)", "turn the selected joint's frame about its twist axis"))
 
 
 class MainWindow(QMainWindow):
@@ -169,8 +168,25 @@ class MainWindow(QMainWindow):
         help_menu = bar.addMenu("&Help")
         self._action(help_menu, "Keyboard shortcuts", self.show_shortcuts, "F1")
 
+    def shortcut_lines(self) -> list[str]:
+        """'key: Menu > entry' for every menu action with a shortcut, read from the actions themselves (so the
+        help cannot drift from the menus), then the mouse gestures."""
+        lines = []
+
+        def walk(menu, path: str) -> None:
+            for action in menu.actions():
+                if action.menu() is not None:
+                    walk(action.menu(), f"{path} > {action.text()}")
+                elif action.shortcuts():
+                    keys = " or ".join(k.toString(QKeySequence.SequenceFormat.NativeText) for k in action.shortcuts())
+                    lines.append(f"{keys}: {path} > {action.text().replace('&', '')}")
+
+        for top in self.menuBar().actions():
+            walk(top.menu(), top.text().replace("&", ""))
+        return lines + [f"{gesture}: {what}" for gesture, what in MOUSE_GESTURES]
+
     def show_shortcuts(self) -> None:
-        QMessageBox.information(self, "Keyboard shortcuts", "\n".join(f"{k}: {what}" for k, what in SHORTCUTS))
+        QMessageBox.information(self, "Keyboard shortcuts", "\n".join(self.shortcut_lines()))
 
     def error(self, message: str) -> None:
         """Every failure the user caused or met ends here: a dialog with the message, nothing silent."""
@@ -274,7 +290,7 @@ class MainWindow(QMainWindow):
         self.compare.load(motion, source)
 
     def add_target(self) -> None:
-        self._ask_to_open("Add target hand", "Hands (*.glb *.gltf *.fbx *.npz *.bvh)", self.add_target_file)
+        self._ask_to_open("Add target hand", TARGET_HAND_FILTER, self.add_target_file)
 
     def add_target_file(self, path: str) -> None:
         hand = self._load_hand(path)
@@ -335,7 +351,7 @@ class MainWindow(QMainWindow):
 
     # --- annotate mode's entry points ---
     def open_hand_to_annotate(self) -> None:
-        self._ask_to_open("Open hand to annotate", "Hands (*.glb *.gltf *.fbx *.npz)", self.annotate_file)
+        self._ask_to_open("Open hand to annotate", TARGET_HAND_FILTER, self.annotate_file)
 
     def annotate_file(self, path: str) -> None:
         """Load a hand (its sidecar or solver frames come with it) and show it in annotation mode; unsaved
