@@ -292,7 +292,7 @@ def test_playback_keys_reach_the_shortcuts_with_the_frame_box_focused(window, qt
 
 def test_ctrl_shortcuts_reach_the_window_with_the_frame_box_focused(window, qtbot, tmp_path):
     from PySide6.QtWidgets import QFileDialog
-    window.settings.setValue("files/last_dir", str(tmp_path))
+    window.settings.setValue("files/export_dir", str(tmp_path))
     window.activateWindow()
     qtbot.waitUntil(lambda: window.isActiveWindow(), timeout=5000)
     window.timeline.spin.setFocus()
@@ -475,3 +475,29 @@ def test_double_click_solo_selects_that_retarget(window, qtbot):
     assert window.compare.selected_result() is window.comparison.results[1]
     assert window.heatmap_choice.currentIndex() == 1 and window.scores.currentRow() == 1
     np.testing.assert_array_equal(window.heatmap.current, window.comparison.results[1].cell_error[window.timeline.frame])
+
+
+def test_export_dialogs_start_in_the_export_folder_with_a_suggested_name(window, qtbot, tmp_path, monkeypatch):
+    from PySide6.QtWidgets import QFileDialog
+
+    from compare_window import when_shown
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)  # no export yet: the working directory
+    window.settings.setValue("files/last_dir", str(ASSETS_DIR / "hands"))  # the last hand's folder: not for exports
+    offered = []
+
+    def ask(export) -> str:
+        when_shown(QFileDialog, lambda dialog: (offered.append(dialog.selectedFiles()[0]), dialog.reject()))
+        assert export() is None  # the user cancels
+        return offered.pop()
+
+    window.timeline.set_frame(7)
+    assert ask(window.export_screenshot) == str(work / "short_iris_tbs_copy_f0007.png")
+    window.scores.selectRow(1)
+    assert ask(window.export_motion) == str(work / "short_iris_asrn.glb")
+    exported = tmp_path / "exports"
+    exported.mkdir()
+    window.export_screenshot(str(exported / "first.png"))  # an export: its folder is where the next ones start
+    assert ask(window.export_video) == str(exported / "short_iris_asrn.mp4")
+    assert not list(work.iterdir())

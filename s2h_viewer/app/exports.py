@@ -5,6 +5,7 @@ frames and nothing is written."""
 
 from __future__ import annotations
 
+import re
 import threading
 from pathlib import Path
 
@@ -21,6 +22,14 @@ def caption_for(mode: CompareMode, frame: int) -> str:
     comparison, result = mode.comparison, mode.selected_result()
     return caption_text(comparison.motion.name, frame, comparison.n_frames, comparison.motion.fps,
                         label(result).split(" -> ")[0], result.target.name)
+
+
+def suggested_name(mode: CompareMode, suffix: str, frame: int | None = None) -> str:
+    """'<clip>_<target>_<method>[_f<frame>]<suffix>' for the selected retarget, safe as a file name."""
+    result = mode.selected_result()
+    parts = [mode.comparison.motion.name, result.target.name, result.method]
+    stem = "_".join(re.sub(r"[^\w.-]+", "-", part).strip("-.") or "x" for part in parts)
+    return f"{stem}{'' if frame is None else f'_f{frame:04d}'}{suffix}"
 
 
 def export_screenshot(mode: CompareMode, path: str) -> Path:

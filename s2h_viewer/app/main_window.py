@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from pathlib import Path
 
@@ -300,19 +301,29 @@ class MainWindow(QMainWindow):
         self.compare.add_target(hand)
 
     # --- exports ---
-    def _ask_to_save(self, title: str, file_filter: str, path: str | None) -> str | None:
-        """``path`` when given, else the user's choice; None without a comparison to export."""
+    def _export_dir(self) -> Path:
+        """Where exports go: the last export's folder, else the working directory (if writable), else home."""
+        last = Path(str(self.settings.value("files/export_dir", "")))
+        if str(last) not in ("", ".") and last.is_dir():
+            return last
+        return Path.cwd() if os.access(Path.cwd(), os.W_OK) else Path.home()
+
+    def _ask_to_save(self, title: str, file_filter: str, path: str | None, name: Callable[[], str]) -> str | None:
+        """``path`` when given, else the user's choice, offered as ``name()`` in the export folder; None without
+        a comparison to export."""
         if self.comparison is None:
             return None
-        return path or QFileDialog.getSaveFileName(self, title, self._last_dir(), file_filter)[0] or None
+        return path or QFileDialog.getSaveFileName(self, title, str(self._export_dir() / name()), file_filter)[0] \
+            or None
 
     def _wrote(self, path: Path, what: str = "") -> Path:
-        self._remember(str(path))
+        self.settings.setValue("files/export_dir", str(Path(path).resolve().parent))
         self.statusBar().showMessage(f"wrote {path}{what}", 5000)
         return path
 
     def export_screenshot(self, path: str | None = None) -> Path | None:
-        path = self._ask_to_save("Export screenshot", "PNG (*.png)", path)
+        path = self._ask_to_save("Export screenshot", "PNG (*.png)", path, lambda: exports.suggested_name(
+            self.compare, ".png", self.timeline.frame))
         return self._wrote(exports.export_screenshot(self.compare, path)) if path else None
 
     def export_video(self, path: str | None = None) -> exports.VideoExport | None:
@@ -320,7 +331,8 @@ class MainWindow(QMainWindow):
         if self.video_export is not None:
             self.error("A video export is running; wait for it or cancel it first.")
             return None
-        path = self._ask_to_save("Export video", "Video (*.mp4 *.gif)", path)
+        path = self._ask_to_save("Export video", "Video (*.mp4 *.gif)", path,
+                                 lambda: exports.suggested_name(self.compare, ".mp4"))
         if not path:
             return None
         job = exports.VideoExport(self.compare, path, self)
@@ -340,7 +352,8 @@ class MainWindow(QMainWindow):
         if self.comparison is None:
             return None
         result = self.compare.selected_result()
-        path = self._ask_to_save(f"Export {result.method} -> {result.target.name}", "Motion (*.glb *.bvh *.npz)", path)
+        path = self._ask_to_save(f"Export {result.method} -> {result.target.name}", "Motion (*.glb *.bvh *.npz)", path,
+                                 lambda: exports.suggested_name(self.compare, ".glb"))
         if not path:
             return None
         try:
