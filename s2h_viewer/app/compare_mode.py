@@ -13,9 +13,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from PySide6.QtCore import Qt, Signal
-from PySide6.QtWidgets import QComboBox, QMenu, QProgressDialog, QSplitter, QVBoxLayout, QWidget
+from PySide6.QtCore import Signal
+from PySide6.QtWidgets import QComboBox, QMenu, QSplitter, QVBoxLayout, QWidget
 
+from s2h_viewer.app.progress_dialog import JobProgressDialog
 from s2h_viewer.app.retarget_queue import RetargetQueue
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
@@ -70,7 +71,7 @@ class CompareMode(QWidget):
         self.queue = RetargetQueue(self)
         self._done_in_batch = 0
         self._resume_playing = False  # the timeline played when retargets paused it: it plays on after
-        self._progress: QProgressDialog | None = None
+        self._progress: JobProgressDialog | None = None
         self.view = CompareView()
         self.timeline = Timeline()
         self.curve = ErrorCurve()
@@ -253,12 +254,9 @@ class CompareMode(QWidget):
     # --- progress ---
     def _show_progress(self) -> None:
         if self._progress is None:
-            self._progress = QProgressDialog("Retargeting...", "Cancel", 0, PROGRESS_STEPS, self)
-            self._progress.setWindowTitle("s2h-viewer: retargeting")
-            self._progress.setWindowModality(Qt.WindowModality.NonModal)  # menus stay usable: actions queue
-            self._progress.setMinimumDuration(300)
-            self._progress.setAutoClose(False)
-            self._progress.setAutoReset(False)
+            # non-modal: the menus stay usable while it runs (their actions queue or cancel work)
+            self._progress = JobProgressDialog("Retargeting...", "Cancel", PROGRESS_STEPS, self,
+                                               "s2h-viewer: retargeting")
             self._progress.canceled.connect(self.cancel)
             self._progress.setValue(0)
 
