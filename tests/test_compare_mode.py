@@ -196,8 +196,10 @@ def test_cancel_a_video_export_writes_nothing(window, qtbot, tmp_path):
         pass
     with qtbot.waitSignal(job.cancelled, timeout=60_000):
         click_cancel(job.dialog, qtbot)
+        assert window.statusBar().currentMessage().startswith("cancelling the video export")  # said at once
     job.thread.join()
     assert not path.exists() and not list(tmp_path.glob("*.mp4*"))
+    assert window.statusBar().currentMessage() == "video export cancelled: no file written (cancelled.mp4)"
 
 
 def test_png_export_carries_a_caption_of_the_selected_retarget(window, tmp_path):
@@ -501,3 +503,47 @@ def test_export_dialogs_start_in_the_export_folder_with_a_suggested_name(window,
     window.export_screenshot(str(exported / "first.png"))  # an export: its folder is where the next ones start
     assert ask(window.export_video) == str(exported / "short_iris_asrn.mp4")
     assert not list(work.iterdir())
+
+
+def test_a_second_job_dialog_stacks_under_the_first(window, qtbot, tmp_path):
+    job = window.export_video(str(tmp_path / "stacked.mp4"))
+    qtbot.waitUntil(job.dialog.isVisible, timeout=60_000)
+    window.method_actions["asm_opt"].trigger()  # a retarget while the export runs: its own dialog
+    wait_until_running(window, qtbot, "asm_opt")
+    retargets = window.compare._progress
+    qtbot.waitUntil(retargets.isVisible, timeout=30_000)
+    first, second = job.dialog.frameGeometry(), retargets.frameGeometry()
+    assert not first.intersects(second) and second.top() > first.bottom()
+    window.compare.cancel()
+    with qtbot.waitSignal(job.cancelled, timeout=60_000):
+        job.cancel()
+
+
+def test_quitting_during_a_video_export_asks_and_never_leaves_a_partial_file(window, qtbot, tmp_path):
+    from PySide6.QtWidgets import QMessageBox
+
+    from compare_window import when_shown
+    asked = []
+
+    def answer(button: str):
+        def click(box) -> None:
+            asked.append(box.text())
+            next(b for b in box.buttons() if b.text() == button).click()
+        when_shown(QMessageBox, click)
+
+    job = window.export_video(str(tmp_path / "kept.mp4"))
+    with qtbot.waitSignal(job.progress, timeout=60_000):
+        pass
+    answer("Keep exporting")
+    assert not window.close() and window.isVisible() and window.video_export is job
+    assert "kept.mp4" in asked[0] and "writes no file" in asked[0]
+    with qtbot.waitSignal(job.written, timeout=300_000):
+        pass
+    assert (tmp_path / "kept.mp4").stat().st_size > 0
+    job = window.export_video(str(tmp_path / "dropped.mp4"))
+    with qtbot.waitSignal(job.progress, timeout=60_000):
+        pass
+    answer("Cancel export and quit")
+    assert window.close() and not window.isVisible() and len(asked) == 2
+    assert not job.thread.is_alive()  # stopped before the window went
+    assert sorted(p.name for p in tmp_path.iterdir() if p.suffix != ".ini") == ["kept.mp4"]  # no partial file

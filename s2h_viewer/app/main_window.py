@@ -22,6 +22,7 @@ from s2h_viewer.retarget.methods import METHODS
 __all__ = ["CompareSetup", "MainWindow", "default_setup", "run"]
 
 RECENT_FILES = 8
+STATUS_MS_CANCELLED = 15_000  # a cancelled export says so this long in the status bar
 #: hand files a target can be (a BVH holds a motion on a skeleton, no mesh to colour: not offered)
 TARGET_HAND_FILTER = "Hands (*.glb *.gltf *.fbx *.npz)"
 #: what the mouse does (the keys are listed from the menus' own actions, `MainWindow.shortcut_lines`)
@@ -338,7 +339,11 @@ class MainWindow(QMainWindow):
         job = exports.VideoExport(self.compare, path, self)
         n = self.comparison.n_frames
         job.written.connect(lambda written: self._wrote(written, f" ({n} frames)"))
-        job.cancelled.connect(lambda: self.statusBar().showMessage("video export cancelled; nothing written", 5000))
+        name = Path(path).name
+        job.dialog.canceled.connect(lambda: self.statusBar().showMessage(  # said at once: the job stops after a frame
+            f"cancelling the video export: {name} will not be written..."))
+        job.cancelled.connect(lambda: self.statusBar().showMessage(
+            f"video export cancelled: no file written ({name})", STATUS_MS_CANCELLED))
         job.failed.connect(self.error)
         for signal in (job.written, job.cancelled, job.failed):
             signal.connect(self._video_export_ended)
@@ -398,17 +403,34 @@ class MainWindow(QMainWindow):
             elif Path(path).suffix.lower() in MOTION_SUFFIXES:
                 self.load_motion(path)
 
+    def _confirm_quit_during_export(self) -> bool:
+        """Quitting with a video export running: keep exporting (no quit), or cancel it (nothing written) and
+        quit."""
+        if self.video_export is None:
+            return True
+        job = self.video_export
+        box = QMessageBox(QMessageBox.Icon.Question, "s2h-viewer: video export running",
+                          f"{Path(job.path).name} is still being rendered ({job.dialog.value()} of "
+                          f"{job.dialog.maximum()} frames). Quitting cancels it and writes no file.", parent=self)
+        keep = box.addButton("Keep exporting", QMessageBox.ButtonRole.RejectRole)
+        quit_button = box.addButton("Cancel export and quit", QMessageBox.ButtonRole.DestructiveRole)
+        box.setDefaultButton(keep)
+        box.exec()
+        if box.clickedButton() is not quit_button:
+            return False
+        if self.video_export is not None:  # it may have ended while the question was up
+            self.video_export.cancel()
+            self.video_export.thread.join()  # it stops after the frame it renders; its temporary file goes
+        return True
+
     def closeEvent(self, event) -> None:
-        if not self.annotate.confirm_discard("quitting"):
+        if not self._confirm_quit_during_export() or not self.annotate.confirm_discard("quitting"):
             event.ignore()
             return
         self.settings.setValue("window/geometry", self.saveGeometry())
         self.runner.finish()
         self.compare.shutdown()
         self.annotate.view.interactor.close_plotter()
-        if self.video_export is not None:
-            self.video_export.cancel()
-            self.video_export.thread.join()
         super().closeEvent(event)
 
 
