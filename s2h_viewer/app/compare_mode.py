@@ -77,6 +77,8 @@ class CompareMode(QWidget):
         self.curve = ErrorCurve()
         self.heatmap = AsmHeatmap()
         self.heatmap_choice = QComboBox()
+        self.heatmap_choice.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+        self.heatmap_choice.setMinimumContentsLength(24)  # a long target name elides instead of widening the panel
         self.heatmap_choice.setToolTip("the retarget the heatmap, the error curve, the scores' highlight and "
                                        "exports follow")
         self.scores = ScoresTable()
