@@ -547,3 +547,64 @@ def test_quitting_during_a_video_export_asks_and_never_leaves_a_partial_file(win
     assert window.close() and not window.isVisible() and len(asked) == 2
     assert not job.thread.is_alive()  # stopped before the window went
     assert sorted(p.name for p in tmp_path.iterdir() if p.suffix != ".ini") == ["kept.mp4"]  # no partial file
+
+
+def viewport_pixels(window, renderer) -> np.ndarray:
+    """The part of the view's image that ``renderer`` draws (rows from the top)."""
+    image = window.view.grab_rgb()
+    h, w = image.shape[:2]
+    x0, y0, x1, y1 = renderer.GetViewport()
+    return image[int(round((1 - y1) * h)):int(round((1 - y0) * h)), int(round(x0 * w)):int(round(x1 * w))]
+
+
+def test_skeleton_overlay_shows_through_an_opaque_skin(window, qtbot):
+    window.timeline.set_frame(40)
+    assert window.view.opacity == 1.0  # the skin opaque, as it starts
+    hand = window.view._hands[2]
+    off = viewport_pixels(window, hand.renderer).astype(int)
+    window.skeleton_overlay.trigger()
+    assert all(h.mesh_actor.prop.opacity < 1.0 for h in window.view._hands)
+    on = viewport_pixels(window, hand.renderer).astype(int)
+    changed = np.abs(on - off).max(-1) > 40
+    assert changed.mean() > 0.02  # the bones (and the skin made see-through for them) are seen
+    window.skeleton_overlay.trigger()
+    assert all(h.mesh_actor.prop.opacity == 1.0 for h in window.view._hands)
+
+
+def test_one_target_every_hand_fits_its_viewport(window):
+    view = window.view
+    w, h = view.interactor.width(), view.interactor.height()
+    x0, y0, x1, y1 = view.hand_viewports()[0]
+    assert (x1 - x0) * w / ((y1 - y0) * h) < 0.6  # one target: tall, narrow cells
+    for frame in (0, window.timeline.n_frames // 2):
+        window.timeline.set_frame(frame)
+        for hand in view._hands:
+            pixels = viewport_pixels(window, hand.renderer)
+            below_title = pixels[pixels.shape[0] // 6:]
+            drawn = (below_title < 235).any(-1)  # skin, not the white background
+            assert drawn.mean() > 0.02
+            assert not drawn[:, :3].any() and not drawn[:, -3:].any(), "the hand is cut off at a side"
+
+
+def test_colour_bar_title_clear_of_its_top_label(window):
+    bar_renderer = window.view.plotter.renderers[-1]
+    pixels = viewport_pixels(window, bar_renderer).astype(int)
+    saturated = (pixels.max(-1) - pixels.min(-1)) > 120  # the colour bar itself (plasma is saturated)
+    bar_top = int(np.flatnonzero(saturated.any(1))[0])
+    dark = (pixels.max(-1) < 110).any(1)  # rows holding black text
+    rows = np.flatnonzero(dark[:bar_top + 8])  # the title and the top label ("0.10") beside the bar's top
+    runs = np.split(rows, np.flatnonzero(np.diff(rows) > 3) + 1)  # blank rows between the two
+    assert len(runs) == 2, f"title and top label overlap: text rows {rows.tolist()}"
+
+
+def test_a_long_target_name_is_elided_and_every_score_column_stays_in_view(window, qtbot, sample_hands):
+    import dataclasses
+
+    from s2h_viewer.widgets.scores_table import NAME_WIDTH
+    long_name = "laurel_exported_from_a_vendor_rig_with_a_very_long_file_name_v2"
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.compare.add_target(dataclasses.replace(sample_hands["laurel"], name=long_name))
+    table = window.scores
+    assert table.columnWidth(1) <= NAME_WIDTH and table.item(2, 1).toolTip() == long_name
+    last = table.columnCount() - 1
+    assert table.columnViewportPosition(last) + table.columnWidth(last) <= table.viewport().width()

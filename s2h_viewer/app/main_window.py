@@ -151,8 +151,8 @@ class MainWindow(QMainWindow):
         view_menu = bar.addMenu("&View")
         self.see_through = self._action(view_menu, "Semi-transparent skin", self.compare.set_see_through, "Ctrl+H",
                                         checkable=True)
-        self.skeleton_overlay = self._action(view_menu, "Skeleton overlay", lambda on: self.view.set_options(
-            skeleton=on), "Ctrl+K", checkable=True)
+        self.skeleton_overlay = self._action(view_menu, "Skeleton overlay (skin see-through)", lambda on: (
+            self.view.set_options(skeleton=on)), "Ctrl+K", checkable=True)
         self.contact_overlay = self._action(view_menu, "Contact overlay (lost contacts in red)", lambda on: (
             self.view.set_options(contacts=on)), "Ctrl+J", checkable=True)
         view_menu.addSeparator()
