@@ -138,6 +138,7 @@ def test_add_and_remove_a_target(window, qtbot):
     assert [r.target.name for r in window.comparison.results] == ["laurel", "laurel"]
     assert all(a is b for a, b in zip(window.comparison.results, laurel_results))  # kept, not recomputed
     assert [a.text() for a in window.targets_menu.actions()] == ["Remove laurel"]
+    assert not window.targets_menu.actions()[0].isEnabled()  # the last target stays: nothing to compare without
     assert window.scores.rowCount() == 2 and len(window.view._hands) == 3
 
 

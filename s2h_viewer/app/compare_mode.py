@@ -323,11 +323,13 @@ class CompareMode(QWidget):
         self.view.set_options(opacity=0.4 if checked else 1.0)
 
     def fill_targets_menu(self, menu: QMenu) -> None:
-        """One "Remove <target>" entry per target (rebuilt whenever the state changes)."""
+        """One "Remove <target>" entry per target (rebuilt whenever the state changes); the last target stays
+        (without one there is nothing to compare, and the grid would keep showing it)."""
         menu.clear()
         for index, target in enumerate(self.state.targets):
             action = menu.addAction(f"Remove {target.name}")
             action.triggered.connect(lambda _=False, i=index: self.remove_target(i))
+            action.setEnabled(len(self.state.targets) > 1)
         menu.setEnabled(bool(self.state.targets))
 
     def shutdown(self) -> None:
