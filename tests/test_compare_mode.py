@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -609,3 +610,24 @@ def test_a_long_target_name_is_elided_and_every_score_column_stays_in_view(windo
     assert table.columnWidth(1) <= NAME_WIDTH and table.item(2, 1).toolTip() == long_name
     last = table.columnCount() - 1
     assert table.columnViewportPosition(last) + table.columnWidth(last) <= table.viewport().width()
+
+
+def test_a_png_asked_for_while_playing_is_the_frame_named(window, qtbot, tmp_path):
+    from PySide6.QtWidgets import QFileDialog
+
+    from compare_window import when_shown
+    window.settings.setValue("files/export_dir", str(tmp_path))
+    window.timeline.set_playing(True)
+    qtbot.waitUntil(lambda: window.timeline.frame > 3, timeout=20_000)
+    seen = []
+
+    def save_after_a_while(dialog) -> None:  # the user takes half a second over the name, then saves
+        seen.append((dialog.selectedFiles()[0], window.timeline.frame, window.timeline.playing))
+        QTimer.singleShot(500, lambda: (seen.append(window.timeline.frame), dialog.accept()))
+
+    when_shown(QFileDialog, save_after_a_while)
+    written = window.export_screenshot()
+    (offered, frame, playing), frame_when_saved = seen
+    assert not playing and frame_when_saved == frame and offered.endswith(f"_f{frame:04d}.png")
+    assert written == tmp_path / Path(offered).name and written.exists()
+    assert window.timeline.playing  # and it plays on

@@ -323,9 +323,16 @@ class MainWindow(QMainWindow):
         return path
 
     def export_screenshot(self, path: str | None = None) -> Path | None:
-        path = self._ask_to_save("Export screenshot", "PNG (*.png)", path, lambda: exports.suggested_name(
-            self.compare, ".png", self.timeline.frame))
-        return self._wrote(exports.export_screenshot(self.compare, path)) if path else None
+        """The grid as shown when asked: playback pauses while the file dialog is up (the suggested name holds
+        the frame, and the frame written must be that one), then plays on."""
+        playing = self.timeline.playing
+        self.timeline.set_playing(False)
+        try:
+            path = self._ask_to_save("Export screenshot", "PNG (*.png)", path, lambda: exports.suggested_name(
+                self.compare, ".png", self.timeline.frame))
+            return self._wrote(exports.export_screenshot(self.compare, path)) if path else None
+        finally:
+            self.timeline.set_playing(playing)
 
     def export_video(self, path: str | None = None) -> exports.VideoExport | None:
         """Start rendering the clip to a video in the background; the job's signals say how it ended."""
