@@ -431,7 +431,7 @@ class MainWindow(QMainWindow):
         return True
 
     def closeEvent(self, event) -> None:
-        if not self._confirm_quit_during_export() or not self.annotate.confirm_discard("quitting"):
+        if not self.annotate.confirm_discard("quitting") or not self._confirm_quit_during_export():
             event.ignore()
             return
         self.settings.setValue("window/geometry", self.saveGeometry())
