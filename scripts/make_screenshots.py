@@ -3,10 +3,10 @@ starts Xvfb without one):
 
     xvfb-run -a -s "-screen 0 1600x1000x24" .venv/bin/python scripts/make_screenshots.py
 
-docs/compare_mode.png: the default samples at frame 120 with the contact overlay (touching pads
-linked in green, contacts a retarget lost in red) and the error curve under the timeline;
-docs/compare_solo.png: one retarget shown alone (double-click); docs/annotation_mode.png: the WebXR
-hand solved, its middle PIP selected.
+docs/compare_mode.png: the default samples with the contact overlay (touching pads linked in green,
+contacts a retarget lost in red) at a frame where the source's fingertips touch and ASRN onto laurel
+loses the touch, the error curve under the timeline; docs/compare_solo.png: that retarget shown alone
+(double-click), and so selected; docs/annotation_mode.png: the WebXR hand solved, its middle PIP selected.
 """
 
 from __future__ import annotations
@@ -14,6 +14,8 @@ from __future__ import annotations
 import shutil
 import tempfile
 from pathlib import Path
+
+import numpy as np
 
 from s2h_viewer.app.scripted import screen_image, scripted_window, wait_for
 from s2h_viewer.samples import ASSETS_DIR
@@ -24,10 +26,12 @@ DOCS = Path(__file__).resolve().parent.parent / "docs"
 def main() -> None:
     with scripted_window() as window, tempfile.TemporaryDirectory() as tmp:
         window.contact_overlay.trigger()
-        window.timeline.set_frame(120)
+        solo = 4  # ASRN -> laurel
+        touching = window.view._hands[0].overlay.contacts.any(1)
+        lost = np.flatnonzero(touching & window.view._hands[solo].overlay.lost.any(1))
+        window.timeline.set_frame(int(lost[len(lost) // 2]) if len(lost) else int(np.argmax(touching)))
         screen_image(window, DOCS / "compare_mode.png")
-        window.scores.selectRow(3)  # ASRN -> laurel: the heatmap, the curve and the solo view follow
-        window.view.set_solo(4)
+        window.view.set_solo(solo)  # shown alone, it is selected: the heatmap, the curve and the table follow
         screen_image(window, DOCS / "compare_solo.png")
         window.view.set_solo(-1)
 

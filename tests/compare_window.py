@@ -4,7 +4,10 @@ and ASRN (or ``methods``), its settings in a temporary file, shown and with its 
 
 from __future__ import annotations
 
-from PySide6.QtCore import QSettings
+from collections.abc import Callable
+
+from PySide6.QtCore import QSettings, QTimer
+from PySide6.QtWidgets import QApplication, QWidget
 
 from s2h_viewer.app.main_window import CompareSetup, MainWindow
 from s2h_viewer.motions.synthesis import synthesize
@@ -25,3 +28,15 @@ def open_compare_window(qtbot, sample_hands, tmp_path, methods: tuple[str, ...] 
     with qtbot.waitSignal(win.comparison_ready, timeout=120_000):
         win.start_comparison()
     return win
+
+
+def when_shown(kind: type[QWidget], then: Callable[[QWidget], None]) -> None:
+    """Once a window of ``kind`` shows (a modal dialog runs its own loop), call ``then(dialog)``: answer it as a
+    user would."""
+    def look() -> None:
+        shown = next((w for w in QApplication.topLevelWidgets() if isinstance(w, kind) and w.isVisible()), None)
+        if shown is None:
+            QTimer.singleShot(50, look)
+        else:
+            then(shown)
+    QTimer.singleShot(0, look)

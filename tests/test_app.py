@@ -11,9 +11,10 @@ pytest.importorskip("pytestqt")
 if not os.environ.get("DISPLAY"):
     pytest.skip("the Qt viewport needs an X display: `make test` runs the suite under Xvfb", allow_module_level=True)
 
+from PySide6.QtGui import QAction  # noqa: E402
 from PySide6.QtWidgets import QMessageBox  # noqa: E402
 
-from compare_window import open_compare_window  # noqa: E402
+from compare_window import open_compare_window, when_shown  # noqa: E402
 
 
 @pytest.fixture
@@ -86,3 +87,52 @@ def test_annotation_mode_solve_turn_undo_save(window, qtbot, tmp_path):
     saved = load_annotation(glb)
     assert path.name == "hand.tbs.json" and saved.set_by[4] == "manual"
     np.testing.assert_allclose(saved.frames[4], session.frames[4], atol=1e-7)
+
+
+def test_timeline_readout_counts_frames_as_the_clip_does(window):
+    timeline, n = window.timeline, window.comparison.n_frames
+    fps = window.comparison.motion.fps
+    assert timeline.readout.text() == f"0/{n - 1} ({n} frames)  0.00 s / {n / fps:.2f} s"
+    timeline.set_frame(n - 1)  # the last frame: its index, and its start time within the clip's length
+    assert timeline.readout.text() == f"{n - 1}/{n - 1} ({n} frames)  {(n - 1) / fps:.2f} s / {n / fps:.2f} s"
+    assert timeline.spin.value() == n - 1  # the frame box shows the same index
+
+
+def test_shortcut_help_lists_every_shortcut_the_menus_define(window, qtbot):
+    from PySide6.QtGui import QKeySequence
+    shown = []
+    when_shown(QMessageBox, lambda box: (shown.append(box.text()), box.accept()))
+    help_action = next(a for m in window.menuBar().actions() for a in m.menu().actions() if a.text() ==
+                       "Keyboard shortcuts")
+    help_action.trigger()
+    qtbot.waitUntil(lambda: bool(shown), timeout=10_000)
+    lines = shown[0].splitlines()
+
+    def in_menus(menu) -> list[QAction]:
+        return [b for a in menu.actions() for b in (in_menus(a.menu()) if a.menu() else [a])]
+
+    keyed = [a for top in window.menuBar().actions() for a in in_menus(top.menu()) if a.shortcuts()]
+    assert len(keyed) >= 20
+    for action in keyed:
+        key = action.shortcut().toString(QKeySequence.SequenceFormat.NativeText)
+        assert any(line.startswith(key) and action.text() in line for line in lines), (key, action.text())
+    assert any(line.startswith("Ctrl+H: View > Semi-transparent skin") for line in lines)
+    assert any(line.startswith("double-click a hand") for line in lines)
+
+
+def test_add_target_offers_only_hand_files_and_each_kind_loads_as_a_hand(window, qtbot):
+    from PySide6.QtWidgets import QFileDialog
+
+    from s2h_viewer.io.files import load_hand_file
+    from s2h_viewer.samples import ASSETS_DIR
+    filters = []
+    when_shown(QFileDialog, lambda dialog: (filters.extend(dialog.nameFilters()), dialog.reject()))
+    window.add_target()
+    assert len(filters) == 1 and "bvh" not in filters[0]
+    patterns = filters[0].split("(")[1].rstrip(")").split()
+    examples = {"*.glb": "webxr/generic-hand-right.glb", "*.gltf": "real/godot_hand_r.gltf",
+                "*.fbx": "fbx/mixamo_right_hand.fbx", "*.npz": "iris.npz"}
+    assert sorted(patterns) == sorted(examples)
+    for pattern in patterns:  # every kind offered is a hand with a skin to colour
+        hand = load_hand_file(ASSETS_DIR / "hands" / examples[pattern])
+        assert hand.mesh is not None and len(hand.mesh.faces) > 100, pattern

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -138,6 +139,7 @@ def test_add_and_remove_a_target(window, qtbot):
     assert [r.target.name for r in window.comparison.results] == ["laurel", "laurel"]
     assert all(a is b for a, b in zip(window.comparison.results, laurel_results))  # kept, not recomputed
     assert [a.text() for a in window.targets_menu.actions()] == ["Remove laurel"]
+    assert not window.targets_menu.actions()[0].isEnabled()  # the last target stays: nothing to compare without
     assert window.scores.rowCount() == 2 and len(window.view._hands) == 3
 
 
@@ -196,8 +198,10 @@ def test_cancel_a_video_export_writes_nothing(window, qtbot, tmp_path):
         pass
     with qtbot.waitSignal(job.cancelled, timeout=60_000):
         click_cancel(job.dialog, qtbot)
+        assert window.statusBar().currentMessage().startswith("cancelling the video export")  # said at once
     job.thread.join()
     assert not path.exists() and not list(tmp_path.glob("*.mp4*"))
+    assert window.statusBar().currentMessage() == "video export cancelled: no file written (cancelled.mp4)"
 
 
 def test_png_export_carries_a_caption_of_the_selected_retarget(window, tmp_path):
@@ -292,7 +296,7 @@ def test_playback_keys_reach_the_shortcuts_with_the_frame_box_focused(window, qt
 
 def test_ctrl_shortcuts_reach_the_window_with_the_frame_box_focused(window, qtbot, tmp_path):
     from PySide6.QtWidgets import QFileDialog
-    window.settings.setValue("files/last_dir", str(tmp_path))
+    window.settings.setValue("files/export_dir", str(tmp_path))
     window.activateWindow()
     qtbot.waitUntil(lambda: window.isActiveWindow(), timeout=5000)
     window.timeline.spin.setFocus()
@@ -406,3 +410,224 @@ def test_camera_presets_turn_the_one_shared_camera(window):
                                    atol=1e-9)
         cameras = {id(h.renderer.GetActiveCamera()) for h in window.view._hands}
         assert len(cameras) == 1  # every hand seen through the same camera: one scale
+
+
+def test_heatmap_shows_the_frame_the_view_draws_at_4x(window, qtbot):
+    from s2h_viewer.widgets.timeline import SPEEDS
+    results = window.comparison.results
+    window.scores.selectRow(1)  # ASRN -> iris: the heatmap follows the selection
+    seen = []  # at every draw: the view's frame, and whether the heatmap holds that frame's matrix
+    window.view.drawn.connect(lambda: seen.append((window.view.frame, np.array_equal(
+        window.heatmap.current, results[1].cell_error[window.view.frame], equal_nan=True))))
+    window.timeline.speed.setCurrentIndex(SPEEDS.index(4.0))
+    window.timeline.set_playing(True)
+    qtbot.waitUntil(lambda: len({f for f, _ in seen}) >= 8, timeout=30_000)
+    window.timeline.set_playing(False)
+    assert all(same for _, same in seen), seen
+    assert window.heatmap.frame == window.view.frame == window.timeline.frame
+
+
+def save_clip(sample_hands, path, gestures: tuple[str, ...] = ("thumbs_up", "fist")):
+    """A short clip on birch written as a motion file, for loading through the window."""
+    from s2h_viewer.io.npz import save_motion
+    from s2h_viewer.motions.synthesis import synthesize
+    save_motion(synthesize(list(gestures), sample_hands["birch"], seed=5, name=path.stem), path)
+    return path
+
+
+def recent(window) -> list[str]:
+    return [a.text() for a in window.recent_menu.actions()]
+
+
+def test_a_loaded_motion_keeps_the_selection_and_only_a_shown_load_is_recent(window, qtbot, sample_hands, tmp_path):
+    window.scores.selectRow(1)  # ASRN -> iris
+    clip = save_clip(sample_hands, tmp_path / "other.npz")
+    shown = window.comparison
+    window.load_motion(str(clip))
+    with qtbot.waitSignal(window.comparison_ready, timeout=60_000):
+        window.compare.cancel()  # what the progress dialog's Cancel does
+    assert window.comparison is shown and "other.npz (motion)" not in recent(window)
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.load_motion(str(clip))
+    assert window.comparison.motion.name == "other" and recent(window)[0] == "other.npz (motion)"
+    selected = window.compare.selected_result()
+    assert (selected.method, selected.target.name) == ("asrn", "iris")
+    assert window.heatmap_choice.currentIndex() == 1 and window.scores.currentRow() == 1
+    np.testing.assert_array_equal(window.compare.curve.error, selected.frame_error)
+
+
+def test_a_cancelled_target_is_not_recent(window, qtbot):
+    laurel = str(ASSETS_DIR / "hands" / "laurel.npz")
+    window.add_target_file(laurel)
+    with qtbot.waitSignal(window.comparison_ready, timeout=60_000):
+        window.compare.cancel()
+    assert "laurel.npz (target)" not in recent(window) and len(window.comparison.results) == 2
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.add_target_file(laurel)
+    assert recent(window) == ["laurel.npz (target)"]
+
+
+def test_double_click_solo_selects_that_retarget(window, qtbot):
+    view = window.view
+    hand = 2  # ASRN -> iris
+    x0, y0, x1, y1 = view.hand_viewports()[hand]
+    w, h = view.interactor.width(), view.interactor.height()
+    assert window.compare.selected_result() is window.comparison.results[0]
+    qtbot.mouseDClick(view.interactor, Qt.MouseButton.LeftButton,
+                      pos=QPoint(int((x0 + x1) / 2 * w), int((1 - (y0 + y1) / 2) * h)))
+    assert view.solo == hand
+    assert window.compare.selected_result() is window.comparison.results[1]
+    assert window.heatmap_choice.currentIndex() == 1 and window.scores.currentRow() == 1
+    np.testing.assert_array_equal(window.heatmap.current, window.comparison.results[1].cell_error[window.timeline.frame])
+
+
+def test_export_dialogs_start_in_the_export_folder_with_a_suggested_name(window, qtbot, tmp_path, monkeypatch):
+    from PySide6.QtWidgets import QFileDialog
+
+    from compare_window import when_shown
+    work = tmp_path / "work"
+    work.mkdir()
+    monkeypatch.chdir(work)  # no export yet: the working directory
+    window.settings.setValue("files/last_dir", str(ASSETS_DIR / "hands"))  # the last hand's folder: not for exports
+    offered = []
+
+    def ask(export) -> str:
+        when_shown(QFileDialog, lambda dialog: (offered.append(dialog.selectedFiles()[0]), dialog.reject()))
+        assert export() is None  # the user cancels
+        return offered.pop()
+
+    window.timeline.set_frame(7)
+    assert ask(window.export_screenshot) == str(work / "short_iris_tbs_copy_f0007.png")
+    window.scores.selectRow(1)
+    assert ask(window.export_motion) == str(work / "short_iris_asrn.glb")
+    exported = tmp_path / "exports"
+    exported.mkdir()
+    window.export_screenshot(str(exported / "first.png"))  # an export: its folder is where the next ones start
+    assert ask(window.export_video) == str(exported / "short_iris_asrn.mp4")
+    assert not list(work.iterdir())
+
+
+def test_a_second_job_dialog_stacks_under_the_first(window, qtbot, tmp_path):
+    job = window.export_video(str(tmp_path / "stacked.mp4"))
+    qtbot.waitUntil(job.dialog.isVisible, timeout=60_000)
+    window.method_actions["asm_opt"].trigger()  # a retarget while the export runs: its own dialog
+    wait_until_running(window, qtbot, "asm_opt")
+    retargets = window.compare._progress
+    qtbot.waitUntil(retargets.isVisible, timeout=30_000)
+    first, second = job.dialog.frameGeometry(), retargets.frameGeometry()
+    assert not first.intersects(second) and second.top() > first.bottom()
+    window.compare.cancel()
+    with qtbot.waitSignal(job.cancelled, timeout=60_000):
+        job.cancel()
+
+
+def test_quitting_during_a_video_export_asks_and_never_leaves_a_partial_file(window, qtbot, tmp_path):
+    from PySide6.QtWidgets import QMessageBox
+
+    from compare_window import when_shown
+    asked = []
+
+    def answer(button: str):
+        def click(box) -> None:
+            asked.append(box.text())
+            next(b for b in box.buttons() if b.text() == button).click()
+        when_shown(QMessageBox, click)
+
+    job = window.export_video(str(tmp_path / "kept.mp4"))
+    with qtbot.waitSignal(job.progress, timeout=60_000):
+        pass
+    answer("Keep exporting")
+    assert not window.close() and window.isVisible() and window.video_export is job
+    assert "kept.mp4" in asked[0] and "writes no file" in asked[0]
+    with qtbot.waitSignal(job.written, timeout=300_000):
+        pass
+    assert (tmp_path / "kept.mp4").stat().st_size > 0
+    job = window.export_video(str(tmp_path / "dropped.mp4"))
+    with qtbot.waitSignal(job.progress, timeout=60_000):
+        pass
+    answer("Cancel export and quit")
+    assert window.close() and not window.isVisible() and len(asked) == 2
+    assert not job.thread.is_alive()  # stopped before the window went
+    assert sorted(p.name for p in tmp_path.iterdir() if p.suffix != ".ini") == ["kept.mp4"]  # no partial file
+
+
+def viewport_pixels(window, renderer) -> np.ndarray:
+    """The part of the view's image that ``renderer`` draws (rows from the top)."""
+    image = window.view.grab_rgb()
+    h, w = image.shape[:2]
+    x0, y0, x1, y1 = renderer.GetViewport()
+    return image[int(round((1 - y1) * h)):int(round((1 - y0) * h)), int(round(x0 * w)):int(round(x1 * w))]
+
+
+def test_skeleton_overlay_shows_through_an_opaque_skin(window, qtbot):
+    window.timeline.set_frame(40)
+    assert window.view.opacity == 1.0  # the skin opaque, as it starts
+    hand = window.view._hands[2]
+    off = viewport_pixels(window, hand.renderer).astype(int)
+    window.skeleton_overlay.trigger()
+    assert all(h.mesh_actor.prop.opacity < 1.0 for h in window.view._hands)
+    on = viewport_pixels(window, hand.renderer).astype(int)
+    changed = np.abs(on - off).max(-1) > 40
+    assert changed.mean() > 0.02  # the bones (and the skin made see-through for them) are seen
+    window.skeleton_overlay.trigger()
+    assert all(h.mesh_actor.prop.opacity == 1.0 for h in window.view._hands)
+
+
+def test_one_target_every_hand_fits_its_viewport(window):
+    view = window.view
+    w, h = view.interactor.width(), view.interactor.height()
+    x0, y0, x1, y1 = view.hand_viewports()[0]
+    assert (x1 - x0) * w / ((y1 - y0) * h) < 0.6  # one target: tall, narrow cells
+    for frame in (0, window.timeline.n_frames // 2):
+        window.timeline.set_frame(frame)
+        for hand in view._hands:
+            pixels = viewport_pixels(window, hand.renderer)
+            below_title = pixels[pixels.shape[0] // 6:]
+            drawn = (below_title < 235).any(-1)  # skin, not the white background
+            assert drawn.mean() > 0.02
+            assert not drawn[:, :3].any() and not drawn[:, -3:].any(), "the hand is cut off at a side"
+
+
+def test_colour_bar_title_clear_of_its_top_label(window):
+    bar_renderer = window.view.plotter.renderers[-1]
+    pixels = viewport_pixels(window, bar_renderer).astype(int)
+    saturated = (pixels.max(-1) - pixels.min(-1)) > 120  # the colour bar itself (plasma is saturated)
+    bar_top = int(np.flatnonzero(saturated.any(1))[0])
+    dark = (pixels.max(-1) < 110).any(1)  # rows holding black text
+    rows = np.flatnonzero(dark[:bar_top + 8])  # the title and the top label ("0.10") beside the bar's top
+    runs = np.split(rows, np.flatnonzero(np.diff(rows) > 3) + 1)  # blank rows between the two
+    assert len(runs) == 2, f"title and top label overlap: text rows {rows.tolist()}"
+
+
+def test_a_long_target_name_is_elided_and_every_score_column_stays_in_view(window, qtbot, sample_hands):
+    import dataclasses
+
+    from s2h_viewer.widgets.scores_table import NAME_WIDTH
+    long_name = "laurel_exported_from_a_vendor_rig_with_a_very_long_file_name_v2"
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.compare.add_target(dataclasses.replace(sample_hands["laurel"], name=long_name))
+    table = window.scores
+    assert table.columnWidth(1) <= NAME_WIDTH and table.item(2, 1).toolTip() == long_name
+    last = table.columnCount() - 1
+    assert table.columnViewportPosition(last) + table.columnWidth(last) <= table.viewport().width()
+
+
+def test_a_png_asked_for_while_playing_is_the_frame_named(window, qtbot, tmp_path):
+    from PySide6.QtWidgets import QFileDialog
+
+    from compare_window import when_shown
+    window.settings.setValue("files/export_dir", str(tmp_path))
+    window.timeline.set_playing(True)
+    qtbot.waitUntil(lambda: window.timeline.frame > 3, timeout=20_000)
+    seen = []
+
+    def save_after_a_while(dialog) -> None:  # the user takes half a second over the name, then saves
+        seen.append((dialog.selectedFiles()[0], window.timeline.frame, window.timeline.playing))
+        QTimer.singleShot(500, lambda: (seen.append(window.timeline.frame), dialog.accept()))
+
+    when_shown(QFileDialog, save_after_a_while)
+    written = window.export_screenshot()
+    (offered, frame, playing), frame_when_saved = seen
+    assert not playing and frame_when_saved == frame and offered.endswith(f"_f{frame:04d}.png")
+    assert written == tmp_path / Path(offered).name and written.exists()
+    assert window.timeline.playing  # and it plays on

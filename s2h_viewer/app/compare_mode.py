@@ -10,13 +10,13 @@ first grid, to the methods computed for every target: none ticked, an empty grid
 
 from __future__ import annotations
 
-import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from PySide6.QtCore import Qt, Signal
-from PySide6.QtWidgets import QComboBox, QMenu, QProgressDialog, QSplitter, QVBoxLayout, QWidget
+from PySide6.QtCore import Signal
+from PySide6.QtWidgets import QComboBox, QMenu, QSplitter, QVBoxLayout, QWidget
 
+from s2h_viewer.app.progress_dialog import JobProgressDialog
 from s2h_viewer.app.retarget_queue import RetargetQueue
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
@@ -30,7 +30,6 @@ from s2h_viewer.widgets.scores_table import ScoresTable
 from s2h_viewer.widgets.timeline import Timeline
 
 PROGRESS_STEPS = 1000
-HEATMAP_PERIOD_PLAYING = 0.25  # seconds: Qt repaints the labelled matrix in software, so not every frame
 
 
 @dataclass
@@ -72,13 +71,14 @@ class CompareMode(QWidget):
         self.queue = RetargetQueue(self)
         self._done_in_batch = 0
         self._resume_playing = False  # the timeline played when retargets paused it: it plays on after
-        self._progress: QProgressDialog | None = None
-        self._heatmap_at = 0.0
+        self._progress: JobProgressDialog | None = None
         self.view = CompareView()
         self.timeline = Timeline()
         self.curve = ErrorCurve()
         self.heatmap = AsmHeatmap()
         self.heatmap_choice = QComboBox()
+        self.heatmap_choice.setSizeAdjustPolicy(QComboBox.SizeAdjustPolicy.AdjustToMinimumContentsLengthWithIcon)
+        self.heatmap_choice.setMinimumContentsLength(24)  # a long target name elides instead of widening the panel
         self.heatmap_choice.setToolTip("the retarget the heatmap, the error curve, the scores' highlight and "
                                        "exports follow")
         self.scores = ScoresTable()
@@ -99,6 +99,7 @@ class CompareMode(QWidget):
         self.view.drawn.connect(self.timeline.note_drawn)
         self.timeline.play_button.toggled.connect(self._playing_changed)
         self.curve.frame_clicked.connect(self.timeline.set_frame)
+        self.view.solo_changed.connect(self._solo_changed)
         self.heatmap_choice.currentIndexChanged.connect(self._choice_changed)
         self.scores.currentCellChanged.connect(lambda row, *_: self._select_row(row))
         self.queue.result_ready.connect(self._on_result)
@@ -194,6 +195,12 @@ class CompareMode(QWidget):
             self._resume_playback()
             self._show_state()
 
+    def _same_retarget(self, key: ResultKey | None) -> ResultKey:
+        """The shown retarget with ``key``'s target and method (a new clip keeps the selection), else the first."""
+        keys = self._shown_keys()
+        return next((k for k in keys if key is not None and (k.target, k.method) == (key.target, key.method)),
+                    keys[0])
+
     def _on_semantics(self, key: tuple[int, int], semantics: tuple) -> None:
         if key == (id(self.state.motion), id(self.state.source)):
             self.state.semantics[key] = semantics
@@ -242,20 +249,16 @@ class CompareMode(QWidget):
         self.heatmap_choice.blockSignals(False)
         if new_clip:
             self.timeline.set_clip(comparison.n_frames, comparison.motion.fps)
-        keys = self._shown_keys()
-        self.select(self.state.selected if self.state.selected in keys else keys[0])
+        self.select(self._same_retarget(self.state.selected))
         self.status(f"{comparison.motion.name}: {comparison.n_frames} frames, {len(comparison.results)} retargets")
         self.comparison_ready.emit()
 
     # --- progress ---
     def _show_progress(self) -> None:
         if self._progress is None:
-            self._progress = QProgressDialog("Retargeting...", "Cancel", 0, PROGRESS_STEPS, self)
-            self._progress.setWindowTitle("s2h-viewer: retargeting")
-            self._progress.setWindowModality(Qt.WindowModality.NonModal)  # menus stay usable: actions queue
-            self._progress.setMinimumDuration(300)
-            self._progress.setAutoClose(False)
-            self._progress.setAutoReset(False)
+            # non-modal: the menus stay usable while it runs (their actions queue or cancel work)
+            self._progress = JobProgressDialog("Retargeting...", "Cancel", PROGRESS_STEPS, self,
+                                               "s2h-viewer: retargeting")
             self._progress.canceled.connect(self.cancel)
             self._progress.setValue(0)
 
@@ -291,9 +294,15 @@ class CompareMode(QWidget):
         if self.comparison is not None and 0 <= row < len(self.comparison.results):
             self.select(self._shown_keys()[row])
 
+    def _solo_changed(self, hand: int) -> None:
+        """A retarget shown alone (double-click, Ctrl+M) is the selected one; the source alone changes nothing."""
+        if self.comparison is not None and hand >= 1:
+            self.select(self._shown_keys()[hand - 1])
+
     def _show_selected_curve(self) -> None:
         result = self.selected_result()
         self.curve.set_curve(result.frame_error, label(result))
+        self.heatmap.set_title(f"ASM error, {label(result)}")
 
     def _playing_changed(self, playing: bool) -> None:
         """Lighter skins while playing; paused, the full ones and the heatmap at the frame shown."""
@@ -308,21 +317,19 @@ class CompareMode(QWidget):
             return
         self.view.show_frame(frame)
         self.curve.set_frame(frame)
-        now = time.perf_counter()
-        if not self.timeline.playing or now - self._heatmap_at >= HEATMAP_PERIOD_PLAYING:
-            self._heatmap_at = now  # while playing, the heatmap follows at a few frames a second
-            result = self.selected_result()
-            self.heatmap.show_matrix(result.cell_error[frame], f"ASM error, {label(result)}, frame {frame}")
+        self.heatmap.show_matrix(self.selected_result().cell_error[frame], frame)  # every frame: it is cheap
 
     def set_see_through(self, checked: bool) -> None:
         self.view.set_options(opacity=0.4 if checked else 1.0)
 
     def fill_targets_menu(self, menu: QMenu) -> None:
-        """One "Remove <target>" entry per target (rebuilt whenever the state changes)."""
+        """One "Remove <target>" entry per target (rebuilt whenever the state changes); the last target stays
+        (without one there is nothing to compare, and the grid would keep showing it)."""
         menu.clear()
         for index, target in enumerate(self.state.targets):
             action = menu.addAction(f"Remove {target.name}")
             action.triggered.connect(lambda _=False, i=index: self.remove_target(i))
+            action.setEnabled(len(self.state.targets) > 1)
         menu.setEnabled(bool(self.state.targets))
 
     def shutdown(self) -> None:

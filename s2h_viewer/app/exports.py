@@ -5,13 +5,15 @@ frames and nothing is written."""
 
 from __future__ import annotations
 
+import re
 import threading
 from pathlib import Path
 
-from PySide6.QtCore import QObject, Qt, Signal
-from PySide6.QtWidgets import QProgressDialog, QWidget
+from PySide6.QtCore import QObject, Signal
+from PySide6.QtWidgets import QWidget
 
 from s2h_viewer.app.compare_mode import CompareMode, label
+from s2h_viewer.app.progress_dialog import JobProgressDialog
 from s2h_viewer.render.caption import add_caption, caption_text
 from s2h_viewer.render.compare_scene import render_comparison
 from s2h_viewer.retarget.progress import Cancelled
@@ -21,6 +23,14 @@ def caption_for(mode: CompareMode, frame: int) -> str:
     comparison, result = mode.comparison, mode.selected_result()
     return caption_text(comparison.motion.name, frame, comparison.n_frames, comparison.motion.fps,
                         label(result).split(" -> ")[0], result.target.name)
+
+
+def suggested_name(mode: CompareMode, suffix: str, frame: int | None = None) -> str:
+    """'<clip>_<target>_<method>[_f<frame>]<suffix>' for the selected retarget, safe as a file name."""
+    result = mode.selected_result()
+    parts = [mode.comparison.motion.name, result.target.name, result.method]
+    stem = "_".join(re.sub(r"[^\w.-]+", "-", part).strip("-.") or "x" for part in parts)
+    return f"{stem}{'' if frame is None else f'_f{frame:04d}'}{suffix}"
 
 
 def export_screenshot(mode: CompareMode, path: str) -> Path:
@@ -51,12 +61,8 @@ class VideoExport(QObject):
         captions = {f: caption_for(mode, f) for f in range(comparison.n_frames)}  # the selection now, not later
         size = (view.interactor.width(), view.interactor.height()) if view.interactor is not None else (1400, 900)
         self._job = (comparison, captions, size, view.options)
-        self.dialog = QProgressDialog(f"Rendering {Path(path).name}...", "Cancel", 0, comparison.n_frames, parent)
-        self.dialog.setWindowTitle("s2h-viewer: video export")
-        self.dialog.setWindowModality(Qt.WindowModality.NonModal)  # the timeline stays usable
-        self.dialog.setMinimumDuration(300)
-        self.dialog.setAutoClose(False)
-        self.dialog.setAutoReset(False)
+        self.dialog = JobProgressDialog(f"Rendering {Path(path).name}...", "Cancel", comparison.n_frames, parent,
+                                        "s2h-viewer: video export")  # non-modal: the timeline stays usable
         self.dialog.canceled.connect(self.cancel)
         self.progress.connect(lambda done, _: self.dialog.setValue(done))
         for signal in (self.written, self.cancelled, self.failed):

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from pathlib import Path
 
@@ -21,15 +22,15 @@ from s2h_viewer.retarget.methods import METHODS
 __all__ = ["CompareSetup", "MainWindow", "default_setup", "run"]
 
 RECENT_FILES = 8
-SHORTCUTS = (("Space", "play / pause"), ("Left / Right", "previous / next frame"), ("Home / End", "first / last frame"),
-             ("double-click a hand / Ctrl+M", "show it alone / the grid again"), ("Ctrl+K / Ctrl+J", "skeleton / "
-             "contact overlay"), ("Ctrl+1 / 2 / 3 / 0", "camera: palm / back / side / reset"),
-             ("Ctrl+O", "open a motion"), ("Ctrl+T", "add a target hand"), ("Ctrl+S", "export a screenshot"),
-             ("Ctrl+E", "export a video"), ("Ctrl+Shift+O", "open a hand to annotate"), ("Ctrl+R", "run the TBS solver"),
-             ("Ctrl+Shift+S", "save the annotation sidecar"),
-             ("Ctrl+Z / Ctrl+Shift+Z", "undo / redo a frame turn or a solver run"),
-             ("click a joint in 3D / the list", "select it"),
-             ("drag the ring in 3D / the dial", "turn the selected joint's frame about its twist axis"))
+STATUS_MS_CANCELLED = 15_000  # a cancelled export says so this long in the status bar
+#: hand files a target can be (a BVH holds a motion on a skeleton, no mesh to colour: not offered)
+TARGET_HAND_FILTER = "Hands (*.glb *.gltf *.fbx *.npz)"
+#: what the mouse does (the keys are listed from the menus' own actions, `MainWindow.shortcut_lines`)
+MOUSE_GESTURES = (("double-click a hand", "show it alone and select it / the grid again"),
+                  ("drag in a 3D view", "turn the camera (every hand of the grid turns with it)"),
+                  ("click the error curve", "jump to that frame"),
+                  ("click a joint in 3D / the list (Annotate)", "select it"),
+                  ("drag the ring in 3D / the dial (Annotate)", "turn the selected joint's frame about its twist axis"))
 
 
 class MainWindow(QMainWindow):
@@ -43,8 +44,10 @@ class MainWindow(QMainWindow):
         self.runner = TaskRunner(self, self.error, self.statusBar().showMessage)
         self.compare = CompareMode(setup, self.error, lambda text: self.statusBar().showMessage(text, 5000))
         self.video_export: exports.VideoExport | None = None
+        self._loading: list[tuple[str, str, object]] = []  # (kind, path, motion or hand) the grid does not show yet
         self.annotate = AnnotateMode(self.runner, self.error, lambda text: self.statusBar().showMessage(text, 5000),
                                      self)
+        self.compare.comparison_ready.connect(self._remember_shown)
         self.compare.comparison_ready.connect(self.comparison_ready)
         self.compare.state_changed.connect(self._state_changed)
         self.annotate.annotation_ready.connect(self.annotation_ready)
@@ -148,8 +151,8 @@ class MainWindow(QMainWindow):
         view_menu = bar.addMenu("&View")
         self.see_through = self._action(view_menu, "Semi-transparent skin", self.compare.set_see_through, "Ctrl+H",
                                         checkable=True)
-        self.skeleton_overlay = self._action(view_menu, "Skeleton overlay", lambda on: self.view.set_options(
-            skeleton=on), "Ctrl+K", checkable=True)
+        self.skeleton_overlay = self._action(view_menu, "Skeleton overlay (skin see-through)", lambda on: (
+            self.view.set_options(skeleton=on)), "Ctrl+K", checkable=True)
         self.contact_overlay = self._action(view_menu, "Contact overlay (lost contacts in red)", lambda on: (
             self.view.set_options(contacts=on)), "Ctrl+J", checkable=True)
         view_menu.addSeparator()
@@ -167,8 +170,25 @@ class MainWindow(QMainWindow):
         help_menu = bar.addMenu("&Help")
         self._action(help_menu, "Keyboard shortcuts", self.show_shortcuts, "F1")
 
+    def shortcut_lines(self) -> list[str]:
+        """'key: Menu > entry' for every menu action with a shortcut, read from the actions themselves (so the
+        help cannot drift from the menus), then the mouse gestures."""
+        lines = []
+
+        def walk(menu, path: str) -> None:
+            for action in menu.actions():
+                if action.menu() is not None:
+                    walk(action.menu(), f"{path} > {action.text()}")
+                elif action.shortcuts():
+                    keys = " or ".join(k.toString(QKeySequence.SequenceFormat.NativeText) for k in action.shortcuts())
+                    lines.append(f"{keys}: {path} > {action.text().replace('&', '')}")
+
+        for top in self.menuBar().actions():
+            walk(top.menu(), top.text().replace("&", ""))
+        return lines + [f"{gesture}: {what}" for gesture, what in MOUSE_GESTURES]
+
     def show_shortcuts(self) -> None:
-        QMessageBox.information(self, "Keyboard shortcuts", "\n".join(f"{k}: {what}" for k, what in SHORTCUTS))
+        QMessageBox.information(self, "Keyboard shortcuts", "\n".join(self.shortcut_lines()))
 
     def error(self, message: str) -> None:
         """Every failure the user caused or met ends here: a dialog with the message, nothing silent."""
@@ -235,16 +255,25 @@ class MainWindow(QMainWindow):
         if path:
             then(path)
 
-    def _load_hand(self, path: str, kind: str) -> HandModel | None:
-        """The hand in ``path`` (remembered as a recent ``kind``), or None after an error dialog."""
+    def _load_hand(self, path: str) -> HandModel | None:
+        """The hand in ``path`` (its folder remembered), or None after an error dialog."""
         from s2h_viewer.io.files import load_hand_file
         try:
             hand = load_hand_file(path)
         except S2HError as exc:
             self.error(str(exc))
             return None
-        self._remember(path, kind)
+        self._remember(path)
         return hand
+
+    def _remember_shown(self) -> None:
+        """Loads the grid now shows become recent files; loads it does not show (cancelled, failed) never do."""
+        comparison = self.comparison
+        shown = {id(comparison.motion)} | {id(r.target) for r in comparison.results} if comparison else set()
+        for kind, path, loaded in self._loading:
+            if id(loaded) in shown:
+                self._remember(path, kind)
+        self._loading = []
 
     def open_motion(self) -> None:
         self._ask_to_open("Open motion", "Motions (*.npz *.bvh *.glb *.gltf *.fbx)", self.load_motion)
@@ -258,46 +287,70 @@ class MainWindow(QMainWindow):
         except (S2HError, KeyError) as exc:
             self.error(str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc))
             return
-        self._remember(path, "motion")
+        self._remember(path)
+        self._loading.append(("motion", path, motion))
         self.compare.load(motion, source)
 
     def add_target(self) -> None:
-        self._ask_to_open("Add target hand", "Hands (*.glb *.gltf *.fbx *.npz *.bvh)", self.add_target_file)
+        self._ask_to_open("Add target hand", TARGET_HAND_FILTER, self.add_target_file)
 
     def add_target_file(self, path: str) -> None:
-        hand = self._load_hand(path, "target")
+        hand = self._load_hand(path)
         if hand is None:
             return
+        self._loading.append(("target", path, hand))
         self.compare.add_target(hand)
 
     # --- exports ---
-    def _ask_to_save(self, title: str, file_filter: str, path: str | None) -> str | None:
-        """``path`` when given, else the user's choice; None without a comparison to export."""
+    def _export_dir(self) -> Path:
+        """Where exports go: the last export's folder, else the working directory (if writable), else home."""
+        last = Path(str(self.settings.value("files/export_dir", "")))
+        if str(last) not in ("", ".") and last.is_dir():
+            return last
+        return Path.cwd() if os.access(Path.cwd(), os.W_OK) else Path.home()
+
+    def _ask_to_save(self, title: str, file_filter: str, path: str | None, name: Callable[[], str]) -> str | None:
+        """``path`` when given, else the user's choice, offered as ``name()`` in the export folder; None without
+        a comparison to export."""
         if self.comparison is None:
             return None
-        return path or QFileDialog.getSaveFileName(self, title, self._last_dir(), file_filter)[0] or None
+        return path or QFileDialog.getSaveFileName(self, title, str(self._export_dir() / name()), file_filter)[0] \
+            or None
 
     def _wrote(self, path: Path, what: str = "") -> Path:
-        self._remember(str(path))
+        self.settings.setValue("files/export_dir", str(Path(path).resolve().parent))
         self.statusBar().showMessage(f"wrote {path}{what}", 5000)
         return path
 
     def export_screenshot(self, path: str | None = None) -> Path | None:
-        path = self._ask_to_save("Export screenshot", "PNG (*.png)", path)
-        return self._wrote(exports.export_screenshot(self.compare, path)) if path else None
+        """The grid as shown when asked: playback pauses while the file dialog is up (the suggested name holds
+        the frame, and the frame written must be that one), then plays on."""
+        playing = self.timeline.playing
+        self.timeline.set_playing(False)
+        try:
+            path = self._ask_to_save("Export screenshot", "PNG (*.png)", path, lambda: exports.suggested_name(
+                self.compare, ".png", self.timeline.frame))
+            return self._wrote(exports.export_screenshot(self.compare, path)) if path else None
+        finally:
+            self.timeline.set_playing(playing)
 
     def export_video(self, path: str | None = None) -> exports.VideoExport | None:
         """Start rendering the clip to a video in the background; the job's signals say how it ended."""
         if self.video_export is not None:
             self.error("A video export is running; wait for it or cancel it first.")
             return None
-        path = self._ask_to_save("Export video", "Video (*.mp4 *.gif)", path)
+        path = self._ask_to_save("Export video", "Video (*.mp4 *.gif)", path,
+                                 lambda: exports.suggested_name(self.compare, ".mp4"))
         if not path:
             return None
         job = exports.VideoExport(self.compare, path, self)
         n = self.comparison.n_frames
         job.written.connect(lambda written: self._wrote(written, f" ({n} frames)"))
-        job.cancelled.connect(lambda: self.statusBar().showMessage("video export cancelled; nothing written", 5000))
+        name = Path(path).name
+        job.dialog.canceled.connect(lambda: self.statusBar().showMessage(  # said at once: the job stops after a frame
+            f"cancelling the video export: {name} will not be written..."))
+        job.cancelled.connect(lambda: self.statusBar().showMessage(
+            f"video export cancelled: no file written ({name})", STATUS_MS_CANCELLED))
         job.failed.connect(self.error)
         for signal in (job.written, job.cancelled, job.failed):
             signal.connect(self._video_export_ended)
@@ -311,7 +364,8 @@ class MainWindow(QMainWindow):
         if self.comparison is None:
             return None
         result = self.compare.selected_result()
-        path = self._ask_to_save(f"Export {result.method} -> {result.target.name}", "Motion (*.glb *.bvh *.npz)", path)
+        path = self._ask_to_save(f"Export {result.method} -> {result.target.name}", "Motion (*.glb *.bvh *.npz)", path,
+                                 lambda: exports.suggested_name(self.compare, ".glb"))
         if not path:
             return None
         try:
@@ -322,16 +376,17 @@ class MainWindow(QMainWindow):
 
     # --- annotate mode's entry points ---
     def open_hand_to_annotate(self) -> None:
-        self._ask_to_open("Open hand to annotate", "Hands (*.glb *.gltf *.fbx *.npz)", self.annotate_file)
+        self._ask_to_open("Open hand to annotate", TARGET_HAND_FILTER, self.annotate_file)
 
     def annotate_file(self, path: str) -> None:
         """Load a hand (its sidecar or solver frames come with it) and show it in annotation mode; unsaved
         edits of the last hand are saved or dropped first, as the user says."""
         if not self.annotate.confirm_discard("opening another hand"):
             return
-        hand = self._load_hand(path, "annotate")
+        hand = self._load_hand(path)
         if hand is None:
             return
+        self._remember(path, "annotate")
         self.annotate.open(hand, path)
         self.tabs.setCurrentWidget(self.annotate.view)
 
@@ -355,17 +410,34 @@ class MainWindow(QMainWindow):
             elif Path(path).suffix.lower() in MOTION_SUFFIXES:
                 self.load_motion(path)
 
+    def _confirm_quit_during_export(self) -> bool:
+        """Quitting with a video export running: keep exporting (no quit), or cancel it (nothing written) and
+        quit."""
+        if self.video_export is None:
+            return True
+        job = self.video_export
+        box = QMessageBox(QMessageBox.Icon.Question, "s2h-viewer: video export running",
+                          f"{Path(job.path).name} is still being rendered ({job.dialog.value()} of "
+                          f"{job.dialog.maximum()} frames). Quitting cancels it and writes no file.", parent=self)
+        keep = box.addButton("Keep exporting", QMessageBox.ButtonRole.RejectRole)
+        quit_button = box.addButton("Cancel export and quit", QMessageBox.ButtonRole.DestructiveRole)
+        box.setDefaultButton(keep)
+        box.exec()
+        if box.clickedButton() is not quit_button:
+            return False
+        if self.video_export is not None:  # it may have ended while the question was up
+            self.video_export.cancel()
+            self.video_export.thread.join()  # it stops after the frame it renders; its temporary file goes
+        return True
+
     def closeEvent(self, event) -> None:
-        if not self.annotate.confirm_discard("quitting"):
+        if not self.annotate.confirm_discard("quitting") or not self._confirm_quit_during_export():
             event.ignore()
             return
         self.settings.setValue("window/geometry", self.saveGeometry())
         self.runner.finish()
         self.compare.shutdown()
         self.annotate.view.interactor.close_plotter()
-        if self.video_export is not None:
-            self.video_export.cancel()
-            self.video_export.thread.join()
         super().closeEvent(event)
 
 

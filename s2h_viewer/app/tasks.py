@@ -6,8 +6,9 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from PySide6.QtCore import QObject, QThread, Signal
-from PySide6.QtWidgets import QProgressDialog, QWidget
+from PySide6.QtWidgets import QWidget
 
+from s2h_viewer.app.progress_dialog import JobProgressDialog
 from s2h_viewer.errors import S2HError
 from s2h_viewer.retarget.progress import reporting
 
@@ -43,7 +44,7 @@ class TaskRunner(QObject):
         super().__init__(parent)
         self._parent, self._on_error, self._on_status = parent, on_error, on_status
         self._thread: QThread | None = None
-        self._progress: QProgressDialog | None = None
+        self._progress: JobProgressDialog | None = None
         self._task: Task | None = None
         self._on_done: Callable[[object], None] | None = None
 
@@ -60,9 +61,7 @@ class TaskRunner(QObject):
         task = Task(fn)
         task.moveToThread(self._thread)
         self._thread.started.connect(task.run)
-        self._progress = QProgressDialog(label, None, 0, DIALOG_STEPS, self._parent)
-        self._progress.setWindowTitle("s2h-viewer")
-        self._progress.setMinimumDuration(300)
+        self._progress = JobProgressDialog(label, None, DIALOG_STEPS, self._parent, "s2h-viewer")
         task.progress.connect(self._on_progress)
         self._on_done = on_done
         task.finished.connect(self._on_task_done)  # a bound slot of a GUI-thread object: runs on the GUI thread

@@ -16,6 +16,12 @@ def add_caption(image: np.ndarray, text: str) -> np.ndarray:
     return np.concatenate([np.asarray(image)[..., :3], np.asarray(band)], 0)
 
 
+def frame_readout(frame: int, n_frames: int, fps: float) -> str:
+    """Frame index over the last index with the frame count, then the frame's time over the clip's length:
+    '0/509 (510 frames)  0.00 s / 17.00 s' (indices from 0, as the frame box, the curve and file names)."""
+    return f"{frame}/{n_frames - 1} ({n_frames} frames)  {frame / fps:.2f} s / {n_frames / fps:.2f} s"
+
+
 def caption_text(clip: str, frame: int, n_frames: int, fps: float, method: str, target: str) -> str:
-    """One line: the clip, the frame of how many and its time, the selected retarget."""
-    return f"{clip}   frame {frame}/{n_frames - 1}  ({frame / fps:.2f} s)   selected: {method} -> {target}"
+    """One line: the clip, the frame as the timeline reads it, the selected retarget."""
+    return f"{clip}   frame {frame_readout(frame, n_frames, fps)}   selected: {method} -> {target}"

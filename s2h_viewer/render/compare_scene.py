@@ -196,9 +196,10 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
     plotter.subplot(0, plotter.shape[1] - 1)
     plotter.set_background("white")
     if coloured is not None:
-        plotter.add_scalar_bar("1 - cos", mapper=coloured.mapper, vertical=True, position_x=0.25,
-                               position_y=0.1, height=0.8, width=0.4, title_font_size=10, label_font_size=9,
-                               color="black", n_labels=4, fmt="%.2f")
+        bar = plotter.add_scalar_bar("1 - cos", mapper=coloured.mapper, vertical=True, position_x=0.25,
+                                     position_y=0.1, height=0.8, width=0.4, title_font_size=10, label_font_size=9,
+                                     color="black", n_labels=4, fmt="%.2f")
+        bar.SetVerticalTitleSeparation(12)  # pixels: the title clear of the top label, not over it
     plotter.link_views()
     set_camera(plotter, "default", [h.hand for h in hands])
     return hands
@@ -213,6 +214,21 @@ CAMERA_PRESETS = {
 }
 
 
+VIEW_ANGLE = 30.0  # degrees, vertical
+FIT_ASPECT = 0.65  # viewport width / height under which a hand's width would not fit at VIEW_ANGLE
+
+
+def fit_view_angle(plotter: pv.Plotter, renderer) -> None:
+    """Widen the shared camera's view angle when ``renderer``'s viewport is narrower than FIT_ASPECT (one
+    target: tall cells), so a hand's width stays in view; VIEW_ANGLE otherwise. Zooming moves the camera,
+    not the angle, so calling this before every render keeps the user's zoom."""
+    width, height = plotter.render_window.GetSize()
+    x0, y0, x1, y1 = renderer.GetViewport()
+    aspect = (x1 - x0) * width / max(1e-9, (y1 - y0) * height)
+    widen = max(1.0, FIT_ASPECT / max(aspect, 1e-6))
+    plotter.camera.view_angle = 2.0 * np.degrees(np.arctan(np.tan(np.radians(VIEW_ANGLE / 2)) * widen))
+
+
 def set_camera(plotter: pv.Plotter, preset: str, hands: list[HandModel]) -> None:
     """Point the shared camera at the palm centre from a preset direction, far enough for the largest hand
     (every viewport shares the camera and has the same size: one scale for source and targets)."""
@@ -224,7 +240,7 @@ def set_camera(plotter: pv.Plotter, preset: str, hands: list[HandModel]) -> None
     camera.focal_point = centre
     camera.position = centre + d * extent * 3.0
     camera.up = up
-    camera.view_angle = 30.0
+    fit_view_angle(plotter, plotter.renderers[0])  # the source's cell: the size of every hand's
     for renderer in plotter.renderers:
         renderer.ResetCameraClippingRange()
 
@@ -289,9 +305,12 @@ class ViewOptions:
     opacity: float = 1.0
 
 
+SKELETON_OPACITY = 0.4  # the skin's opacity at most while the skeleton overlay is on: bones inside show
+
+
 def apply_options(plotter: pv.Plotter, hands: list[PosedHand], options: ViewOptions) -> None:
     for hand in hands:
-        hand.set_opacity(options.opacity)
+        hand.set_opacity(min(options.opacity, SKELETON_OPACITY) if options.skeleton else options.opacity)
         hand.overlay.set_visible(options.skeleton, options.contacts)
     set_camera(plotter, options.camera, [h.hand for h in hands])
 

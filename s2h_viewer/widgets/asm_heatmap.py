@@ -1,13 +1,17 @@
 """The 20 x 29 ASM error matrix of one retarget at the current frame, as a colour image with axis
-labels (joint names) and a tooltip naming the cell's joint pair and its error."""
+labels (joint names) and a tooltip naming the cell's joint pair and its error.
+
+It follows every frame the view draws, so it must cost next to nothing per frame: the labels are
+painted once into a pixmap, and a frame only writes the 20 x 29 cell colours (a colour table lookup)
+into one reused image, which the paint scales up by ``CELL`` without smoothing."""
 
 from __future__ import annotations
 
 import numpy as np
 from matplotlib import colormaps
-from PySide6.QtCore import Qt
+from PySide6.QtCore import QRect, Qt
 from PySide6.QtGui import QColor, QFont, QImage, QPainter, QPixmap
-from PySide6.QtWidgets import QLabel, QToolTip, QVBoxLayout, QWidget
+from PySide6.QtWidgets import QLabel, QSizePolicy, QToolTip, QVBoxLayout, QWidget
 
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.render.compare_scene import ERROR_COLOURMAP, ERROR_RANGE
@@ -16,15 +20,24 @@ CELL = 12  # pixels per matrix cell
 LEFT, TOP = 78, 70  # room for the row and column labels
 ROW_NAMES = topo.FINGER_JOINT_NAMES
 COLUMN_NAMES = topo.FINGER_JOINT_NAMES + tuple(f"palm anchor {i + 1}" for i in range(topo.N_ANCHORS))
+COLOURS = 256  # entries of the colour table
+MASKED_GREY = 200
 
 
-def error_image(cell_error: np.ndarray) -> np.ndarray:
-    """(20 * CELL, 29 * CELL, 3) uint8: error coloured over ERROR_RANGE, masked cells grey."""
+def colour_table() -> np.ndarray:
+    """(COLOURS + 1, 3) uint8: the error colour map over ERROR_RANGE, then grey for masked cells."""
+    table = (colormaps[ERROR_COLOURMAP](np.linspace(0.0, 1.0, COLOURS))[:, :3] * 255).round().astype(np.uint8)
+    return np.vstack([table, np.full((1, 3), MASKED_GREY, dtype=np.uint8)])
+
+
+def colour_indices(cell_error: np.ndarray) -> np.ndarray:
+    """Each cell's row in ``colour_table``: its error scaled over ERROR_RANGE (clipped), masked cells last."""
     lo, hi = ERROR_RANGE
-    scaled = np.clip((np.nan_to_num(cell_error, nan=lo) - lo) / (hi - lo), 0.0, 1.0)
-    rgb = (colormaps[ERROR_COLOURMAP](scaled)[..., :3] * 255).astype(np.uint8)
-    rgb[np.isnan(cell_error)] = 200
-    return np.repeat(np.repeat(rgb, CELL, axis=0), CELL, axis=1)
+    with np.errstate(invalid="ignore"):
+        scaled = np.clip((cell_error - lo) / (hi - lo), 0.0, 1.0)
+    index = (np.nan_to_num(scaled) * (COLOURS - 1)).round().astype(np.intp)
+    index[np.isnan(cell_error)] = COLOURS
+    return index
 
 
 def short(name: str) -> str:
@@ -32,13 +45,43 @@ def short(name: str) -> str:
     return name.replace("palm anchor", "anchor").replace("_", " ")
 
 
-class _MatrixLabel(QLabel):
-    """The image; hovering a cell shows its joint pair and error."""
+def axis_labels() -> QPixmap:
+    """The joint names along both axes on white, the matrix area left empty (painted once)."""
+    pixmap = QPixmap(LEFT + topo.N_ASM_COLUMNS * CELL, TOP + topo.N_FINGER_JOINTS * CELL)
+    pixmap.fill(QColor("white"))
+    painter = QPainter(pixmap)
+    painter.setFont(QFont(painter.font().family(), 7))
+    for row, name in enumerate(ROW_NAMES):
+        painter.drawText(0, TOP + row * CELL, LEFT - 3, CELL, Qt.AlignmentFlag.AlignRight |
+                         Qt.AlignmentFlag.AlignVCenter, short(name))
+    painter.rotate(-90)  # column names read upwards
+    for column, name in enumerate(COLUMN_NAMES):
+        painter.drawText(-TOP + 3, LEFT + column * CELL, TOP - 3, CELL, Qt.AlignmentFlag.AlignLeft |
+                         Qt.AlignmentFlag.AlignVCenter, short(name))
+    painter.end()
+    return pixmap
+
+
+class _Matrix(QWidget):
+    """The labels, the cells scaled up and the frame number in the empty corner; hovering a cell shows its
+    joint pair and error."""
 
     def __init__(self, heatmap: "AsmHeatmap"):
         super().__init__()
         self.heatmap = heatmap
+        self.labels = axis_labels()
+        self.setFixedSize(self.labels.size())  # a fixed size: a new frame repaints it, never lays out the window
         self.setMouseTracking(True)
+
+    def paintEvent(self, event) -> None:
+        painter = QPainter(self)
+        painter.drawPixmap(0, 0, self.labels)
+        heatmap = self.heatmap
+        if heatmap.current is not None:
+            painter.drawImage(QRect(LEFT, TOP, topo.N_ASM_COLUMNS * CELL, topo.N_FINGER_JOINTS * CELL),
+                              heatmap.image)
+            painter.drawText(QRect(0, 0, LEFT - 3, TOP - 3), Qt.AlignmentFlag.AlignRight |
+                             Qt.AlignmentFlag.AlignBottom, f"frame {heatmap.frame}")
 
     def mouseMoveEvent(self, event) -> None:
         text = self.heatmap.cell_text(int(event.position().x()), int(event.position().y()))
@@ -53,18 +96,22 @@ class AsmHeatmap(QWidget):
 
     def __init__(self, parent: QWidget | None = None):
         super().__init__(parent)
+        self.current: np.ndarray | None = None  # the matrix shown
+        self.frame = -1  # the frame it belongs to
+        self._colours = colour_table()
+        self._rgb = np.zeros((topo.N_FINGER_JOINTS, topo.N_ASM_COLUMNS, 4), dtype=np.uint8)  # 32-bit rows
+        self.image = QImage(self._rgb.data, topo.N_ASM_COLUMNS, topo.N_FINGER_JOINTS, 4 * topo.N_ASM_COLUMNS,
+                            QImage.Format.Format_RGBX8888)  # a view of ``_rgb``: a frame writes the array only
         self.title = QLabel("ASM error")
-        self.image = _MatrixLabel(self)
-        self.image.setAlignment(Qt.AlignmentFlag.AlignLeft | Qt.AlignmentFlag.AlignTop)
-        self.image.setMinimumSize(LEFT + topo.N_ASM_COLUMNS * CELL, TOP + topo.N_FINGER_JOINTS * CELL)
+        self.title.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Fixed)  # a long name: no wider
+        self.matrix = _Matrix(self)
         self.legend = QLabel(f"rows: the {topo.N_FINGER_JOINTS} finger joints; columns: the same 20, then "
                              f"{topo.N_ANCHORS} palm anchors. Colour: 1 - cos, {ERROR_RANGE[0]:g} (dark) to "
                              f"{ERROR_RANGE[1]:g}+ (bright); grey: masked. Hover a cell for its joint pair.")
         self.legend.setWordWrap(True)
         layout = QVBoxLayout(self)
-        for widget in (self.title, self.image, self.legend):
+        for widget in (self.title, self.matrix, self.legend):
             layout.addWidget(widget)
-        self.current: np.ndarray | None = None
 
     def cell_at(self, x: int, y: int) -> tuple[int, int] | None:
         """(row, column) of the matrix cell under image pixel (x, y), or None off the matrix."""
@@ -81,22 +128,13 @@ class AsmHeatmap(QWidget):
         error = "masked" if np.isnan(value) else f"1 - cos = {value:.3f}"
         return f"{ROW_NAMES[cell[0]]} to {COLUMN_NAMES[cell[1]]}: {error}"
 
-    def show_matrix(self, cell_error: np.ndarray, title: str) -> None:
-        self.current = cell_error
-        rgb = np.ascontiguousarray(error_image(cell_error))
-        h, w = rgb.shape[:2]
-        pixmap = QPixmap(LEFT + w, TOP + h)
-        pixmap.fill(QColor("white"))
-        painter = QPainter(pixmap)
-        painter.drawImage(LEFT, TOP, QImage(rgb.data, w, h, 3 * w, QImage.Format.Format_RGB888))
-        painter.setFont(QFont(painter.font().family(), 7))
-        for row, name in enumerate(ROW_NAMES):
-            painter.drawText(0, TOP + row * CELL, LEFT - 3, CELL, Qt.AlignmentFlag.AlignRight |
-                             Qt.AlignmentFlag.AlignVCenter, short(name))
-        painter.rotate(-90)  # column names read upwards
-        for column, name in enumerate(COLUMN_NAMES):
-            painter.drawText(-TOP + 3, LEFT + column * CELL, TOP - 3, CELL, Qt.AlignmentFlag.AlignLeft |
-                             Qt.AlignmentFlag.AlignVCenter, short(name))
-        painter.end()
-        self.image.setPixmap(pixmap)
+    def set_title(self, title: str) -> None:
+        """What the matrix belongs to (the selected retarget); the full text also as the tooltip."""
         self.title.setText(title)
+        self.title.setToolTip(title)
+
+    def show_matrix(self, cell_error: np.ndarray, frame: int) -> None:
+        """Show ``cell_error`` (20, 29), the matrix of ``frame``: new cell colours in the same image, a repaint."""
+        self.current, self.frame = cell_error, frame
+        self._rgb[..., :3] = self._colours[colour_indices(cell_error)]
+        self.matrix.update()

@@ -17,8 +17,8 @@ from PySide6.QtCore import QEvent, QObject, Signal
 from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
-from s2h_viewer.render.compare_scene import (PLAYING_FACES, PosedHand, ViewOptions, apply_options, grid_layout,
-                                             populate)
+from s2h_viewer.render.compare_scene import (PLAYING_FACES, PosedHand, ViewOptions, apply_options, fit_view_angle,
+                                             grid_layout, populate)
 from s2h_viewer.retarget.comparison import Comparison
 from s2h_viewer.widgets.vtk_widget import PlotterWidget, window_plotter
 
@@ -54,6 +54,7 @@ class CompareView(QWidget):
         self.plotter = window_plotter(**grid_layout(comparison))
         self.interactor = PlotterWidget(self.plotter, self)
         self.interactor.installEventFilter(self)
+        self.plotter.render_window.AddObserver("StartEvent", lambda *_: self._fit_camera())
         self.plotter.render_window.AddObserver("EndEvent", lambda *_: self.drawn.emit())
         self._layout.addWidget(self.interactor)
         self.interactor.Initialize()
@@ -70,6 +71,13 @@ class CompareView(QWidget):
             hand.show(frame)
         if self.interactor is not None:
             self.interactor.update()
+
+    def _fit_camera(self) -> None:
+        """Before each render: the camera's view angle for the hand viewports' shape now (the widget's size and
+        solo change it), so a hand's width stays in view in tall cells."""
+        shown = next((h.renderer for h in self._hands if h.renderer.GetDraw()), None)
+        if shown is not None:
+            fit_view_angle(self.plotter, shown)
 
     def set_playing(self, playing: bool) -> None:
         self.playing = playing

@@ -1,22 +1,36 @@
-"""Per-method clip scores (S_palm, S_finger, contacts, violations) for every target, in a table."""
+"""Per-method clip scores (S_palm, S_finger, contacts, violations) for every target, in a table.
+Names longer than ``NAME_WIDTH`` are elided in the middle (the full name in the cell's tooltip; drag a
+header edge to widen a column) and the table asks for the width of all its columns, so a long target
+name never pushes a score out of sight."""
 
 from __future__ import annotations
 
-from PySide6.QtWidgets import QTableWidget, QTableWidgetItem, QWidget
+from PySide6.QtCore import Qt
+from PySide6.QtWidgets import QHeaderView, QTableWidget, QTableWidgetItem, QWidget
 
 from s2h_viewer.retarget.comparison import Comparison
 from s2h_viewer.retarget.methods import METHODS
 
-COLUMNS = (("Method", None), ("Target", None), ("S_palm", "s_palm"), ("S_finger", "s_finger"),
-           ("Contact P", "contact_precision"), ("Contact R", "contact_recall"), ("Palm R", "palm_contact_recall"),
-           ("Violations", "violation_rate"))
+#: (header, score key or None for a name column, header tooltip)
+COLUMNS = (("Method", None, "retargeting method"), ("Target", None, "target hand"),
+           ("S_palm", "s_palm", "finger-palm semantic similarity to the source (1 is the same)"),
+           ("S_finger", "s_finger", "finger-finger semantic similarity to the source (1 is the same)"),
+           ("Contact\nP", "contact_precision", "contact precision: pad contacts made that the source makes"),
+           ("Contact\nR", "contact_recall", "contact recall: pad contacts of the source that are kept"),
+           ("Palm\nR", "palm_contact_recall", "fingertip-on-palm contacts of the source that are kept"),
+           ("Viol-\nations", "violation_rate", "share of joint angles over 5 deg outside the anatomical limits"))
+NAME_WIDTH = 96  # pixels: widest a name column starts (drag the header edge for more)
 
 
 class ScoresTable(QTableWidget):
     def __init__(self, parent: QWidget | None = None):
         super().__init__(0, len(COLUMNS), parent)
-        self.setHorizontalHeaderLabels([c for c, _ in COLUMNS])
+        self.setHorizontalHeaderLabels([c for c, _, _ in COLUMNS])
+        for column, (_, _, tip) in enumerate(COLUMNS):
+            self.horizontalHeaderItem(column).setToolTip(tip)
+        self.horizontalHeader().setSectionResizeMode(QHeaderView.ResizeMode.Interactive)
         self.verticalHeader().setVisible(False)
+        self.setTextElideMode(Qt.TextElideMode.ElideMiddle)
         self.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
 
     def show_comparison(self, comparison: Comparison) -> None:
@@ -24,7 +38,16 @@ class ScoresTable(QTableWidget):
         for row, result in enumerate(comparison.results):
             values = result.scores.as_dict()
             cells = [METHODS[result.method].label, result.target.name]
-            cells += [f"{values[key]:.3f}" for _, key in COLUMNS[2:]]
+            cells += [f"{values[key]:.3f}" for _, key, _ in COLUMNS[2:]]
             for col, text in enumerate(cells):
-                self.setItem(row, col, QTableWidgetItem(text))
+                item = QTableWidgetItem(text)
+                if COLUMNS[col][1] is None:
+                    item.setToolTip(text)
+                self.setItem(row, col, item)
         self.resizeColumnsToContents()
+        for column, (_, key, _) in enumerate(COLUMNS):
+            if key is None and self.columnWidth(column) > NAME_WIDTH:
+                self.setColumnWidth(column, NAME_WIDTH)
+        # wide enough for every column (names capped above): the side panel makes room, no score hides
+        self.setMinimumWidth(self.horizontalHeader().length() + 2 * self.frameWidth() +
+                             self.verticalScrollBar().sizeHint().width())

@@ -1,5 +1,5 @@
-"""Playback timeline: play/pause, scrub, step, loop, speed, a frame/total and time readout, and the
-frame rate actually drawn.
+"""Playback timeline: play/pause, scrub, step, loop, speed, a readout of the frame (index/last, the frame
+count) and its time (of the clip's length), and the frame rate actually drawn.
 
 Playback runs against the clock: each tick shows the frame that real time (times the speed) has
 reached since play started, so a view that draws slower than the clip drops frames instead of
@@ -12,6 +12,8 @@ import time
 
 from PySide6.QtCore import QEvent, QObject, Qt, QTimer, Signal
 from PySide6.QtWidgets import QCheckBox, QComboBox, QHBoxLayout, QLabel, QPushButton, QSlider, QSpinBox, QWidget
+
+from s2h_viewer.render.caption import frame_readout
 
 SPEEDS = (0.25, 0.5, 1.0, 2.0, 4.0)
 MAX_DRAW_WAIT = 0.2  # seconds a tick waits for the view to draw the frame asked before asking anew
@@ -131,8 +133,7 @@ class Timeline(QWidget):
         self._anchor = (time.perf_counter(), self.frame)
 
     def _readout_text(self, frame: int) -> str:
-        total = self.n_frames - 1
-        return f"{frame}/{total}  {frame / self.clip_fps:5.2f} s / {total / self.clip_fps:.2f} s"
+        return frame_readout(frame, self.n_frames, self.clip_fps)
 
     def _show_readout(self, frame: int) -> None:
         self.readout.setText(self._readout_text(frame))
