@@ -4,9 +4,9 @@ starts Xvfb without one):
     xvfb-run -a -s "-screen 0 1600x1000x24" .venv/bin/python scripts/make_screenshots.py
 
 docs/compare_mode.png: the default samples with the contact overlay (touching pads linked in green,
-contacts a retarget lost in red) at a frame where the source's fingertips touch and ASRN onto laurel
-loses the touch, the error curve under the timeline; docs/compare_solo.png: that retarget shown alone
-(double-click), and so selected; docs/annotation_mode.png: the WebXR hand solved, its middle PIP selected.
+contacts a retarget lost in red) at a frame where the source's fingertips touch, TBS Copy onto laurel
+loses the touch and ASRN onto laurel keeps it, the error curve under the timeline;
+docs/compare_solo.png: ASRN onto laurel shown alone (double-click), and so selected; docs/annotation_mode.png: the WebXR hand solved, its middle PIP selected.
 """
 
 from __future__ import annotations
@@ -26,10 +26,11 @@ DOCS = Path(__file__).resolve().parent.parent / "docs"
 def main() -> None:
     with scripted_window() as window, tempfile.TemporaryDirectory() as tmp:
         window.contact_overlay.trigger()
-        solo = 4  # ASRN -> laurel
-        touching = window.view._hands[0].overlay.contacts.any(1)
-        lost = np.flatnonzero(touching & window.view._hands[solo].overlay.lost.any(1))
-        window.timeline.set_frame(int(lost[len(lost) // 2]) if len(lost) else int(np.argmax(touching)))
+        copy, solo = 3, 4  # TBS Copy -> laurel, ASRN -> laurel
+        hands = window.view._hands
+        touching = hands[0].overlay.contacts.any(1)
+        shown = np.flatnonzero(touching & hands[copy].overlay.lost.any(1) & ~hands[solo].overlay.lost.any(1))
+        window.timeline.set_frame(int(shown[len(shown) // 2]) if len(shown) else int(np.argmax(touching)))
         screen_image(window, DOCS / "compare_mode.png")
         window.view.set_solo(solo)  # shown alone, it is selected: the heatmap, the curve and the table follow
         screen_image(window, DOCS / "compare_solo.png")
