@@ -16,7 +16,8 @@ from s2h_viewer.hand.rotations import tbs_euler_to_quat
 from s2h_viewer.motions.fitting import fit_gesture_angles
 from s2h_viewer.motions.gestures import GESTURES
 from s2h_viewer.semantics.anatomy import anatomical_loss, violation_rate
-from s2h_viewer.semantics.asm import SELF_CELLS, asm_columns, distance_matrix, palm_unit, semantic_matrix
+from s2h_viewer.semantics.asm import (BLOCK_FRAMES, SELF_CELLS, asm_columns, distance_matrix, palm_unit,
+                                      semantic_matrix)
 from s2h_viewer.semantics.contacts import contact_precision_recall, detect_contacts, pair_index
 from s2h_viewer.semantics.metrics import palm_and_finger_scores, score_retarget
 from s2h_viewer.semantics.reference import asm_sequence
@@ -55,6 +56,26 @@ def test_asm_values_and_gradients_equal_the_plain_formulation(sample_hands, rng,
         for got, want in zip(grads_fast, grads_plain):
             assert want.abs().max() > 0
             torch.testing.assert_close(got, want, **tol)
+
+
+def test_a_clip_longer_than_a_block_has_the_plain_values_and_gradients(sample_hands, rng):
+    """Past `BLOCK_FRAMES` the ASM goes block by block: into one output with a reused factor without
+    autograd, blocks joined with it. Both must be the plain formulation, the last short block included."""
+    n_frames = 2 * BLOCK_FRAMES + 37
+    hand = sample_hands["kale"]
+    q = random_tbs_motion(n_frames, rng, max_deg=90.0).float()
+    with torch.no_grad():
+        pose = forward_kinematics(hand, q)
+        torch.testing.assert_close(semantic_matrix(pose), plain_semantic_matrix(pose), rtol=1e-4, atol=1e-5)
+    q.requires_grad_()
+    pose = forward_kinematics(hand, q)
+    weights = torch.randn(n_frames, 20, 29, 3, generator=rng, dtype=torch.float64).float()
+    fast, plain = semantic_matrix(pose), plain_semantic_matrix(pose)
+    assert fast.requires_grad
+    torch.testing.assert_close(fast, plain, rtol=1e-4, atol=1e-5)
+    got, = torch.autograd.grad((fast * weights).sum(), q, retain_graph=True)
+    want, = torch.autograd.grad((plain * weights).sum(), q)
+    torch.testing.assert_close(got, want, rtol=1e-4, atol=1e-4)
 
 
 def test_asm_gradient_matches_finite_differences(sample_hands, rng):
