@@ -68,6 +68,26 @@ def semantic_matrix(pose: HandPose) -> torch.Tensor:
     return out
 
 
+def semantic_matrix_by_axis(pose: HandPose) -> torch.Tensor:
+    """`semantic_matrix` with the 3 components first, (T, 3, 20, 29): the same numbers laid out for losses
+    that reduce over the components (ASM-Opt's L_sem), which then run over rows of 580 cells, not triples.
+
+    One (20 x 4) @ (4 x 29) product per frame and component: ``D[a, k, m] = [M_k / u, -x_k^T M_k / u][k, b, a]
+    [x_m, 1][m, b]``."""
+    n_frames = pose.positions.shape[0]
+    columns = torch.cat([asm_columns(pose), pose.positions.new_ones(n_frames, topo.N_ASM_COLUMNS, 1)], -1)
+    d = _seen_from(pose).permute(0, 3, 1, 2) @ columns.transpose(1, 2)[:, None]
+    d.diagonal(dim1=2, dim2=3).zero_()  # rounding leaves ~1e-8 at m == k in float32
+    return d
+
+
+def _seen_from(pose: HandPose) -> torch.Tensor:
+    """(T, 20, 4, 3) ``[M_k / u, -x_k^T M_k / u][k, b, a]``: what turns ``[x_m, 1]`` into ``D[k, m, a]``."""
+    x = pose.finger_positions
+    scaled = pose.finger_frames / palm_unit(pose)[:, :, None, None]
+    return torch.cat([scaled, -(x[:, :, None, :] @ scaled)], 2)
+
+
 def _spread(like: torch.Tensor, n_frames: int) -> torch.Tensor:
     """(T, 29, 3, 4, 3) ``[x_m, 1][m, b] I[c, a]`` at ``[m, a, b, c]``, the ones set and ``x_m`` left zero."""
     spread = like.new_zeros(n_frames, topo.N_ASM_COLUMNS, 3, 4, 3)
@@ -81,10 +101,9 @@ def _semantic_block(positions: torch.Tensor, frames: torch.Tensor, spread: torch
 
     The factor ``[x_m, 1][m, b] I[c, a]`` is stored as ``[(m, a), (b, c)]`` and handed to the product
     transposed: MKL's batched product is faster that way round here."""
-    pose, n_frames, x = HandPose(positions, frames), len(positions), positions[:, 1:]
-    scaled = frames[:, 1:] / palm_unit(pose)[:, :, None, None]  # M_k / u: [k, b, a]
-    rows = torch.cat([scaled, -(x[:, :, None, :] @ scaled)], 2).view(n_frames, topo.N_FINGER_JOINTS, 12)
-    spread = _spread(x, n_frames) if spread is None else spread[:n_frames]
+    pose, n_frames = HandPose(positions, frames), len(positions)
+    rows = _seen_from(pose).view(n_frames, topo.N_FINGER_JOINTS, 12)
+    spread = _spread(positions, n_frames) if spread is None else spread[:n_frames]
     points = asm_columns(pose)
     for a in range(3):
         spread[:, :, a, :3, a] = points
