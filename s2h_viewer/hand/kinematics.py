@@ -128,7 +128,7 @@ def forward_kinematics(hand: HandModel, q_tbs: torch.Tensor | np.ndarray) -> Han
     quaternions (``g_j = g_p * l_j * r_j``). The work runs with the frames last (``(joint, 4, T)``), so
     every kernel is a small matrix times long contiguous rows: one product per joint turns the
     quaternion's outer product ``g g^T`` into its frame and its child's bone vector at once. The
-    rotations are transposed in once and the result out once (blocked 2-D transposes).
+    rotations are transposed in once and the result out once.
     Differentiable in ``q_tbs``; dtype follows ``q_tbs`` (float32 for numpy input).
     """
     q = _as_tensor(q_tbs, torch.float32)
@@ -136,7 +136,7 @@ def forward_kinematics(hand: HandModel, q_tbs: torch.Tensor | np.ndarray) -> Han
         raise ValueError(f"q_tbs must have shape (T, 15, 4), got {tuple(q.shape)}")
     n_frames = q.shape[0]
     chain = _chain(hand, q.dtype)
-    rot = q.reshape(n_frames, 4 * topo.N_ARTICULATED).t().contiguous().view(topo.N_ARTICULATED, 4, n_frames)
+    rot = q.permute(1, 2, 0).contiguous()  # (joint, 4, T)
     rot = rot / (rot * rot).sum(1, keepdim=True).sqrt().clamp_min(1e-12)
     local = torch.bmm(chain.left_products, rot).view(5, 3, 4, n_frames)  # l_j * r_j: (finger, level, 4, T)
     turns = [local[:, 0]]
@@ -156,8 +156,8 @@ def forward_kinematics(hand: HandModel, q_tbs: torch.Tensor | np.ndarray) -> Han
     by_finger = positions[1:].view(5, 4, 3, n_frames)
     by_finger[:, 0] = chain.first
     by_finger[:, 1:] = chain.first[:, None] + frame_bone[:, :, 9:].cumsum(1)  # x_j = x_p + M_p offset_j
-    return HandPose(positions=positions.view(-1, n_frames).t().contiguous().view(n_frames, topo.N_JOINTS, 3),
-                    frames=frames.view(-1, n_frames).t().contiguous().view(n_frames, topo.N_JOINTS, 3, 3))
+    return HandPose(positions=positions.permute(2, 0, 1).contiguous(),
+                    frames=frames.permute(2, 0, 1).contiguous().view(n_frames, topo.N_JOINTS, 3, 3))
 
 
 def _tbs_in_parent_rig_frame(hand: HandModel, dtype: torch.dtype) -> torch.Tensor:
