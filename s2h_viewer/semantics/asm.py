@@ -85,7 +85,9 @@ def _seen_from(pose: HandPose) -> torch.Tensor:
     """(T, 20, 4, 3) ``[M_k / u, -x_k^T M_k / u][k, b, a]``: what turns ``[x_m, 1]`` into ``D[k, m, a]``."""
     x = pose.finger_positions
     scaled = pose.finger_frames / palm_unit(pose)[:, :, None, None]
-    return torch.cat([scaled, -(x[:, :, None, :] @ scaled)], 2)
+    shift = (x[..., 0, None] * scaled[:, :, 0]).addcmul(x[..., 1, None], scaled[:, :, 1])  # x_k^T M_k / u,
+    shift = shift.addcmul(x[..., 2, None], scaled[:, :, 2])  # a term a row: faster than 20 T (1x3)@(3x3)
+    return torch.cat([scaled, -shift[:, :, None]], 2)
 
 
 def _spread(like: torch.Tensor, n_frames: int) -> torch.Tensor:
