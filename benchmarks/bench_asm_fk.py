@@ -4,7 +4,8 @@
 
 Prints frames/s of each and their ratio (target: batched >= 50x the loop), plus the skinning
 cost per frame that the viewer pays, against a per-joint accumulation loop. Timings are medians
-of several repeats; nothing here is asserted, so CI never depends on machine speed.
+of several repeats; nothing here is asserted, so CI never depends on machine speed. Large tensors
+go on huge pages as in the app (`s2h_viewer/__init__.py`); ``THP_MEM_ALLOC_ENABLE=0`` measures 4 kB pages.
 """
 
 from __future__ import annotations
@@ -14,6 +15,8 @@ import os
 import platform
 import statistics
 import time
+
+import s2h_viewer  # noqa: F401  first: it sets how torch allocates large tensors, before torch is imported
 
 import numpy as np
 import torch
@@ -61,7 +64,8 @@ def main() -> None:
     q = np.resize(clips, (args.frames, 15, 4)).astype(np.float32)
     q32 = torch.as_tensor(q)
     print(f"machine: {platform.processor() or platform.machine()}, torch {torch.__version__}, "
-          f"{torch.get_num_threads()} threads (OMP_NUM_THREADS={os.environ.get('OMP_NUM_THREADS', 'unset')}); "
+          f"{torch.get_num_threads()} threads (OMP_NUM_THREADS={os.environ.get('OMP_NUM_THREADS', 'unset')}, "
+          f"THP_MEM_ALLOC_ENABLE={os.environ.get('THP_MEM_ALLOC_ENABLE')}); "
           f"hand {hand.name}, {args.frames} frames; load average {os.getloadavg()[0]:.2f} on {os.cpu_count()} CPUs")
 
     def batched():

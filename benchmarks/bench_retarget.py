@@ -12,6 +12,8 @@ import argparse
 import os
 import time
 
+import s2h_viewer  # noqa: F401  first: it sets how torch allocates large tensors, before torch is imported
+
 import numpy as np
 import torch
 

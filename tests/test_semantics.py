@@ -16,11 +16,12 @@ from s2h_viewer.hand.rotations import tbs_euler_to_quat
 from s2h_viewer.motions.fitting import fit_gesture_angles
 from s2h_viewer.motions.gestures import GESTURES
 from s2h_viewer.semantics.anatomy import anatomical_loss, violation_rate
-from s2h_viewer.semantics.asm import SELF_CELLS, asm_columns, distance_matrix, palm_unit, semantic_matrix
+from s2h_viewer.semantics.asm import (BLOCK_FRAMES, SELF_CELLS, asm_columns, distance_matrix, palm_unit,
+                                      semantic_matrix, semantic_matrix_by_axis)
 from s2h_viewer.semantics.contacts import contact_precision_recall, detect_contacts, pair_index
 from s2h_viewer.semantics.metrics import palm_and_finger_scores, score_retarget
 from s2h_viewer.semantics.reference import asm_sequence
-from s2h_viewer.semantics.similarity import masked_cosine, semantic_similarity, semantic_weights
+from s2h_viewer.semantics.similarity import SourceSemantics, masked_cosine, semantic_similarity, semantic_weights
 
 
 def test_batched_asm_equals_the_per_frame_reference(skeleton_hands, rng):
@@ -55,6 +56,26 @@ def test_asm_values_and_gradients_equal_the_plain_formulation(sample_hands, rng,
         for got, want in zip(grads_fast, grads_plain):
             assert want.abs().max() > 0
             torch.testing.assert_close(got, want, **tol)
+
+
+def test_a_clip_longer_than_a_block_has_the_plain_values_and_gradients(sample_hands, rng):
+    """Past `BLOCK_FRAMES` the ASM goes block by block: into one output with a reused factor without
+    autograd, blocks joined with it. Both must be the plain formulation, the last short block included."""
+    n_frames = 2 * BLOCK_FRAMES + 37
+    hand = sample_hands["kale"]
+    q = random_tbs_motion(n_frames, rng, max_deg=90.0).float()
+    with torch.no_grad():
+        pose = forward_kinematics(hand, q)
+        torch.testing.assert_close(semantic_matrix(pose), plain_semantic_matrix(pose), rtol=1e-4, atol=1e-5)
+    q.requires_grad_()
+    pose = forward_kinematics(hand, q)
+    weights = torch.randn(n_frames, 20, 29, 3, generator=rng, dtype=torch.float64).float()
+    fast, plain = semantic_matrix(pose), plain_semantic_matrix(pose)
+    assert fast.requires_grad
+    torch.testing.assert_close(fast, plain, rtol=1e-4, atol=1e-5)
+    got, = torch.autograd.grad((fast * weights).sum(), q, retain_graph=True)
+    want, = torch.autograd.grad((plain * weights).sum(), q)
+    torch.testing.assert_close(got, want, rtol=1e-4, atol=1e-4)
 
 
 def test_asm_gradient_matches_finite_differences(sample_hands, rng):
@@ -118,6 +139,40 @@ def test_float32_asm_has_an_exact_zero_diagonal_and_finite_gradients(sample_hand
     loss = -semantic_similarity(source, d)
     loss.backward()
     assert torch.isfinite(q.grad).all() and q.grad.abs().max() < 1e3
+
+
+@pytest.mark.parametrize("dtype", [torch.float64, torch.float32])
+def test_components_first_asm_and_l_sem_equal_the_plain_ones_with_finite_gradients(sample_hands, rng, dtype):
+    """ASM-Opt takes the ASM components first and L_sem on that layout: the same numbers, the same
+    gradients, none of them NaN where a cell is zero (the diagonal; and a coincident pair of points)."""
+    tol = dict(rtol=1e-10, atol=1e-12) if dtype == torch.float64 else dict(rtol=1e-4, atol=1e-6)
+    source = SourceSemantics.of(semantic_matrix(forward_kinematics(sample_hands["birch"],
+                                                                   random_tbs_motion(9, rng).to(dtype))))
+    q = random_tbs_motion(9, rng, max_deg=90.0).to(dtype).requires_grad_()
+    pose = forward_kinematics(sample_hands["laurel"], q)
+    if dtype == torch.float64:  # float32's product leaves rounding (1e-8) where two joints meet, not 0
+        pose.positions[4, 7] = pose.positions[4, 6]  # a zero cell off the diagonal: joints 5 and 6 meet
+    by_axis, plain = semantic_matrix_by_axis(pose), plain_semantic_matrix(pose)
+    torch.testing.assert_close(by_axis, plain.movedim(-1, -3), **tol)
+    assert torch.all(by_axis[:, :, range(20), range(20)] == 0)
+    if dtype == torch.float64:
+        assert by_axis[4, :, 5, 6].abs().max() < 1e-15 and plain[4, 5, 6].abs().max() == 0
+    fast, want = source.similarity_by_axis(by_axis), semantic_similarity_plain(source, plain)
+    torch.testing.assert_close(fast, want, **tol)
+    got, = torch.autograd.grad(fast, q, retain_graph=True)
+    expected, = torch.autograd.grad(want, q)
+    assert torch.isfinite(got).all() and expected.abs().max() > 0
+    torch.testing.assert_close(got, expected, **tol)
+
+
+def semantic_similarity_plain(source: SourceSemantics, d_target: torch.Tensor) -> torch.Tensor:
+    """L_sem as DESIGN.md section 5 writes it, from the source's directions and weights: the weighted
+    mean over cells valid on both sides of ``cos(D_A, D_B)``, averaged over frames."""
+    directions = source.directions.movedim(-3, -1)
+    norm = d_target.norm(dim=-1)
+    weights = source.weights * (norm > 1e-9)
+    cos = (directions * d_target).sum(-1) / norm.clamp_min(1e-9)
+    return ((weights * cos).sum((-1, -2)) / weights.sum((-1, -2))).mean()
 
 
 def test_weights_favour_the_nearest_joints(skeleton_hands):

@@ -82,12 +82,12 @@ _QUAT_MATRIX = _quat_matrix_table()
 
 @dataclass(frozen=True)
 class _Chain:
-    """A hand's FK constants in one dtype, laid out with the frame axis last (see `forward_kinematics`)."""
+    """A hand's FK constants in one dtype, batched over the 15 (finger, level) joints (see `forward_kinematics`)."""
 
-    left_products: torch.Tensor  # (3 levels, 4, 4, 5 fingers): ``C_p^T C_j`` as a quaternion's product matrix
-    offsets: torch.Tensor  # (4 levels, 3, 5 fingers): each joint's offset in its parent's TBS rest frame
+    left_products: torch.Tensor  # (15, 4, 4): ``C_p^T C_j`` as a quaternion's left-product matrix
+    frame_and_bone: torch.Tensor  # (15, 12, 16): ``outer(g, g)`` -> the frame ``R(g)`` (9) and ``R(g) offset`` (3)
+    first: torch.Tensor  # (5, 3, 1): each finger's first joint (MCP/CMC) offset from the wrist
     quat_product: torch.Tensor  # (4, 16) `_quat_product_table`
-    quat_matrix: torch.Tensor  # (9, 16) `_quat_matrix_table`
 
 
 #: per hand: (the geometry the constants were made from, {dtype: _Chain}); a re-annotated hand is rebuilt
@@ -105,28 +105,30 @@ def _chain(hand: HandModel, dtype: torch.dtype) -> _Chain:
         parent_frames = np.concatenate([np.eye(3)[None], canonical])[topo.ARTICULATED_PARENT_ROTATING]
         local = Rotation.from_matrix(parent_frames.transpose(0, 2, 1) @ canonical).as_quat(scalar_first=True)
         left = np.einsum("ja,oab->job", local, _QUAT_PRODUCT.reshape(4, 4, 4))  # (l * r) = left @ r
-        offsets = hand.offsets[1:].reshape(5, 4, 3).copy()
-        offsets[:, 1:] = np.einsum("flba,flb->fla", hand.rest_frames.reshape(5, 3, 3, 3), offsets[:, 1:])
-        cached[1][dtype] = _Chain(
-            *(torch.as_tensor(np.ascontiguousarray(a), dtype=dtype) for a in (
-                left.reshape(5, 3, 4, 4).transpose(1, 2, 3, 0), offsets.transpose(1, 2, 0), _QUAT_PRODUCT,
-                _QUAT_MATRIX)))
+        offsets = hand.offsets[1:].reshape(5, 4, 3).copy()  # (finger, level, 3)
+        # each child's offset in its parent's TBS rest frame, so that x_child = x_parent + M_parent @ offset
+        children = np.einsum("flba,flb->fla", hand.rest_frames.reshape(5, 3, 3, 3), offsets[:, 1:])
+        matrix = _QUAT_MATRIX.reshape(3, 3, 16)
+        bone = np.einsum("abp,flb->flap", matrix, children).reshape(15, 3, 16)
+        frame_and_bone = np.concatenate([np.broadcast_to(_QUAT_MATRIX, (15, 9, 16)), bone], 1)
+        cached[1][dtype] = _Chain(*(torch.as_tensor(np.ascontiguousarray(a), dtype=dtype) for a in (
+            left, frame_and_bone, offsets[:, 0, :, None], _QUAT_PRODUCT)))
     return cached[1][dtype]
 
 
-def _outer_map(table: torch.Tensor, a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
-    """``table @ outer(a, b)`` over (4, ...) component-first tensors -> (len(table), ...)."""
-    outer = (a[:, None] * b[None, :]).reshape(16, -1)
-    return (table @ outer).reshape(len(table), *a.shape[1:])
+def _quat_products(table: torch.Tensor, a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
+    """Hamilton products ``a * b`` of (..., 4, T) component-first quaternions, as ``table @ outer(a, b)``."""
+    return table @ (a[..., :, None, :] * b[..., None, :, :]).flatten(-3, -2)
 
 
 def forward_kinematics(hand: HandModel, q_tbs: torch.Tensor | np.ndarray) -> HandPose:
     """(T, 15, 4) TBS quaternions (w, x, y, z) -> joint positions and global TBS frames.
 
-    Vectorised over frames and fingers; loops only over the levels of a finger chain, composing
-    quaternions (``g_j = g_p * l_j * r_j``) and making matrices once. The work is laid out component
-    first with the frames last (``(4, level, finger, T)``), so every kernel runs over long contiguous
-    rows, not over trailing axes of 3 or 4; the result is transposed into `HandPose`'s layout once.
+    Vectorised over frames and joints; loops only over the levels of a finger chain, composing
+    quaternions (``g_j = g_p * l_j * r_j``). The work runs with the frames last (``(joint, 4, T)``), so
+    every kernel is a small matrix times long contiguous rows: one product per joint turns the
+    quaternion's outer product ``g g^T`` into its frame and its child's bone vector at once. The
+    rotations are transposed in once and the result out once.
     Differentiable in ``q_tbs``; dtype follows ``q_tbs`` (float32 for numpy input).
     """
     q = _as_tensor(q_tbs, torch.float32)
@@ -134,27 +136,28 @@ def forward_kinematics(hand: HandModel, q_tbs: torch.Tensor | np.ndarray) -> Han
         raise ValueError(f"q_tbs must have shape (T, 15, 4), got {tuple(q.shape)}")
     n_frames = q.shape[0]
     chain = _chain(hand, q.dtype)
-    q = q / q.norm(dim=-1, keepdim=True).clamp_min(1e-12)
-    rot = q.reshape(n_frames, 5, 3, 4).permute(2, 3, 1, 0)  # (level, 4, finger, T)
-    local = (chain.left_products[..., None] * rot[:, None]).sum(2)  # l_j * r_j: (level, 4, finger, T)
-    turns = [local[0]]
+    rot = q.permute(1, 2, 0).contiguous()  # (joint, 4, T)
+    rot = rot / (rot * rot).sum(1, keepdim=True).sqrt().clamp_min(1e-12)
+    local = torch.bmm(chain.left_products, rot).view(5, 3, 4, n_frames)  # l_j * r_j: (finger, level, 4, T)
+    turns = [local[:, 0]]
     for level in (1, 2):
-        turns.append(_outer_map(chain.quat_product, turns[-1], local[level]))
-    turn = torch.stack(turns, 1)  # (4, level, finger, T)
-    frames = _outer_map(chain.quat_matrix, turn, turn).reshape(3, 3, 3, 5, n_frames)  # (a, b, level, finger, T)
-    bones = (frames * chain.offsets[1:].transpose(0, 1)[..., None]).sum(1)  # M_p offset_j: (3, level, finger, T)
-    first = chain.offsets[0][:, None, :, None]
-    chain_positions = torch.cat([first.expand(3, 1, 5, n_frames), first + bones.cumsum(1)], 1)
+        turns.append(_quat_products(chain.quat_product, turns[-1], local[:, level]))
+    turn = torch.stack(turns, 1).view(topo.N_ARTICULATED, 4, n_frames)  # g_j: (joint, 4, T)
+    outer = (turn[:, :, None] * turn[:, None]).view(topo.N_ARTICULATED, 16, n_frames)
+    frame_bone = torch.bmm(chain.frame_and_bone, outer).view(5, 3, 12, n_frames)  # (finger, level, 9 + 3, T)
 
-    positions = q.new_zeros(n_frames, topo.N_JOINTS, 3)
-    positions[:, 1:] = chain_positions.permute(3, 2, 1, 0).reshape(n_frames, topo.N_FINGER_JOINTS, 3)
-    out_frames = q.new_empty(n_frames, topo.N_JOINTS, 3, 3)
-    out_frames[:, 0] = torch.eye(3, dtype=q.dtype)
-    by_finger = out_frames[:, 1:].view(n_frames, 5, 4, 3, 3)
-    by_level = frames.permute(4, 3, 2, 0, 1)  # (T, finger, level, 3, 3)
-    by_finger[:, :, :3] = by_level
-    by_finger[:, :, 3] = by_level[:, :, 2]  # a tip takes its parent's frame
-    return HandPose(positions=positions, frames=out_frames)
+    frames = q.new_empty(topo.N_JOINTS, 9, n_frames)  # every joint's frame, frames last, then transposed once
+    frames[0] = torch.eye(3, dtype=q.dtype).view(9, 1)
+    by_finger = frames[1:].view(5, 4, 9, n_frames)
+    by_finger[:, :3] = frame_bone[:, :, :9]
+    by_finger[:, 3] = frame_bone[:, 2, :9]  # a tip takes its parent's frame
+    positions = q.new_empty(topo.N_JOINTS, 3, n_frames)
+    positions[0] = 0.0
+    by_finger = positions[1:].view(5, 4, 3, n_frames)
+    by_finger[:, 0] = chain.first
+    by_finger[:, 1:] = chain.first[:, None] + frame_bone[:, :, 9:].cumsum(1)  # x_j = x_p + M_p offset_j
+    return HandPose(positions=positions.permute(2, 0, 1).contiguous(),
+                    frames=frames.permute(2, 0, 1).contiguous().view(n_frames, topo.N_JOINTS, 3, 3))
 
 
 def _tbs_in_parent_rig_frame(hand: HandModel, dtype: torch.dtype) -> torch.Tensor:

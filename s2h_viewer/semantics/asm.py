@@ -20,6 +20,8 @@ ANCHORS: tuple[tuple[int, float], ...] = tuple(
 _ANCHOR_JOINTS = [j for j, _ in ANCHORS]
 _ANCHOR_FRACTIONS = [f for _, f in ANCHORS]
 _MIDDLE_MCP = topo.joint_index("middle_mcp")
+#: frames per block of `semantic_matrix`: a block's (12 x 87) factors, 4 kB a frame, stay in cache
+BLOCK_FRAMES = 512
 #: (20, 29) True at the cells m == k (a joint seen from itself): zero by definition, masked everywhere.
 SELF_CELLS = torch.cat([torch.eye(topo.N_FINGER_JOINTS, dtype=torch.bool),
                         torch.zeros(topo.N_FINGER_JOINTS, topo.N_ANCHORS, dtype=torch.bool)], 1)
@@ -50,18 +52,69 @@ def semantic_matrix(pose: HandPose) -> torch.Tensor:
     One batched product per frame writes the result in its final layout, once:
     ``D[k, (m, a)] = sum_(b, c) [M_k / u, -x_k^T M_k / u][k, (b, c)] * ([x_m, 1][m, b] I[c, a])``, a
     (20 x 12) @ (12 x 87) product. The unit division, the shift and the layout are folded into the small
-    (20 x 12) factor, so the big output is never divided, masked or transposed afterwards.
+    (20 x 12) factor, so the big output is never divided, masked or transposed afterwards. Long clips go
+    `BLOCK_FRAMES` frames at a time, so the factors stay in cache and only the output goes to memory.
     """
-    x, frames = pose.finger_positions, pose.finger_frames
-    n_frames = x.shape[0]
-    scaled = frames / palm_unit(pose)[:, :, None, None]
-    rows = torch.cat([scaled.reshape(n_frames, topo.N_FINGER_JOINTS, 9),
-                      -(x[..., :, None] * scaled).sum(-2)], -1)
-    columns = torch.cat([asm_columns(pose), x.new_ones(n_frames, topo.N_ASM_COLUMNS, 1)], -1)
-    spread = x.new_zeros(n_frames, 4, 3, topo.N_ASM_COLUMNS, 3)  # [x_m, 1][m, b] I[c, a] at [b, c, m, a]
-    spread.diagonal(dim1=2, dim2=4).copy_(columns.transpose(1, 2)[..., None])
-    d = torch.bmm(rows, spread.view(n_frames, 12, 3 * topo.N_ASM_COLUMNS))
-    d = d.view(n_frames, topo.N_FINGER_JOINTS, topo.N_ASM_COLUMNS, 3)
+    positions, frames, n_frames = pose.positions, pose.frames, pose.positions.shape[0]
+    if n_frames <= BLOCK_FRAMES:
+        return _semantic_block(positions, frames)
+    blocks = [slice(s, s + BLOCK_FRAMES) for s in range(0, n_frames, BLOCK_FRAMES)]
+    if torch.is_grad_enabled() and (positions.requires_grad or frames.requires_grad):
+        return torch.cat([_semantic_block(positions[b], frames[b]) for b in blocks])
+    out = positions.new_empty(n_frames, topo.N_FINGER_JOINTS, topo.N_ASM_COLUMNS, 3)
+    spread = _spread(positions, BLOCK_FRAMES)  # its zeros and ones written once, for every block
+    for b in blocks:
+        _semantic_block(positions[b], frames[b], spread, out[b])
+    return out
+
+
+def semantic_matrix_by_axis(pose: HandPose) -> torch.Tensor:
+    """`semantic_matrix` with the 3 components first, (T, 3, 20, 29): the same numbers laid out for losses
+    that reduce over the components (ASM-Opt's L_sem), which then run over rows of 580 cells, not triples.
+
+    One (20 x 4) @ (4 x 29) product per frame and component: ``D[a, k, m] = [M_k / u, -x_k^T M_k / u][k, b, a]
+    [x_m, 1][m, b]``."""
+    n_frames = pose.positions.shape[0]
+    columns = torch.cat([asm_columns(pose), pose.positions.new_ones(n_frames, topo.N_ASM_COLUMNS, 1)], -1)
+    d = _seen_from(pose).permute(0, 3, 1, 2) @ columns.transpose(1, 2)[:, None]
+    d.diagonal(dim1=2, dim2=3).zero_()  # rounding leaves ~1e-8 at m == k in float32
+    return d
+
+
+def _seen_from(pose: HandPose) -> torch.Tensor:
+    """(T, 20, 4, 3) ``[M_k / u, -x_k^T M_k / u][k, b, a]``: what turns ``[x_m, 1]`` into ``D[k, m, a]``."""
+    x = pose.finger_positions
+    scaled = pose.finger_frames / palm_unit(pose)[:, :, None, None]
+    shift = (x[..., 0, None] * scaled[:, :, 0]).addcmul(x[..., 1, None], scaled[:, :, 1])  # x_k^T M_k / u,
+    shift = shift.addcmul(x[..., 2, None], scaled[:, :, 2])  # a term a row: faster than 20 T (1x3)@(3x3)
+    return torch.cat([scaled, -shift[:, :, None]], 2)
+
+
+def _spread(like: torch.Tensor, n_frames: int) -> torch.Tensor:
+    """(T, 29, 3, 4, 3) ``[x_m, 1][m, b] I[c, a]`` at ``[m, a, b, c]``, the ones set and ``x_m`` left zero."""
+    spread = like.new_zeros(n_frames, topo.N_ASM_COLUMNS, 3, 4, 3)
+    spread.diagonal(dim1=2, dim2=4)[:, :, 3] = 1.0
+    return spread
+
+
+def _semantic_block(positions: torch.Tensor, frames: torch.Tensor, spread: torch.Tensor | None = None,
+                    out: torch.Tensor | None = None) -> torch.Tensor:
+    """`semantic_matrix` of one block of frames; into ``out`` (no autograd) with a `_spread` reused.
+
+    The factor ``[x_m, 1][m, b] I[c, a]`` is stored as ``[(m, a), (b, c)]`` and handed to the product
+    transposed: MKL's batched product is faster that way round here."""
+    pose, n_frames = HandPose(positions, frames), len(positions)
+    rows = _seen_from(pose).view(n_frames, topo.N_FINGER_JOINTS, 12)
+    spread = _spread(positions, n_frames) if spread is None else spread[:n_frames]
+    points = asm_columns(pose)
+    for a in range(3):
+        spread[:, :, a, :3, a] = points
+    product = spread.view(n_frames, 3 * topo.N_ASM_COLUMNS, 12).transpose(1, 2)
+    if out is None:
+        d = torch.bmm(rows, product).view(n_frames, topo.N_FINGER_JOINTS, topo.N_ASM_COLUMNS, 3)
+    else:
+        d = out
+        torch.bmm(rows, product, out=out.view(n_frames, topo.N_FINGER_JOINTS, 3 * topo.N_ASM_COLUMNS))
     d.diagonal(dim1=1, dim2=2).zero_()  # rounding leaves ~1e-8 at m == k in float32
     return d
 
