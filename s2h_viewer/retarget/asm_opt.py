@@ -14,8 +14,6 @@ cross-faded at the seams (`retarget.windows`). No training.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from contextlib import contextmanager
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,6 +25,7 @@ from s2h_viewer.hand.motion import Motion
 from s2h_viewer.hand.rotations import quat_to_tbs_euler, tbs_euler_to_quat
 from s2h_viewer.retarget.methods import on_target, register
 from s2h_viewer.retarget.progress import report
+from s2h_viewer.retarget.threads import torch_threads
 from s2h_viewer.retarget.windows import stream_windows
 from s2h_viewer.semantics.anatomy import angle_excess, clamp_bends
 from s2h_viewer.semantics.asm import semantic_matrix, semantic_matrix_by_axis
@@ -103,23 +102,11 @@ def optimise_asm(source_q: np.ndarray, source_hand: HandModel, target_hand: Hand
     return out
 
 
-@contextmanager
-def _threads(n: int) -> Iterator[None]:
-    """Run torch on ``n`` threads, then restore: small batches gain nothing from a second thread, and
-    threads that spin waiting for each other are many times slower on a busy machine."""
-    before = torch.get_num_threads()
-    torch.set_num_threads(n)
-    try:
-        yield
-    finally:
-        torch.set_num_threads(before)
-
-
 def _optimise_chunk(source_q: np.ndarray, source_hand: HandModel, target_hand: HandModel, initial_q: np.ndarray,
                     config: AsmOptConfig) -> np.ndarray:
     """(T, 15, 3) optimised TBS Euler angles of one chunk, warm-started from ``initial_q``; batched over
     its keyframes."""
-    with _threads(1):
+    with torch_threads(1):
         return _optimise_keyframes(source_q, source_hand, target_hand, initial_q, config)
 
 
