@@ -22,12 +22,12 @@ from s2h_viewer.io.bvh import load_bvh, save_bvh
 from s2h_viewer.io.fbx import load_fbx_hand, load_fbx_motion
 from s2h_viewer.io.files import load_hand_file, load_motion_file, save_motion_file
 from s2h_viewer.io.gltf import load_gltf_hand, load_gltf_motion, save_gltf_motion
-from s2h_viewer.hand.motion import Motion
-from s2h_viewer.hand.rotations import quat_multiply
+from s2h_viewer.hand.rotations import quat_to_tbs_euler
 from s2h_viewer.io.npz import load_hand, load_motion
 from s2h_viewer.motions.synthesis import synthesize
 from s2h_viewer.retarget import retarget
 from s2h_viewer.samples import ASSETS_DIR
+from s2h_viewer.semantics.anatomy import violation_rate
 
 WEBXR = ASSETS_DIR / "hands" / "webxr"
 FBX = ASSETS_DIR / "hands" / "fbx"
@@ -117,15 +117,8 @@ def test_npz_and_files_dispatch_round_trip(sample_hands, motion_on_birch, tmp_pa
 #: the FBX sample rig was made (scripts/make_fbx_samples.py) from test hand kale as generated before the
 #: procedural family was widened, and its take baked from the counting clip of then, whose TBS rotations
 #: were measured from the rest pose (motion schema 1): both kept here as they were
-FBX_SOURCE = Path(__file__).parent / "fixtures" / "fbx_source"
-
-
-def fbx_source_kale():
-    return load_hand(FBX_SOURCE / "kale.npz")
-
-
 def test_fbx_mixamo_rig_matches_the_hand_it_was_made_from():
-    kale = fbx_source_kale()
+    kale = load_hand(ASSETS_DIR / "hands" / "kale.npz")
     hand = load_fbx_hand(FBX / "mixamo_right_hand.fbx")
     assert hand.meta["rig_scheme"] == "mixamo" and hand.mesh is not None
     np.testing.assert_allclose(hand.rest_positions @ hand.palm_frame, kale.rest_positions @ kale.palm_frame,
@@ -134,16 +127,34 @@ def test_fbx_mixamo_rig_matches_the_hand_it_was_made_from():
 
 
 def test_fbx_take_is_the_counting_motion_it_was_baked_from():
-    kale = fbx_source_kale()
-    # rotations from the rest pose, as schema 1 stored them: from the canonical pose, R_rest R
-    rest_relative = torch.as_tensor(np.load(FBX_SOURCE / "counting_rest_relative.npy"), dtype=torch.float64)
-    q = quat_multiply(torch.as_tensor(kale.rest_tbs).expand_as(rest_relative), rest_relative)
-    expected = Motion(q_tbs=q.numpy(), fps=30.0)
+    """The take is counting.npz TBS-copied onto kale (scripts/make_fbx_samples.py): read back, it is that
+    performance, its bends within 2 deg (the solver's frames are not kale's exact ones)."""
+    kale = load_hand(ASSETS_DIR / "hands" / "kale.npz")
+    counting = load_motion(ASSETS_DIR / "motions" / "counting.npz")
     hand = load_fbx_hand(FBX / "mixamo_right_hand.fbx")
     motion = load_fbx_motion(FBX / "mixamo_right_hand.fbx", hand)
-    assert motion.n_frames == expected.n_frames and motion.fps == expected.fps
-    error = np.abs(positions(hand, motion) - positions(kale, expected))
+    assert motion.n_frames == counting.n_frames and motion.fps == counting.fps
+    error = np.abs(positions(hand, motion) - positions(kale, counting))
     assert error.mean() < 1e-4 and error.max() < 2e-3  # Blender's baked keys, within 2 mm
+    bend = torch.as_tensor(np.stack([motion.q_tbs, counting.q_tbs]), dtype=torch.float64)
+    bend = torch.rad2deg(quat_to_tbs_euler(bend)[..., 1])
+    assert (bend[0] - bend[1]).abs().max() < 2.0
+
+
+def test_fbx_take_keeps_the_source_within_the_anatomical_limits():
+    """A correct conversion of the counting take reads it within the limits: with kale's own frames every
+    angle is within 5 deg of them (rate 0; the stale take made before the canonical pose, counting's angles
+    put on kale's 14 deg curled rest, read 0.27). With the ray solver's frames (1-4 deg off kale's), the
+    ring and pinky bends of 85-89 deg sit at the Euler gimbal (bend 90: twist and splay trade off), where
+    a 2 deg frame difference reads as +-20..60 deg of twist and splay that cancel: 0.23 here, the same as
+    the glTF export of this take (0.17-0.23), which is what TBS Copy then carries, unchanged."""
+    kale = load_hand(ASSETS_DIR / "hands" / "kale.npz")
+    hand = load_fbx_hand(FBX / "mixamo_right_hand.fbx")
+    hand.rest_frames = hand.palm_frame @ kale.palm_frame.T @ kale.rest_frames  # kale's frames in the rig's axes
+    motion = load_fbx_motion(FBX / "mixamo_right_hand.fbx", hand)
+    assert violation_rate(motion.q_tbs) <= 0.01
+    copied = retarget(motion, hand, load_hand(ASSETS_DIR / "hands" / "iris.npz"), "tbs_copy")
+    assert violation_rate(copied.q_tbs) == violation_rate(motion.q_tbs)
 
 
 @pytest.mark.parametrize("scheme,names,tips_missing", [
