@@ -18,6 +18,7 @@ if not os.environ.get("DISPLAY"):
 import imageio.v2 as imageio  # noqa: E402
 from PIL import Image  # noqa: E402
 from PySide6.QtCore import QPoint, Qt, QTimer  # noqa: E402
+from PySide6.QtTest import QTest  # noqa: E402
 from PySide6.QtWidgets import QPushButton  # noqa: E402
 
 from compare_window import open_compare_window  # noqa: E402
@@ -631,3 +632,61 @@ def test_a_png_asked_for_while_playing_is_the_frame_named(window, qtbot, tmp_pat
     assert not playing and frame_when_saved == frame and offered.endswith(f"_f{frame:04d}.png")
     assert written == tmp_path / Path(offered).name and written.exists()
     assert window.timeline.playing  # and it plays on
+
+
+def edit_menu_action(window, text: str):
+    edit_menu = next(a.menu() for a in window.menuBar().actions() if a.text() == "&Edit")
+    return next(a for a in edit_menu.actions() if a.text().startswith(text))
+
+
+def test_undo_in_compare_never_undoes_the_hidden_annotate_tab(window, qtbot):
+    window.activateWindow()
+    qtbot.waitActive(window)  # the keys below go to the window's shortcuts
+    window.annotate_file(str(ASSETS_DIR / "hands" / "webxr" / "generic-hand-right.glb"))
+    view = window.annotate_view
+    view.select(7)
+    view.turn_selected(30)  # a turn in the Annotate tab
+    turned = window.annotation.frames[7].copy()
+    assert edit_menu_action(window, "Undo").text().startswith("Undo turn")
+    window.tabs.setCurrentWidget(window.compare)
+    qtbot.wait(200)
+    undo = edit_menu_action(window, "Undo")
+    assert not undo.isEnabled() and undo.text() == "Undo"  # Compare has nothing to undo
+    QTest.keyClick(window, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
+    np.testing.assert_array_equal(window.annotation.frames[7], turned)
+    assert window.undo_stack.index() == 1
+    window.tabs.setCurrentWidget(window.annotate.view)
+    qtbot.wait(200)  # the tab's widgets settle before the key
+    QTest.keyClick(window, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)  # in Annotate it undoes the turn
+    assert window.undo_stack.index() == 0
+
+
+def test_removing_a_target_is_undone_with_its_results_not_recomputed(window, qtbot):
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.add_target_file(str(ASSETS_DIR / "hands" / "laurel.npz"))
+    iris_results = window.comparison.results[:2]
+    computed = len(window.compare.queue.computed)
+    with qtbot.waitSignal(window.comparison_ready, timeout=10_000):
+        window.targets_menu.actions()[0].trigger()  # Remove iris
+    assert edit_menu_action(window, "Undo").text() == "Undo remove iris"
+    window.activateWindow()
+    qtbot.waitActive(window)  # Ctrl+Z goes to the window's shortcuts
+    qtbot.wait(200)
+    with qtbot.waitSignal(window.comparison_ready, timeout=10_000):
+        QTest.keyClick(window, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
+    assert [r.target.name for r in window.comparison.results] == ["iris", "iris", "laurel", "laurel"]
+    assert all(a is b for a, b in zip(window.comparison.results, iris_results))  # the same results: not recomputed
+    assert len(window.compare.queue.computed) == computed
+    assert [a.text() for a in window.targets_menu.actions()] == ["Remove iris", "Remove laurel"]
+
+
+def test_reticking_a_method_takes_its_results_from_the_cache(window, qtbot):
+    asrn = window.comparison.results[1]
+    computed = len(window.compare.queue.computed)
+    with qtbot.waitSignal(window.comparison_ready, timeout=10_000):
+        window.method_actions["asrn"].trigger()  # untick
+    assert grid_methods(window) == ["tbs_copy"]
+    with qtbot.waitSignal(window.comparison_ready, timeout=10_000):
+        window.method_actions["asrn"].trigger()  # tick again
+    assert grid_methods(window) == ["tbs_copy", "asrn"] and window.comparison.results[1] is asrn
+    assert len(window.compare.queue.computed) == computed

@@ -8,7 +8,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from PySide6.QtCore import QSettings, Signal
-from PySide6.QtGui import QAction, QKeySequence
+from PySide6.QtGui import QAction, QKeySequence, QUndoGroup
 from PySide6.QtWidgets import QFileDialog, QMainWindow, QMessageBox, QTabWidget
 
 from s2h_viewer.app import exports
@@ -135,7 +135,18 @@ class MainWindow(QMainWindow):
         edit_menu = bar.addMenu("&Edit")
         annotate_menu = bar.addMenu("&Annotate")
         self._action(annotate_menu, "Open hand...", self.open_hand_to_annotate, "Ctrl+Shift+O")
-        self.annotate.fill_menus(edit_menu, annotate_menu)
+        self.annotate.fill_menu(annotate_menu)
+        # one undo stack per tab: Edit > Undo acts on the visible tab's work only
+        self.undo_group = QUndoGroup(self)
+        for stack in (self.compare.undo_stack, self.annotate.undo_stack):
+            self.undo_group.addStack(stack)
+        undo = self.undo_group.createUndoAction(edit_menu, "Undo")
+        undo.setShortcut(QKeySequence.StandardKey.Undo)
+        redo = self.undo_group.createRedoAction(edit_menu, "Redo")
+        redo.setShortcut(QKeySequence.StandardKey.Redo)
+        edit_menu.addActions([undo, redo])
+        self.tabs.currentChanged.connect(self._tab_changed)
+        self._tab_changed()
         methods_menu = bar.addMenu("&Methods")
         chosen = self.settings.value("compare/methods", self.setup.methods)
         chosen = [m for m in (chosen if isinstance(chosen, list) else [chosen]) if m in METHODS] or self.setup.methods
@@ -169,6 +180,11 @@ class MainWindow(QMainWindow):
         self._action(play, "Last frame", lambda: timeline.set_frame(timeline.n_frames - 1), "End")
         help_menu = bar.addMenu("&Help")
         self._action(help_menu, "Keyboard shortcuts", self.show_shortcuts, "F1")
+
+    def _tab_changed(self, *_) -> None:
+        """Undo and redo follow the visible tab."""
+        annotating = self.tabs.currentWidget() is self.annotate.view
+        self.undo_group.setActiveStack(self.annotate.undo_stack if annotating else self.compare.undo_stack)
 
     def shortcut_lines(self) -> list[str]:
         """'key: Menu > entry' for every menu action with a shortcut, read from the actions themselves (so the
