@@ -690,3 +690,25 @@ def test_reticking_a_method_takes_its_results_from_the_cache(window, qtbot):
         window.method_actions["asrn"].trigger()  # tick again
     assert grid_methods(window) == ["tbs_copy", "asrn"] and window.comparison.results[1] is asrn
     assert len(window.compare.queue.computed) == computed
+
+
+def test_the_users_camera_stays_when_the_grid_changes(window, qtbot):
+    view = window.view
+    preset = np.array(view.plotter.camera.position)
+    QTest.mouseMove(view.interactor, QPoint(100, 100))  # drag in the source's viewport: turn the camera
+    drag_from, drag_to = QPoint(80, 120), QPoint(200, 60)
+    QTest.mousePress(view.interactor, Qt.MouseButton.LeftButton, pos=drag_from)
+    for step in range(1, 9):
+        QTest.mouseMove(view.interactor, drag_from + (drag_to - drag_from) * step / 8)
+    QTest.mouseRelease(view.interactor, Qt.MouseButton.LeftButton, pos=drag_to)
+    camera = view.plotter.camera
+    dragged = (camera.position, camera.focal_point, camera.up)
+    assert np.linalg.norm(np.subtract(dragged[0], preset)) > 1e-3 * np.linalg.norm(preset)  # the drag turned it
+    with qtbot.waitSignal(window.comparison_ready, timeout=10_000):
+        window.method_actions["asrn"].trigger()  # a new grid
+    camera = view.plotter.camera
+    np.testing.assert_allclose(camera.position, dragged[0])
+    np.testing.assert_allclose(camera.up, dragged[2])
+    assert len({id(h.renderer.GetActiveCamera()) for h in view._hands}) == 1  # one camera: one scale
+    window.skeleton_overlay.trigger()  # an overlay leaves the camera alone too
+    np.testing.assert_allclose(view.plotter.camera.position, dragged[0])
