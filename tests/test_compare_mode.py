@@ -712,3 +712,20 @@ def test_the_users_camera_stays_when_the_grid_changes(window, qtbot):
     assert len({id(h.renderer.GetActiveCamera()) for h in view._hands}) == 1  # one camera: one scale
     window.skeleton_overlay.trigger()  # an overlay leaves the camera alone too
     np.testing.assert_allclose(view.plotter.camera.position, dragged[0])
+
+
+def test_a_click_on_the_timeline_groove_jumps_to_that_frame(window, qtbot):
+    from PySide6.QtWidgets import QStyle, QStyleOptionSlider
+    slider = window.timeline.slider
+    window.timeline.set_frame(0)
+    option = QStyleOptionSlider()
+    slider.initStyleOption(option)
+    groove = slider.style().subControlRect(QStyle.ComplexControl.CC_Slider, option,
+                                           QStyle.SubControl.SC_SliderGroove, slider)
+    handle = slider.style().subControlRect(QStyle.ComplexControl.CC_Slider, option,
+                                           QStyle.SubControl.SC_SliderHandle, slider)
+    span = groove.width() - handle.width()
+    x = groove.left() + handle.width() // 2 + int(0.75 * span)
+    QTest.mouseClick(slider, Qt.MouseButton.LeftButton, pos=QPoint(x, slider.height() // 2))
+    expected = QStyle.sliderValueFromPosition(0, slider.maximum(), x - groove.left() - handle.width() // 2, span)
+    assert abs(window.timeline.frame - expected) <= 1 and window.timeline.frame > 0.7 * slider.maximum()
