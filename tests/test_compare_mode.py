@@ -729,3 +729,23 @@ def test_a_click_on_the_timeline_groove_jumps_to_that_frame(window, qtbot):
     QTest.mouseClick(slider, Qt.MouseButton.LeftButton, pos=QPoint(x, slider.height() // 2))
     expected = QStyle.sliderValueFromPosition(0, slider.maximum(), x - groove.left() - handle.width() // 2, span)
     assert abs(window.timeline.frame - expected) <= 1 and window.timeline.frame > 0.7 * slider.maximum()
+
+
+def test_the_selected_retarget_is_a_highlighted_row_of_the_scores_table(window, qtbot):
+    from PySide6.QtGui import QPalette
+    table = window.scores
+    window.resize(1200, 1000)  # room under the two rows
+    qtbot.waitUntil(lambda: table.viewport().height() > table.visualItemRect(table.item(1, 3)).bottom() + 20)
+    cell = table.visualItemRect(table.item(1, 3)).center()
+    QTest.mouseClick(table.viewport(), Qt.MouseButton.LeftButton, pos=cell)
+    assert window.heatmap_choice.currentIndex() == 1
+    assert [i.row() for i in table.selectionModel().selectedRows()] == [1]  # the whole row, not one cell
+    below = QPoint(cell.x(), table.viewport().height() - 3)  # empty space under the rows
+    assert table.indexAt(below).row() == -1
+    QTest.mouseClick(table.viewport(), Qt.MouseButton.LeftButton, pos=below)
+    assert [i.row() for i in table.selectionModel().selectedRows()] == [1]  # still shows the selection
+    window.view.set_solo(1)  # solo the first retarget: it is selected
+    assert [i.row() for i in table.selectionModel().selectedRows()] == [0]
+    palette = table.palette()  # the highlight as visible with the focus elsewhere (the 3D view)
+    assert palette.color(QPalette.ColorGroup.Inactive, QPalette.ColorRole.Highlight) == palette.color(
+        QPalette.ColorGroup.Active, QPalette.ColorRole.Highlight)
