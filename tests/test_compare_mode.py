@@ -508,7 +508,8 @@ def test_export_dialogs_start_in_the_export_folder_with_a_suggested_name(window,
     assert not list(work.iterdir())
 
 
-def test_a_second_job_dialog_stacks_under_the_first(window, qtbot, tmp_path):
+def test_a_second_job_dialog_stacks_above_the_first_at_the_bottom_of_the_window(window, qtbot, tmp_path):
+    from s2h_viewer.app.progress_dialog import WIDTH
     job = window.export_video(str(tmp_path / "stacked.mp4"))
     qtbot.waitUntil(job.dialog.isVisible, timeout=60_000)
     window.method_actions["asm_opt"].trigger()  # a retarget while the export runs: its own dialog
@@ -516,7 +517,12 @@ def test_a_second_job_dialog_stacks_under_the_first(window, qtbot, tmp_path):
     retargets = window.compare._progress
     qtbot.waitUntil(retargets.isVisible, timeout=30_000)
     first, second = job.dialog.frameGeometry(), retargets.frameGeometry()
-    assert not first.intersects(second) and second.top() > first.bottom()
+    assert not first.intersects(second) and second.bottom() < first.top()
+    view = window.view.geometry()
+    view_centre = window.view.mapToGlobal(view.center() - view.topLeft()).y()
+    window_bottom = window.geometry().bottom()
+    assert first.top() > view_centre and window_bottom - first.bottom() < 40  # at the bottom, off the grid's middle
+    assert job.dialog.width() == retargets.width() == WIDTH
     window.compare.cancel()
     with qtbot.waitSignal(job.cancelled, timeout=60_000):
         job.cancel()
