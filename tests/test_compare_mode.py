@@ -755,3 +755,26 @@ def test_the_selected_retarget_is_a_highlighted_row_of_the_scores_table(window, 
     palette = table.palette()  # the highlight as visible with the focus elsewhere (the 3D view)
     assert palette.color(QPalette.ColorGroup.Inactive, QPalette.ColorRole.Highlight) == palette.color(
         QPalette.ColorGroup.Active, QPalette.ColorRole.Highlight)
+
+
+def test_add_target_hand_opens_in_the_last_hand_folder_else_the_shipped_hands(window, qtbot, tmp_path):
+    import shutil
+
+    from PySide6.QtWidgets import QFileDialog
+
+    from compare_window import when_shown
+    offered = []
+
+    def ask() -> str:
+        when_shown(QFileDialog, lambda dialog: (offered.append(dialog.directory().absolutePath()), dialog.reject()))
+        window.add_target()
+        return offered.pop()
+
+    assert Path(ask()) == (ASSETS_DIR / "hands").resolve()  # no hand opened yet: the shipped hands
+    folder = tmp_path / "avatars"
+    folder.mkdir()
+    hand = shutil.copy(ASSETS_DIR / "hands" / "laurel.npz", folder / "laurel.npz")
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.add_target_file(str(hand))
+    window.export_screenshot(str(tmp_path / "shot.png"))  # an export elsewhere does not move the hand folder
+    assert Path(ask()) == folder.resolve()

@@ -265,9 +265,9 @@ class MainWindow(QMainWindow):
                 action.triggered.connect(lambda _=False, p=path, k=kind: opens[k](p))
         self.recent_menu.setEnabled(bool(self.recent_menu.actions()))
 
-    def _ask_to_open(self, title: str, file_filter: str, then: Callable[[str], None]) -> None:
-        """A file dialog in the last folder; ``then(path)`` unless the user cancels."""
-        path, _ = QFileDialog.getOpenFileName(self, title, self._last_dir(), file_filter)
+    def _ask_to_open(self, title: str, file_filter: str, then: Callable[[str], None], folder: str | None = None) -> None:
+        """A file dialog in ``folder`` (else the last folder); ``then(path)`` unless the user cancels."""
+        path, _ = QFileDialog.getOpenFileName(self, title, folder or self._last_dir(), file_filter)
         if path:
             then(path)
 
@@ -280,6 +280,7 @@ class MainWindow(QMainWindow):
             self.error(str(exc))
             return None
         self._remember(path)
+        self.settings.setValue("files/hand_dir", str(Path(path).resolve().parent))
         return hand
 
     def _remember_shown(self) -> None:
@@ -307,8 +308,17 @@ class MainWindow(QMainWindow):
         self._loading.append(("motion", path, motion))
         self.compare.load(motion, source)
 
+    def _hand_dir(self) -> str:
+        """Where hand dialogs start: the last hand's folder, else the shipped hands, else the working directory."""
+        from s2h_viewer.samples import ASSETS_DIR
+        last = Path(str(self.settings.value("files/hand_dir", "")))
+        for folder in (last, ASSETS_DIR / "hands"):
+            if str(folder) not in ("", ".") and folder.is_dir():
+                return str(folder)
+        return str(Path.cwd())
+
     def add_target(self) -> None:
-        self._ask_to_open("Add target hand", TARGET_HAND_FILTER, self.add_target_file)
+        self._ask_to_open("Add target hand", TARGET_HAND_FILTER, self.add_target_file, self._hand_dir())
 
     def add_target_file(self, path: str) -> None:
         hand = self._load_hand(path)
@@ -392,7 +402,7 @@ class MainWindow(QMainWindow):
 
     # --- annotate mode's entry points ---
     def open_hand_to_annotate(self) -> None:
-        self._ask_to_open("Open hand to annotate", TARGET_HAND_FILTER, self.annotate_file)
+        self._ask_to_open("Open hand to annotate", TARGET_HAND_FILTER, self.annotate_file, self._hand_dir())
 
     def annotate_file(self, path: str) -> None:
         """Load a hand (its sidecar or solver frames come with it) and show it in annotation mode; unsaved
