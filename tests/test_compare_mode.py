@@ -18,6 +18,7 @@ if not os.environ.get("DISPLAY"):
 import imageio.v2 as imageio  # noqa: E402
 from PIL import Image  # noqa: E402
 from PySide6.QtCore import QPoint, Qt, QTimer  # noqa: E402
+from PySide6.QtTest import QTest  # noqa: E402
 from PySide6.QtWidgets import QPushButton  # noqa: E402
 
 from compare_window import open_compare_window  # noqa: E402
@@ -507,7 +508,8 @@ def test_export_dialogs_start_in_the_export_folder_with_a_suggested_name(window,
     assert not list(work.iterdir())
 
 
-def test_a_second_job_dialog_stacks_under_the_first(window, qtbot, tmp_path):
+def test_a_second_job_dialog_stacks_above_the_first_at_the_bottom_of_the_window(window, qtbot, tmp_path):
+    from s2h_viewer.app.progress_dialog import WIDTH
     job = window.export_video(str(tmp_path / "stacked.mp4"))
     qtbot.waitUntil(job.dialog.isVisible, timeout=60_000)
     window.method_actions["asm_opt"].trigger()  # a retarget while the export runs: its own dialog
@@ -515,7 +517,12 @@ def test_a_second_job_dialog_stacks_under_the_first(window, qtbot, tmp_path):
     retargets = window.compare._progress
     qtbot.waitUntil(retargets.isVisible, timeout=30_000)
     first, second = job.dialog.frameGeometry(), retargets.frameGeometry()
-    assert not first.intersects(second) and second.top() > first.bottom()
+    assert not first.intersects(second) and second.bottom() < first.top()
+    view = window.view.geometry()
+    view_centre = window.view.mapToGlobal(view.center() - view.topLeft()).y()
+    window_bottom = window.geometry().bottom()
+    assert first.top() > view_centre and window_bottom - first.bottom() < 40  # at the bottom, off the grid's middle
+    assert job.dialog.width() == retargets.width() == WIDTH
     window.compare.cancel()
     with qtbot.waitSignal(job.cancelled, timeout=60_000):
         job.cancel()
@@ -631,3 +638,143 @@ def test_a_png_asked_for_while_playing_is_the_frame_named(window, qtbot, tmp_pat
     assert not playing and frame_when_saved == frame and offered.endswith(f"_f{frame:04d}.png")
     assert written == tmp_path / Path(offered).name and written.exists()
     assert window.timeline.playing  # and it plays on
+
+
+def edit_menu_action(window, text: str):
+    edit_menu = next(a.menu() for a in window.menuBar().actions() if a.text() == "&Edit")
+    return next(a for a in edit_menu.actions() if a.text().startswith(text))
+
+
+def test_undo_in_compare_never_undoes_the_hidden_annotate_tab(window, qtbot):
+    window.activateWindow()
+    qtbot.waitActive(window)  # the keys below go to the window's shortcuts
+    window.annotate_file(str(ASSETS_DIR / "hands" / "webxr" / "generic-hand-right.glb"))
+    view = window.annotate_view
+    view.select(7)
+    view.turn_selected(30)  # a turn in the Annotate tab
+    turned = window.annotation.frames[7].copy()
+    assert edit_menu_action(window, "Undo").text().startswith("Undo turn")
+    window.tabs.setCurrentWidget(window.compare)
+    qtbot.wait(200)
+    undo = edit_menu_action(window, "Undo")
+    assert not undo.isEnabled() and undo.text() == "Undo"  # Compare has nothing to undo
+    QTest.keyClick(window, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
+    np.testing.assert_array_equal(window.annotation.frames[7], turned)
+    assert window.undo_stack.index() == 1
+    window.tabs.setCurrentWidget(window.annotate.view)
+    qtbot.wait(200)  # the tab's widgets settle before the key
+    QTest.keyClick(window, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)  # in Annotate it undoes the turn
+    assert window.undo_stack.index() == 0
+
+
+def test_removing_a_target_is_undone_with_its_results_not_recomputed(window, qtbot):
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.add_target_file(str(ASSETS_DIR / "hands" / "laurel.npz"))
+    iris_results = window.comparison.results[:2]
+    computed = len(window.compare.queue.computed)
+    with qtbot.waitSignal(window.comparison_ready, timeout=10_000):
+        window.targets_menu.actions()[0].trigger()  # Remove iris
+    assert edit_menu_action(window, "Undo").text() == "Undo remove iris"
+    window.activateWindow()
+    qtbot.waitActive(window)  # Ctrl+Z goes to the window's shortcuts
+    qtbot.wait(200)
+    with qtbot.waitSignal(window.comparison_ready, timeout=10_000):
+        QTest.keyClick(window, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
+    assert [r.target.name for r in window.comparison.results] == ["iris", "iris", "laurel", "laurel"]
+    assert all(a is b for a, b in zip(window.comparison.results, iris_results))  # the same results: not recomputed
+    assert len(window.compare.queue.computed) == computed
+    assert [a.text() for a in window.targets_menu.actions()] == ["Remove iris", "Remove laurel"]
+
+
+def test_reticking_a_method_takes_its_results_from_the_cache(window, qtbot):
+    asrn = window.comparison.results[1]
+    computed = len(window.compare.queue.computed)
+    with qtbot.waitSignal(window.comparison_ready, timeout=10_000):
+        window.method_actions["asrn"].trigger()  # untick
+    assert grid_methods(window) == ["tbs_copy"]
+    with qtbot.waitSignal(window.comparison_ready, timeout=10_000):
+        window.method_actions["asrn"].trigger()  # tick again
+    assert grid_methods(window) == ["tbs_copy", "asrn"] and window.comparison.results[1] is asrn
+    assert len(window.compare.queue.computed) == computed
+
+
+def test_the_users_camera_stays_when_the_grid_changes(window, qtbot):
+    view = window.view
+    preset = np.array(view.plotter.camera.position)
+    QTest.mouseMove(view.interactor, QPoint(100, 100))  # drag in the source's viewport: turn the camera
+    drag_from, drag_to = QPoint(80, 120), QPoint(200, 60)
+    QTest.mousePress(view.interactor, Qt.MouseButton.LeftButton, pos=drag_from)
+    for step in range(1, 9):
+        QTest.mouseMove(view.interactor, drag_from + (drag_to - drag_from) * step / 8)
+    QTest.mouseRelease(view.interactor, Qt.MouseButton.LeftButton, pos=drag_to)
+    camera = view.plotter.camera
+    dragged = (camera.position, camera.focal_point, camera.up)
+    assert np.linalg.norm(np.subtract(dragged[0], preset)) > 1e-3 * np.linalg.norm(preset)  # the drag turned it
+    with qtbot.waitSignal(window.comparison_ready, timeout=10_000):
+        window.method_actions["asrn"].trigger()  # a new grid
+    camera = view.plotter.camera
+    np.testing.assert_allclose(camera.position, dragged[0])
+    np.testing.assert_allclose(camera.up, dragged[2])
+    assert len({id(h.renderer.GetActiveCamera()) for h in view._hands}) == 1  # one camera: one scale
+    window.skeleton_overlay.trigger()  # an overlay leaves the camera alone too
+    np.testing.assert_allclose(view.plotter.camera.position, dragged[0])
+
+
+def test_a_click_on_the_timeline_groove_jumps_to_that_frame(window, qtbot):
+    from PySide6.QtWidgets import QStyle, QStyleOptionSlider
+    slider = window.timeline.slider
+    window.timeline.set_frame(0)
+    option = QStyleOptionSlider()
+    slider.initStyleOption(option)
+    groove = slider.style().subControlRect(QStyle.ComplexControl.CC_Slider, option,
+                                           QStyle.SubControl.SC_SliderGroove, slider)
+    handle = slider.style().subControlRect(QStyle.ComplexControl.CC_Slider, option,
+                                           QStyle.SubControl.SC_SliderHandle, slider)
+    span = groove.width() - handle.width()
+    x = groove.left() + handle.width() // 2 + int(0.75 * span)
+    QTest.mouseClick(slider, Qt.MouseButton.LeftButton, pos=QPoint(x, slider.height() // 2))
+    expected = QStyle.sliderValueFromPosition(0, slider.maximum(), x - groove.left() - handle.width() // 2, span)
+    assert abs(window.timeline.frame - expected) <= 1 and window.timeline.frame > 0.7 * slider.maximum()
+
+
+def test_the_selected_retarget_is_a_highlighted_row_of_the_scores_table(window, qtbot):
+    from PySide6.QtGui import QPalette
+    table = window.scores
+    window.resize(1200, 1000)  # room under the two rows
+    qtbot.waitUntil(lambda: table.viewport().height() > table.visualItemRect(table.item(1, 3)).bottom() + 20)
+    cell = table.visualItemRect(table.item(1, 3)).center()
+    QTest.mouseClick(table.viewport(), Qt.MouseButton.LeftButton, pos=cell)
+    assert window.heatmap_choice.currentIndex() == 1
+    assert [i.row() for i in table.selectionModel().selectedRows()] == [1]  # the whole row, not one cell
+    below = QPoint(cell.x(), table.viewport().height() - 3)  # empty space under the rows
+    assert table.indexAt(below).row() == -1
+    QTest.mouseClick(table.viewport(), Qt.MouseButton.LeftButton, pos=below)
+    assert [i.row() for i in table.selectionModel().selectedRows()] == [1]  # still shows the selection
+    window.view.set_solo(1)  # solo the first retarget: it is selected
+    assert [i.row() for i in table.selectionModel().selectedRows()] == [0]
+    palette = table.palette()  # the highlight as visible with the focus elsewhere (the 3D view)
+    assert palette.color(QPalette.ColorGroup.Inactive, QPalette.ColorRole.Highlight) == palette.color(
+        QPalette.ColorGroup.Active, QPalette.ColorRole.Highlight)
+
+
+def test_add_target_hand_opens_in_the_last_hand_folder_else_the_shipped_hands(window, qtbot, tmp_path):
+    import shutil
+
+    from PySide6.QtWidgets import QFileDialog
+
+    from compare_window import when_shown
+    offered = []
+
+    def ask() -> str:
+        when_shown(QFileDialog, lambda dialog: (offered.append(dialog.directory().absolutePath()), dialog.reject()))
+        window.add_target()
+        return offered.pop()
+
+    assert Path(ask()) == (ASSETS_DIR / "hands").resolve()  # no hand opened yet: the shipped hands
+    folder = tmp_path / "avatars"
+    folder.mkdir()
+    hand = shutil.copy(ASSETS_DIR / "hands" / "laurel.npz", folder / "laurel.npz")
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.add_target_file(str(hand))
+    window.export_screenshot(str(tmp_path / "shot.png"))  # an export elsewhere does not move the hand folder
+    assert Path(ask()) == folder.resolve()

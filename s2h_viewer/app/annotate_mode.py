@@ -90,13 +90,8 @@ class AnnotateMode(QObject):
         self.undo_stack = QUndoStack(self)
         self.view.frame_edited.connect(self._frame_edited)
 
-    def fill_menus(self, edit_menu: QMenu, annotate_menu: QMenu) -> None:
-        """Undo/redo in Edit; the solver and saving in Annotate."""
-        undo = self.undo_stack.createUndoAction(edit_menu, "Undo")
-        undo.setShortcut(QKeySequence.StandardKey.Undo)
-        redo = self.undo_stack.createRedoAction(edit_menu, "Redo")
-        redo.setShortcut(QKeySequence.StandardKey.Redo)
-        edit_menu.addActions([undo, redo])
+    def fill_menu(self, annotate_menu: QMenu) -> None:
+        """The solver and saving in Annotate (undo and redo are the window's: they follow the visible tab)."""
         for text, slot, shortcut in (("Run TBS solver", self.run_solver, "Ctrl+R"),
                                      ("Save annotation", self.save, "Ctrl+Shift+S")):
             action = QAction(text, annotate_menu)

@@ -6,7 +6,10 @@ remove a target, load a motion, select, cancel). Each action queues the retarget
 running ones it no longer needs (``RetargetQueue``); results are cached per (motion, source, target,
 method), so ticking a method computes that method alone. The grid shows the state once everything it
 asks for is computed; Cancel goes back to what the grid showed, and the menus follow (before the
-first grid, to the methods computed for every target: none ticked, an empty grid, if none is)."""
+first grid, to the methods computed for every target: none ticked, an empty grid, if none is).
+Results nothing asks for any more (an unticked method) stay in a bounded spare cache while the motion
+and their target stay, so ticking the method again is instant. Removing a target is undoable (its own
+undo stack: Edit > Undo in this tab), and brings the target back with its results, nothing recomputed."""
 
 from __future__ import annotations
 
@@ -14,6 +17,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from PySide6.QtCore import Signal
+from PySide6.QtGui import QUndoCommand, QUndoStack
 from PySide6.QtWidgets import QComboBox, QMenu, QSplitter, QVBoxLayout, QWidget
 
 from s2h_viewer.app.progress_dialog import JobProgressDialog
@@ -30,6 +34,8 @@ from s2h_viewer.widgets.scores_table import ScoresTable
 from s2h_viewer.widgets.timeline import Timeline
 
 PROGRESS_STEPS = 1000
+#: frames of results (every frame's pose and ASM error) the spare cache of unticked methods holds at most
+SPARE_FRAMES = 100_000
 
 
 @dataclass
@@ -54,6 +60,23 @@ def label(result: MethodResult) -> str:
     return f"{METHODS[result.method].label} -> {result.target.name}"
 
 
+class RemoveTargetCommand(QUndoCommand):
+    """Remove one target (undoable): undo puts it back where it was, with the results it had."""
+
+    def __init__(self, mode: "CompareMode", index: int):
+        self.hand = mode.state.targets[index]
+        super().__init__(f"remove {self.hand.name}")
+        self.mode, self.index = mode, index
+        self.results: dict[ResultKey, MethodResult] = {}
+
+    def redo(self) -> None:
+        self.results = {k: r for k, r in self.mode.state.results.items() if k.target == id(self.hand)}
+        self.mode._drop_target(self.index)
+
+    def undo(self) -> None:
+        self.mode._restore_target(min(self.index, len(self.mode.state.targets)), self.hand, self.results)
+
+
 class CompareMode(QWidget):
     """The Compare tab. ``comparison_ready`` fires when the grid shows everything the state asks for;
     ``state_changed`` whenever methods or targets change (the window's menus follow it)."""
@@ -67,6 +90,8 @@ class CompareMode(QWidget):
         self.error, self.status = error, status
         self.state = CompareState(setup.motion, setup.source, list(setup.targets), list(setup.methods))
         self._shown: tuple | None = None  # (motion, source, targets, methods) on screen: where Cancel returns
+        self._spare: dict[ResultKey, MethodResult] = {}  # results no one asks for now, oldest first
+        self.undo_stack = QUndoStack(self)
         self.comparison: Comparison | None = None
         self.queue = RetargetQueue(self)
         self._done_in_batch = 0
@@ -126,9 +151,20 @@ class CompareMode(QWidget):
         self._sync()
 
     def remove_target(self, index: int) -> None:
-        """Drop one target and its results; the rest stay as computed."""
+        """Drop one target and its results (undoable); the rest stay as computed."""
+        self.undo_stack.push(RemoveTargetCommand(self, index))
+
+    def _drop_target(self, index: int) -> None:
         targets = list(self.state.targets)
         del targets[index]
+        self.state.targets = targets
+        self._sync()
+
+    def _restore_target(self, index: int, hand: HandModel, results: dict[ResultKey, MethodResult]) -> None:
+        """Put a removed target back at ``index``; its results come back from ``results``, not recomputed."""
+        self._spare.update(results)
+        targets = list(self.state.targets)
+        targets.insert(index, hand)
         self.state.targets = targets
         self._sync()
 
@@ -178,7 +214,7 @@ class CompareMode(QWidget):
             motion, source, targets, methods = self._shown
             keep |= {ResultKey(id(motion), id(source), id(t), m) for t in targets for m in methods}
             clips.add((id(motion), id(source)))
-        self.state.results = {k: r for k, r in self.state.results.items() if k in keep}
+        self._keep_results(keep)
         self.state.semantics = {k: s for k, s in self.state.semantics.items() if k in clips}
         missing = self.state.missing()
         was_busy = bool(self.queue.pending())
@@ -194,6 +230,20 @@ class CompareMode(QWidget):
             self._close_progress()
             self._resume_playback()
             self._show_state()
+
+    def _keep_results(self, keep: set[ResultKey]) -> None:
+        """Results outside ``keep`` go to the spare cache; the spares of this clip and these targets that
+        ``keep`` asks for come back (at most SPARE_FRAMES frames are kept, the oldest dropped first)."""
+        self._spare.update({k: r for k, r in self.state.results.items() if k not in keep})
+        clip, targets = (id(self.state.motion), id(self.state.source)), {id(t) for t in self.state.targets}
+        self._spare = {k: r for k, r in self._spare.items() if (k.motion, k.source) == clip and k.target in targets}
+        self.state.results = {k: r for k, r in self.state.results.items() if k in keep}
+        self.state.results.update({k: self._spare.pop(k) for k in keep if k in self._spare})
+        frames = sum(len(r.cell_error) for r in self._spare.values())
+        for key in list(self._spare):
+            if frames <= SPARE_FRAMES:
+                break
+            frames -= len(self._spare.pop(key).cell_error)
 
     def _same_retarget(self, key: ResultKey | None) -> ResultKey:
         """The shown retarget with ``key``'s target and method (a new clip keeps the selection), else the first."""
@@ -240,7 +290,7 @@ class CompareMode(QWidget):
         new_clip = self.comparison is None or self.comparison.motion is not comparison.motion
         self.comparison = comparison
         self._shown = (self.state.motion, self.state.source, tuple(self.state.targets), tuple(self.state.methods))
-        self.state.results = {k: self.state.results[k] for k in self.state.wanted()}
+        self._keep_results(set(self.state.wanted()))
         self.view.set_comparison(comparison)
         self.scores.show_comparison(comparison)
         self.heatmap_choice.blockSignals(True)

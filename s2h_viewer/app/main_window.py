@@ -8,7 +8,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from PySide6.QtCore import QSettings, Signal
-from PySide6.QtGui import QAction, QKeySequence
+from PySide6.QtGui import QAction, QKeySequence, QUndoGroup
 from PySide6.QtWidgets import QFileDialog, QMainWindow, QMessageBox, QTabWidget
 
 from s2h_viewer.app import exports
@@ -135,7 +135,18 @@ class MainWindow(QMainWindow):
         edit_menu = bar.addMenu("&Edit")
         annotate_menu = bar.addMenu("&Annotate")
         self._action(annotate_menu, "Open hand...", self.open_hand_to_annotate, "Ctrl+Shift+O")
-        self.annotate.fill_menus(edit_menu, annotate_menu)
+        self.annotate.fill_menu(annotate_menu)
+        # one undo stack per tab: Edit > Undo acts on the visible tab's work only
+        self.undo_group = QUndoGroup(self)
+        for stack in (self.compare.undo_stack, self.annotate.undo_stack):
+            self.undo_group.addStack(stack)
+        undo = self.undo_group.createUndoAction(edit_menu, "Undo")
+        undo.setShortcut(QKeySequence.StandardKey.Undo)
+        redo = self.undo_group.createRedoAction(edit_menu, "Redo")
+        redo.setShortcut(QKeySequence.StandardKey.Redo)
+        edit_menu.addActions([undo, redo])
+        self.tabs.currentChanged.connect(self._tab_changed)
+        self._tab_changed()
         methods_menu = bar.addMenu("&Methods")
         chosen = self.settings.value("compare/methods", self.setup.methods)
         chosen = [m for m in (chosen if isinstance(chosen, list) else [chosen]) if m in METHODS] or self.setup.methods
@@ -169,6 +180,11 @@ class MainWindow(QMainWindow):
         self._action(play, "Last frame", lambda: timeline.set_frame(timeline.n_frames - 1), "End")
         help_menu = bar.addMenu("&Help")
         self._action(help_menu, "Keyboard shortcuts", self.show_shortcuts, "F1")
+
+    def _tab_changed(self, *_) -> None:
+        """Undo and redo follow the visible tab."""
+        annotating = self.tabs.currentWidget() is self.annotate.view
+        self.undo_group.setActiveStack(self.annotate.undo_stack if annotating else self.compare.undo_stack)
 
     def shortcut_lines(self) -> list[str]:
         """'key: Menu > entry' for every menu action with a shortcut, read from the actions themselves (so the
@@ -249,9 +265,9 @@ class MainWindow(QMainWindow):
                 action.triggered.connect(lambda _=False, p=path, k=kind: opens[k](p))
         self.recent_menu.setEnabled(bool(self.recent_menu.actions()))
 
-    def _ask_to_open(self, title: str, file_filter: str, then: Callable[[str], None]) -> None:
-        """A file dialog in the last folder; ``then(path)`` unless the user cancels."""
-        path, _ = QFileDialog.getOpenFileName(self, title, self._last_dir(), file_filter)
+    def _ask_to_open(self, title: str, file_filter: str, then: Callable[[str], None], folder: str | None = None) -> None:
+        """A file dialog in ``folder`` (else the last folder); ``then(path)`` unless the user cancels."""
+        path, _ = QFileDialog.getOpenFileName(self, title, folder or self._last_dir(), file_filter)
         if path:
             then(path)
 
@@ -264,6 +280,7 @@ class MainWindow(QMainWindow):
             self.error(str(exc))
             return None
         self._remember(path)
+        self.settings.setValue("files/hand_dir", str(Path(path).resolve().parent))
         return hand
 
     def _remember_shown(self) -> None:
@@ -291,8 +308,17 @@ class MainWindow(QMainWindow):
         self._loading.append(("motion", path, motion))
         self.compare.load(motion, source)
 
+    def _hand_dir(self) -> str:
+        """Where hand dialogs start: the last hand's folder, else the shipped hands, else the working directory."""
+        from s2h_viewer.samples import ASSETS_DIR
+        last = Path(str(self.settings.value("files/hand_dir", "")))
+        for folder in (last, ASSETS_DIR / "hands"):
+            if str(folder) not in ("", ".") and folder.is_dir():
+                return str(folder)
+        return str(Path.cwd())
+
     def add_target(self) -> None:
-        self._ask_to_open("Add target hand", TARGET_HAND_FILTER, self.add_target_file)
+        self._ask_to_open("Add target hand", TARGET_HAND_FILTER, self.add_target_file, self._hand_dir())
 
     def add_target_file(self, path: str) -> None:
         hand = self._load_hand(path)
@@ -376,7 +402,7 @@ class MainWindow(QMainWindow):
 
     # --- annotate mode's entry points ---
     def open_hand_to_annotate(self) -> None:
-        self._ask_to_open("Open hand to annotate", TARGET_HAND_FILTER, self.annotate_file)
+        self._ask_to_open("Open hand to annotate", TARGET_HAND_FILTER, self.annotate_file, self._hand_dir())
 
     def annotate_file(self, path: str) -> None:
         """Load a hand (its sidecar or solver frames come with it) and show it in annotation mode; unsaved

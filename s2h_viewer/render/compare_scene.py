@@ -308,11 +308,13 @@ class ViewOptions:
 SKELETON_OPACITY = 0.4  # the skin's opacity at most while the skeleton overlay is on: bones inside show
 
 
-def apply_options(plotter: pv.Plotter, hands: list[PosedHand], options: ViewOptions) -> None:
+def apply_options(plotter: pv.Plotter, hands: list[PosedHand], options: ViewOptions, camera: bool = True) -> None:
+    """Opacity and overlays; with ``camera``, the camera preset too (else the camera stays where it is)."""
     for hand in hands:
         hand.set_opacity(min(options.opacity, SKELETON_OPACITY) if options.skeleton else options.opacity)
         hand.overlay.set_visible(options.skeleton, options.contacts)
-    set_camera(plotter, options.camera, [h.hand for h in hands])
+    if camera:
+        set_camera(plotter, options.camera, [h.hand for h in hands])
 
 
 def render_comparison(comparison: Comparison, path: str | Path, frame: int | None = None,

@@ -49,6 +49,10 @@ class CompareView(QWidget):
 
     def set_comparison(self, comparison: Comparison) -> None:
         """Lay out one subplot per hand: the source, then a row per target, a column per method."""
+        kept = None
+        if self.plotter is not None and self.comparison is not None and self.comparison.source is comparison.source:
+            camera = self.plotter.camera  # the user's camera (dragged or a preset) outlives the grid
+            kept = (camera.position, camera.focal_point, camera.up)
         self.comparison = comparison
         self.close_grid()  # pyvista fixes the subplot layout at construction: start afresh
         self.plotter = window_plotter(**grid_layout(comparison))
@@ -63,6 +67,11 @@ class CompareView(QWidget):
         self.solo = -1
         self._choose_skins()
         apply_options(self.plotter, self._hands, self.options)
+        if kept is not None:  # one camera for every viewport still: the same scale for source and targets
+            camera = self.plotter.camera
+            camera.position, camera.focal_point, camera.up = kept
+            for renderer in self.plotter.renderers:
+                renderer.ResetCameraClippingRange()
         self.show_frame(min(self.frame, comparison.n_frames - 1))
 
     def show_frame(self, frame: int) -> None:
@@ -94,8 +103,8 @@ class CompareView(QWidget):
     def set_options(self, **changes) -> None:
         """Change the camera preset, overlays or opacity (``ViewOptions`` fields) and redraw."""
         self.options = dataclasses.replace(self.options, **changes)
-        if self.interactor is not None:
-            apply_options(self.plotter, self._hands, self.options)
+        if self.interactor is not None:  # the camera moves for a preset only, not for an overlay
+            apply_options(self.plotter, self._hands, self.options, camera="camera" in changes)
             self.show_frame(self.frame)
 
     def set_mesh_opacity(self, opacity: float) -> None:

@@ -6,6 +6,7 @@ name never pushes a score out of sight."""
 from __future__ import annotations
 
 from PySide6.QtCore import Qt
+from PySide6.QtGui import QPalette
 from PySide6.QtWidgets import QHeaderView, QTableWidget, QTableWidgetItem, QWidget
 
 from s2h_viewer.retarget.comparison import Comparison
@@ -32,6 +33,18 @@ class ScoresTable(QTableWidget):
         self.verticalHeader().setVisible(False)
         self.setTextElideMode(Qt.TextElideMode.ElideMiddle)
         self.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
+        # a row is one retarget: select whole rows, one at a time, highlighted even with the focus elsewhere
+        self.setSelectionBehavior(QTableWidget.SelectionBehavior.SelectRows)
+        self.setSelectionMode(QTableWidget.SelectionMode.SingleSelection)
+        palette = self.palette()
+        for role in (QPalette.ColorRole.Highlight, QPalette.ColorRole.HighlightedText):
+            palette.setColor(QPalette.ColorGroup.Inactive, role, palette.color(QPalette.ColorGroup.Active, role))
+        self.setPalette(palette)
+
+    def mousePressEvent(self, event) -> None:
+        """A click in the empty space under the rows keeps the selected retarget (there always is one)."""
+        if self.indexAt(event.position().toPoint()).isValid():
+            super().mousePressEvent(event)
 
     def show_comparison(self, comparison: Comparison) -> None:
         self.setRowCount(len(comparison.results))

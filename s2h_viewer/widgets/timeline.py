@@ -11,7 +11,8 @@ from __future__ import annotations
 import time
 
 from PySide6.QtCore import QEvent, QObject, Qt, QTimer, Signal
-from PySide6.QtWidgets import QCheckBox, QComboBox, QHBoxLayout, QLabel, QPushButton, QSlider, QSpinBox, QWidget
+from PySide6.QtWidgets import (QCheckBox, QComboBox, QHBoxLayout, QLabel, QProxyStyle, QPushButton, QSlider, QSpinBox,
+                               QStyle, QWidget)
 
 from s2h_viewer.render.caption import frame_readout
 
@@ -27,6 +28,16 @@ class _LeaveShortcutKeys(QObject):
     def eventFilter(self, watched: QObject, event: QEvent) -> bool:
         return event.type() == QEvent.Type.ShortcutOverride and (
             event.key() in PASSED_KEYS or bool(event.modifiers() & Qt.KeyboardModifier.ControlModifier))
+
+
+class _ClickJumps(QProxyStyle):
+    """A click on the slider's groove jumps to the frame under the pointer (and a drag from there follows
+    it), where Qt's default pages by a step per click."""
+
+    def styleHint(self, hint, option=None, widget=None, data=None) -> int:
+        if hint == QStyle.StyleHint.SH_Slider_AbsoluteSetButtons:
+            return Qt.MouseButton.LeftButton.value
+        return super().styleHint(hint, option, widget, data)
 
 
 def fixed_size(label: QLabel, widest: str) -> None:
@@ -47,6 +58,9 @@ class Timeline(QWidget):
         self.play_button.setCheckable(True)
         self.play_button.setFocusPolicy(Qt.FocusPolicy.NoFocus)  # Space is play/pause, not "press the button"
         self.slider = QSlider(Qt.Orientation.Horizontal)
+        self._slider_style = _ClickJumps()  # the application's style underneath (not owned)
+        self._slider_style.setParent(self.slider)
+        self.slider.setStyle(self._slider_style)
         self.spin = QSpinBox()
         self._key_filter = _LeaveShortcutKeys(self)
         self.spin.installEventFilter(self._key_filter)
