@@ -30,9 +30,21 @@ from s2h_viewer.widgets.asm_heatmap import CELL, LEFT, TOP  # noqa: E402
 from s2h_viewer.widgets.error_curve import worst_frames  # noqa: E402
 
 
+#: clip repeats that make ASM-Opt's work long enough to catch running (40 x 138 frames: seconds, not 0.1 s)
+LONG = 40
+
+
 @pytest.fixture
 def window(qtbot, sample_hands, tmp_path):
     win = open_compare_window(qtbot, sample_hands, tmp_path)
+    yield win
+    win.close()
+
+
+@pytest.fixture
+def long_window(qtbot, sample_hands, tmp_path):
+    """`window` on the clip played `LONG` times over: ASM-Opt added to it runs for seconds."""
+    win = open_compare_window(qtbot, sample_hands, tmp_path, repeats=LONG)
     yield win
     win.close()
 
@@ -59,7 +71,8 @@ def wait_until_running(window, qtbot, method: str) -> None:
         pass
 
 
-def test_toggling_a_method_during_a_retarget_queues_it_and_computes_only_it(window, qtbot):
+def test_toggling_a_method_during_a_retarget_queues_it_and_computes_only_it(long_window, qtbot):
+    window = long_window
     before = dict(window.setup.results)
     computed = len(window.compare.queue.computed)
     window.method_actions["asm_opt"].trigger()
@@ -75,7 +88,8 @@ def test_toggling_a_method_during_a_retarget_queues_it_and_computes_only_it(wind
     assert len(window.view._hands) == 1 + len(expected)
 
 
-def test_unticking_the_running_method_cancels_it_and_the_grid_follows(window, qtbot):
+def test_unticking_the_running_method_cancels_it_and_the_grid_follows(long_window, qtbot):
+    window = long_window
     window.method_actions["asm_opt"].trigger()
     wait_until_running(window, qtbot, "asm_opt")
     with qtbot.waitSignal(window.compare.queue.job_cancelled, timeout=60_000) as cancelled:
@@ -85,7 +99,8 @@ def test_unticking_the_running_method_cancels_it_and_the_grid_follows(window, qt
     assert not window.compare.queue.busy or not window.compare.queue.pending()
 
 
-def test_cancel_a_retarget_goes_back_to_the_grid_and_the_menu_follows(window, qtbot):
+def test_cancel_a_retarget_goes_back_to_the_grid_and_the_menu_follows(long_window, qtbot):
+    window = long_window
     shown = window.comparison
     window.method_actions["asm_opt"].trigger()
     wait_until_running(window, qtbot, "asm_opt")
@@ -100,7 +115,8 @@ def test_cancel_a_retarget_goes_back_to_the_grid_and_the_menu_follows(window, qt
 
 def test_cancel_the_first_retarget_keeps_the_targets_and_ticking_a_method_computes_it(qtbot, sample_hands,
                                                                                       tmp_path):
-    window = open_compare_window(qtbot, sample_hands, tmp_path, methods=("asm_opt",), compute=False)
+    window = open_compare_window(qtbot, sample_hands, tmp_path, methods=("asm_opt",), compute=False,
+                                 repeats=LONG)
     window.start_comparison()
     wait_until_running(window, qtbot, "asm_opt")
     with qtbot.waitSignal(window.compare.queue.job_cancelled, timeout=60_000):
@@ -117,7 +133,8 @@ def test_cancel_the_first_retarget_keeps_the_targets_and_ticking_a_method_comput
 
 
 def test_cancel_the_first_retarget_shows_the_methods_already_computed(qtbot, sample_hands, tmp_path):
-    window = open_compare_window(qtbot, sample_hands, tmp_path, methods=("tbs_copy", "asm_opt"), compute=False)
+    window = open_compare_window(qtbot, sample_hands, tmp_path, methods=("tbs_copy", "asm_opt"), compute=False,
+                                 repeats=LONG)
     window.start_comparison()
     wait_until_running(window, qtbot, "asm_opt")  # TBS Copy is computed by now
     with qtbot.waitSignal(window.comparison_ready, timeout=60_000):
@@ -154,7 +171,8 @@ def test_playback_pauses_for_a_new_retarget_and_plays_on_after_it(window, qtbot)
     qtbot.waitUntil(lambda: window.timeline.frame != frame, timeout=10_000)  # and the frames move on
 
 
-def test_playback_plays_on_after_a_cancelled_retarget(window, qtbot):
+def test_playback_plays_on_after_a_cancelled_retarget(long_window, qtbot):
+    window = long_window
     window.timeline.set_playing(True)
     window.method_actions["asm_opt"].trigger()
     assert not window.timeline.playing
@@ -508,7 +526,8 @@ def test_export_dialogs_start_in_the_export_folder_with_a_suggested_name(window,
     assert not list(work.iterdir())
 
 
-def test_a_second_job_dialog_stacks_above_the_first_at_the_bottom_of_the_window(window, qtbot, tmp_path):
+def test_a_second_job_dialog_stacks_above_the_first_at_the_bottom_of_the_window(long_window, qtbot, tmp_path):
+    window = long_window
     from s2h_viewer.app.progress_dialog import WIDTH
     job = window.export_video(str(tmp_path / "stacked.mp4"))
     qtbot.waitUntil(job.dialog.isVisible, timeout=60_000)
