@@ -27,7 +27,7 @@ from s2h_viewer.retarget.methods import on_target, register
 from s2h_viewer.retarget.progress import report
 from s2h_viewer.retarget.threads import torch_threads
 from s2h_viewer.retarget.windows import stream_windows
-from s2h_viewer.semantics.anatomy import angle_excess, clamp_bends
+from s2h_viewer.semantics.anatomy import angle_loss, clamp_bends
 from s2h_viewer.semantics.asm import semantic_matrix, semantic_matrix_by_axis
 from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, contact_gaps, contact_loss
 from s2h_viewer.semantics.similarity import SourceSemantics
@@ -195,7 +195,7 @@ def _loss(keyed: _Keyed, target_hand: HandModel, correction: torch.Tensor, confi
     contact = contact_loss(gaps, keyed.source_gaps)
     smooth = (correction[2:] - 2 * correction[1:-1] + correction[:-2]).square().sum((-1, -2)).mean() \
         if len(correction) > 2 else correction.new_zeros(())
-    anatomy = angle_excess(angles).square().sum((-1, -2)).mean()
+    anatomy = angle_loss(angles)
     return (-config.semantic_weight * sem + config.anatomy_weight * anatomy
             + config.smoothness_weight * smooth + config.contact_weight * contact
             + config.prior_weight * correction.square().sum((-1, -2)).mean())

@@ -24,7 +24,7 @@ from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.rotations import quat_to_tbs_euler, tbs_euler_to_quat
 from s2h_viewer.retarget.progress import report, stage
 from s2h_viewer.retarget.threads import torch_threads
-from s2h_viewer.semantics.anatomy import angle_excess, clamp_bends
+from s2h_viewer.semantics.anatomy import angle_loss, clamp_bends
 from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, PAD_PAIRS, contact_gaps, contact_loss
 
 
@@ -127,7 +127,7 @@ def _fit_runs(q: np.ndarray, source_gaps: np.ndarray, lengths: list[int], hand: 
         padded = correction.new_zeros(padded_len, *correction.shape[1:]).index_copy(0, slots, correction)
         smooth = (padded[2:] - 2 * padded[1:-1] + padded[:-2]).square().sum((-1, -2)).mean()
         loss = (config.contact_weight * contact_loss(gaps, source)
-                + config.anatomy_weight * angle_excess(angles).square().sum((-1, -2)).mean()
+                + config.anatomy_weight * angle_loss(angles)
                 + config.smoothness_weight * smooth
                 + config.prior_weight * correction.square().sum((-1, -2)).mean())
         optimiser.zero_grad()

@@ -63,7 +63,12 @@ def clamp_bends(angles: torch.Tensor, margin: float = math.radians(1.0)) -> torc
 
 def anatomical_loss(q_tbs: torch.Tensor) -> torch.Tensor:
     """L_ana: sum over joints of squared excesses, averaged over frames (scalar, radians^2)."""
-    return anatomical_excess(q_tbs).square().sum(dim=(-1, -2)).mean()
+    return angle_loss(quat_to_tbs_euler(q_tbs))
+
+
+def angle_loss(angles: torch.Tensor) -> torch.Tensor:
+    """`anatomical_loss` of (..., 15, 3) Euler angles given directly (the optimisers' variables)."""
+    return angle_excess(angles).square().sum(dim=(-1, -2)).mean()
 
 
 def violation_rate(q_tbs: torch.Tensor | np.ndarray, tolerance_deg: float = 5.0) -> float:
