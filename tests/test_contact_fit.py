@@ -5,7 +5,7 @@ import pytest
 
 from s2h_viewer.io.files import load_hand_file
 from s2h_viewer.motions.synthesis import synthesize
-from s2h_viewer.retarget.contact_fit import disagreement, fit_contacts, runs_around
+from s2h_viewer.retarget.contact_fit import _batches, disagreement, fit_contacts, runs_around
 from s2h_viewer.retarget.methods import retarget
 from s2h_viewer.semantics.metrics import score_retarget
 from s2h_viewer.samples import ASSETS_DIR
@@ -70,7 +70,6 @@ def test_asrn_keeps_the_source_contacts_on_the_godot_hand(sample_hands):
 
 
 def test_batches_hold_at_most_their_frames_and_cover_every_run():
-    from s2h_viewer.retarget.contact_fit import _batches
     runs = [(0, 5), (10, 30), (40, 41), (50, 120)]
     batches = _batches(runs, 25)
     assert all(sum(b - a for a, b in batch) <= 25 for batch in batches)

@@ -19,7 +19,7 @@ import numpy as np
 import torch
 
 from s2h_viewer.hand.chunks import frame_chunks
-from s2h_viewer.hand.kinematics import forward_kinematics
+from s2h_viewer.hand.kinematics import HandPose, forward_kinematics
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.rotations import quat_to_tbs_euler, tbs_euler_to_quat
 from s2h_viewer.retarget.progress import report, stage
@@ -40,11 +40,15 @@ class ContactFitConfig:
     batch_frames: int = 4096  # frames optimised at once (memory of one batch)
 
 
+def _pose_pad_gaps(hand: HandModel, pose: HandPose) -> torch.Tensor:
+    """(T, 10) fingertip-pad gaps of a posed hand in units of its length (what the fit compares)."""
+    return contact_gaps(hand, pose)[:, PAD_PAIRS] / hand.hand_length
+
+
 def pad_gaps(hand: HandModel, q_tbs: np.ndarray) -> np.ndarray:
     """(T, 10) fingertip-pad gaps in units of the hand's length."""
     with torch.no_grad():
-        pose = forward_kinematics(hand, torch.as_tensor(q_tbs, dtype=torch.float32))
-        return (contact_gaps(hand, pose)[:, PAD_PAIRS] / hand.hand_length).numpy()
+        return _pose_pad_gaps(hand, forward_kinematics(hand, torch.as_tensor(q_tbs, dtype=torch.float32))).numpy()
 
 
 def disagreement(source_hand: HandModel, source_q: np.ndarray, target_hand: HandModel, target_q: np.ndarray
@@ -122,8 +126,7 @@ def _fit_runs(q: np.ndarray, source_gaps: np.ndarray, lengths: list[int], hand: 
     for step in range(config.steps):
         report(step / config.steps)  # and where a cancel stops the fit
         angles = start + correction
-        pose = forward_kinematics(hand, tbs_euler_to_quat(angles))
-        gaps = contact_gaps(hand, pose)[:, PAD_PAIRS] / hand.hand_length
+        gaps = _pose_pad_gaps(hand, forward_kinematics(hand, tbs_euler_to_quat(angles)))
         padded = correction.new_zeros(padded_len, *correction.shape[1:]).index_copy(0, slots, correction)
         smooth = (padded[2:] - 2 * padded[1:-1] + padded[:-2]).square().sum((-1, -2)).mean()
         loss = (config.contact_weight * contact_loss(gaps, source)
