@@ -31,8 +31,8 @@ def settle() -> None:
 
 
 def screen_image(window, path: str | Path) -> None:
-    """Save what the X server shows of ``window`` (the 3D view is a native GL window: Qt's own
-    ``grab`` would leave it black), once the X server's expose events (a dialog just closed) are drawn."""
+    """Save what the X server shows of ``window`` (dialogs and tooltips over it included), once the
+    X server's expose events (a dialog just closed) are drawn."""
     from PIL import ImageGrab
     wait_for(seconds=0.5)
     settle()

@@ -3,7 +3,8 @@ count) and its time (of the clip's length), and the frame rate actually drawn.
 
 Playback runs against the clock: each tick shows the frame that real time (times the speed) has
 reached since play started, so a view that draws slower than the clip drops frames instead of
-slowing the clip down. Space, the arrow keys and the Ctrl shortcuts (Ctrl+E, Ctrl+S, ...) stay the
+slowing the clip down. Ticks come at twice the rate frames fall due at the chosen speed, and once
+more as soon as a frame is drawn: a view slower than that rate draws back to back, never waiting. Space, the arrow keys and the Ctrl shortcuts (Ctrl+E, Ctrl+S, ...) stay the
 window's shortcuts even when the frame box has the focus (its line edit would take them otherwise)."""
 
 from __future__ import annotations
@@ -88,7 +89,7 @@ class Timeline(QWidget):
         self.play_button.toggled.connect(self.set_playing)
         self.slider.valueChanged.connect(self._set_from_widget)
         self.spin.valueChanged.connect(self._set_from_widget)
-        self.speed.currentIndexChanged.connect(lambda _: self._restart_clock())
+        self.speed.currentIndexChanged.connect(lambda _: self._speed_changed())
         self.set_clip(1, 30.0)
 
     @property
@@ -126,7 +127,7 @@ class Timeline(QWidget):
         self._drawn.clear()
         if playing:
             self._restart_clock()
-            self._timer.start(max(1, int(500.0 / self.clip_fps)))  # twice the clip's rate: no frame waits long
+            self._timer.start(self._tick_interval())
         else:
             self._timer.stop()
             self.fps_label.setText("-- fps")
@@ -142,6 +143,16 @@ class Timeline(QWidget):
         now = time.perf_counter()
         self._drawn = [t for t in self._drawn if now - t < 1.0] + [now]
         self.fps_label.setText(f"{len(self._drawn):d} fps")
+        QTimer.singleShot(0, self, self._tick)  # the next due frame now, not at the timer's next tick
+
+    def _tick_interval(self) -> int:
+        """Milliseconds between ticks: half the time between frames at the chosen speed."""
+        return max(1, int(500.0 / (self.clip_fps * SPEEDS[self.speed.currentIndex()])))
+
+    def _speed_changed(self) -> None:
+        self._restart_clock()
+        if self.playing:
+            self._timer.start(self._tick_interval())
 
     def _restart_clock(self) -> None:
         self._anchor = (time.perf_counter(), self.frame)
@@ -153,31 +164,42 @@ class Timeline(QWidget):
         self.readout.setText(self._readout_text(frame))
 
     def _set_from_widget(self, frame: int) -> None:
+        """The slider or the spin box moved (a person, or `set_frame`): while playing, play on from there."""
+        if self.playing:
+            self._restart_clock()
+        self._show(frame)
+
+    def _show(self, frame: int) -> None:
+        """Both widgets at ``frame`` (without their signals), the readout, then ``frame_changed``."""
         for widget in (self.slider, self.spin):
             if widget.value() != frame:
                 widget.blockSignals(True)
                 widget.setValue(frame)
                 widget.blockSignals(False)
-        if self.playing and self.sender() is not None and self.sender() is not self._timer:
-            self._restart_clock()  # scrubbing while playing: play on from there
         self._show_readout(frame)
         self.frame_changed.emit(frame)
 
-    def _tick(self) -> None:
-        if self._asked_at is not None and time.perf_counter() - self._asked_at < MAX_DRAW_WAIT:
-            return  # the last frame is not drawn yet: a new one now would be skinned and never shown
+    def due_frame(self, ahead: float = 0.0) -> int | None:
+        """The frame the clock asks for ``ahead`` seconds from now; None past the end when not looping."""
         started, first = self._anchor
         speed = SPEEDS[self.speed.currentIndex()]
-        due = first + int((time.perf_counter() - started) * self.clip_fps * speed)
+        due = first + int((time.perf_counter() + ahead - started) * self.clip_fps * speed)
         if due >= self.n_frames:
             if not self.loop.isChecked():
-                self.set_frame(self.n_frames - 1)
-                self.set_playing(False)
-                return
+                return None
             due %= self.n_frames
+        return due
+
+    def _tick(self) -> None:
+        if not self.playing:  # a tick queued by the last drawn frame, after a pause
+            return
+        if self._asked_at is not None and time.perf_counter() - self._asked_at < MAX_DRAW_WAIT:
+            return  # the last frame is not drawn yet: a new one now would be skinned and never shown
+        due = self.due_frame()
+        if due is None:  # the end, not looping
+            self.set_frame(self.n_frames - 1)
+            self.set_playing(False)
+            return
         if due != self.frame:
-            self.slider.blockSignals(True)  # the clock moves the frame: keep the anchor
-            self.slider.setValue(due)
-            self.slider.blockSignals(False)
             self._asked_at = time.perf_counter()
-            self._set_from_widget(due)
+            self._show(due)  # the clock moves the frame: the anchor stays
