@@ -153,10 +153,19 @@ def source_cell_below(comparison: Comparison) -> tuple[int, int] | None:
     return (1, 0) if rows > 1 else None
 
 
+def plain_text() -> None:
+    """Draw every VTK text as it is written: by default VTK hands a string holding '|' or '$' to its MathText
+    backend, which makes '|' a column break (an FBX take "Armature|counting" read "Armature   counting")."""
+    import vtkmodules.vtkRenderingFreeType  # noqa: F401  (registers the text renderer GetInstance returns)
+    from vtkmodules.vtkRenderingCore import vtkTextRenderer
+    vtkTextRenderer.GetInstance().SetDefaultBackend(vtkTextRenderer.FreeType)
+
+
 def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
              display_faces: int | None = DISPLAY_FACES, playing_faces: int | None = None) -> list[PosedHand]:
     """Fill a plotter made with ``**grid_layout(comparison)``; returns the hands to update per frame.
     ``playing_faces``: each skin also at that many faces, drawn while playing (`PosedHand.set_playing`)."""
+    plain_text()
     lighter: dict[tuple[int, int | None], HandModel] = {}
 
     def light(hand: HandModel, faces: int | None) -> HandModel:
@@ -203,6 +212,16 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
     plotter.link_views()
     set_camera(plotter, "default", [h.hand for h in hands])
     return hands
+
+
+def colour_bar_beside_solo(plotter: pv.Plotter) -> None:
+    """A retarget shown alone keeps the colour bar of its error colours: the one hand viewport drawn gives
+    the bar's column (its share of the grid's width) back to the bar, drawn again on the right."""
+    bar = plotter.renderers[plotter.renderers.loc_to_index((0, plotter.shape[1] - 1))]
+    solo = next(r for r in plotter.renderers if r.GetDraw() and r is not bar)
+    solo.SetViewport(0.0, 0.0, 1.0 - COLOUR_BAR_SHARE, 1.0)
+    bar.SetViewport(1.0 - COLOUR_BAR_SHARE, 0.0, 1.0, 1.0)
+    bar.SetDraw(True)
 
 
 #: camera directions in view space (x = fingers, y = thumb side, z = back of the hand) and up vectors.
@@ -348,7 +367,8 @@ def render_comparison(comparison: Comparison, path: str | Path, frame: int | Non
 
     try:
         if path.suffix.lower() in VIDEO_SUFFIXES:
-            return write_video(path, (image(f) for f in range(comparison.n_frames)), comparison.motion.fps)
+            return write_video(path, (image(f) for f in range(comparison.n_frames)), comparison.motion.fps,
+                               comparison.n_frames)
         from PIL import Image
         with atomic_path(path) as tmp:
             Image.fromarray(image(frame or 0)).save(tmp, format="PNG")
