@@ -853,8 +853,8 @@ def test_a_take_name_with_a_bar_is_drawn_as_written(window, qtbot, sample_hands)
         window.load_motion(str(ASSETS_DIR / "hands" / "fbx" / "mixamo_right_hand.fbx"))
     assert window.comparison.motion.name == "Armature|counting"
     actor = next(a for r in window.view.plotter.renderers for a in r.GetViewProps()
-                 if hasattr(a, "GetText") and "Armature" in (a.GetText(2) or ""))  # the legend under the source
-    text = actor.GetText(2)  # the upper left corner's
+                 if hasattr(a, "GetInput") and "Armature" in (a.GetInput() or ""))  # the legend under the source
+    text = actor.GetInput()
     boxes = []
     for line in (text, text.replace("|", "!")):
         box = [0, 0, 0, 0]
@@ -885,3 +885,19 @@ def test_a_retarget_shown_alone_keeps_the_colour_bar(window, qtbot):
     qtbot.keyClick(window.timeline.spin.lineEdit(), Qt.Key.Key_M, Qt.KeyboardModifier.ControlModifier)
     assert window.view.solo == -1 and all(r.GetDraw() for r in window.view.plotter.renderers)
     assert tuple(window.view.plotter.renderers[-1].GetViewport()) == window.view._viewports[-1]
+
+
+def test_labels_stay_legible_with_five_methods(qtbot, sample_hands, tmp_path):
+    """Five methods on a 1000 x 700 window: the labels (method -> target, the scores) were drawn by corner
+    annotations that shrink with their cell, to glyphs 5 pixels high; now each line is as high as ever."""
+    window = open_compare_window(qtbot, sample_hands, tmp_path, methods=tuple(METHODS))
+    try:
+        image = window.view.grab_rgb()
+        h, w = image.shape[:2]
+        for x0, y0, x1, y1 in window.view.hand_viewports()[:2]:  # the source, the first retarget
+            cell = image[int(round((1 - y1) * h)):int(round((1 - y0) * h)), int(round(x0 * w)):int(round(x1 * w))]
+            dark = np.flatnonzero((cell[: cell.shape[0] // 3].max(-1) < 110).any(1))  # rows with black text
+            lines = np.split(dark, np.flatnonzero(np.diff(dark) > 1) + 1)
+            assert len(lines) >= 1 and len(lines[0]) >= 9, [len(line) for line in lines]  # a line of 13 px text
+    finally:
+        window.close()

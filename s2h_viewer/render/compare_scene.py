@@ -30,6 +30,7 @@ ERROR_COLOURMAP = "plasma"
 DISPLAY_FACES = 10_000
 PLAYING_FACES = 3_000  # while the window plays: a third of the triangles, a quarter less time per frame
 COLOUR_BAR_SHARE = 0.065  # of the grid's width: the colour bar's column, however many hand columns
+LABEL_PX = 13  # the grid's labels' font size, in pixels
 CONTACT_COLOUR = "#1a9850"
 LOST_COLOUR = "#ff1f1f"
 #: each contact pair (``semantics.contacts.CONTACT_PAIRS``) as two indices into ``contact_sites``.
@@ -161,6 +162,14 @@ def plain_text() -> None:
     vtkTextRenderer.GetInstance().SetDefaultBackend(vtkTextRenderer.FreeType)
 
 
+def add_label(plotter: pv.Plotter, text: str) -> None:
+    """Text at the top left of the current subplot, LABEL_PX pixels high whatever the cell's size (pyvista's
+    corner annotation scales its font with the viewport: five methods made it unreadably small)."""
+    label = plotter.add_text(text, position=(0.02, 0.98), viewport=True, color="black")
+    label.prop.font_size = LABEL_PX
+    label.prop.SetVerticalJustificationToTop()
+
+
 def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
              display_faces: int | None = DISPLAY_FACES, playing_faces: int | None = None) -> list[PosedHand]:
     """Fill a plotter made with ``**grid_layout(comparison)``; returns the hands to update per frame.
@@ -181,7 +190,7 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
     for row, target in enumerate(dict.fromkeys(id(r.target) for r in comparison.results)):
         results = [r for r in comparison.results if id(r.target) == target]
         panels += [((row, 1 + k), r.target, r.pose, r.joint_error, source_contacts,
-                    f"{METHODS[r.method].label} -> {r.target.name}\nS_palm {r.scores.s_palm:.3f}  "
+                    f"{METHODS[r.method].label} -> {r.target.name}\nS_palm {r.scores.s_palm:.3f}\n"
                     f"S_finger {r.scores.s_finger:.3f}") for k, r in enumerate(results)]
     hands = []
     for cell, hand, pose, error, expected, label in panels:
@@ -194,13 +203,13 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
         posed.overlay = Overlays(plotter, hand, pose, expected)
         posed.renderer = plotter.renderer
         hands.append(posed)
-        plotter.add_text(label, font_size=9, color="black", position="upper_left")
+        add_label(plotter, label)
     below = source_cell_below(comparison)
     if below is not None:
         plotter.subplot(*below)
         plotter.set_background("white")
-        plotter.add_text(f"clip: {comparison.motion.name}\n{comparison.n_frames} frames at {comparison.motion.fps:g} fps",
-                         font_size=9, color="black", position="upper_left")
+        add_label(plotter, f"clip: {comparison.motion.name}\n{comparison.n_frames} frames at "
+                           f"{comparison.motion.fps:g} fps")
     coloured = next((h.error_actor for h in hands if h.error_actor is not None), None)
     plotter.subplot(0, plotter.shape[1] - 1)
     plotter.set_background("white")
