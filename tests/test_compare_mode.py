@@ -901,3 +901,40 @@ def test_labels_stay_legible_with_five_methods(qtbot, sample_hands, tmp_path):
             assert len(lines) >= 1 and len(lines[0]) >= 9, [len(line) for line in lines]  # a line of 13 px text
     finally:
         window.close()
+
+
+def test_ticking_a_method_and_adding_a_target_are_undone_and_redone_from_the_cache(window, qtbot):
+    """Ctrl+Z undid only a removed target; ticking a method and adding a target are undone and redone too,
+    the menus, the settings and the grid agreeing each time, and nothing computed twice."""
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.method_actions["dm"].trigger()
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.add_target_file(str(ASSETS_DIR / "hands" / "laurel.npz"))
+    results = list(window.comparison.results)
+    computed = len(window.compare.queue.computed)
+    window.activateWindow()
+    qtbot.waitActive(window)  # the keys go to the window's shortcuts
+    qtbot.wait(200)
+
+    def key(modifiers) -> None:
+        with qtbot.waitSignal(window.comparison_ready, timeout=10_000):
+            QTest.keyClick(window, Qt.Key.Key_Z, modifiers)
+
+    def agree(methods: list[str], targets: list[str]) -> None:
+        assert ticked(window) == methods == list(window.settings.value("compare/methods"))
+        assert grid_methods(window) == methods * len(targets)
+        assert list(dict.fromkeys(r.target.name for r in window.comparison.results)) == targets
+        assert [a.text() for a in window.targets_menu.actions()] == [f"Remove {t}" for t in targets]
+        assert all(any(r is s for s in results) for r in window.comparison.results)  # the results computed once
+
+    assert edit_menu_action(window, "Undo").text() == "Undo add laurel"
+    key(Qt.KeyboardModifier.ControlModifier)
+    agree(["tbs_copy", "dm", "asrn"], ["iris"])
+    assert edit_menu_action(window, "Undo").text() == "Undo tick DM"
+    key(Qt.KeyboardModifier.ControlModifier)
+    agree(["tbs_copy", "asrn"], ["iris"])
+    key(Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier)  # redo
+    agree(["tbs_copy", "dm", "asrn"], ["iris"])
+    key(Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier)
+    agree(["tbs_copy", "dm", "asrn"], ["iris", "laurel"])
+    assert len(window.compare.queue.computed) == computed
