@@ -1,4 +1,4 @@
-"""GIF written frame by frame as frames come (Pillow's GIF encoder, one frame at a time), so the work of
+"""GIF written frame by frame as frames come (Pillow's frame-level GIF functions), so the work of
 writing is spread over the frames: a caller reporting progress per frame reports the writing too, and can
 stop between any two frames. GIF delays count centiseconds; each frame's delay is the rounded clip time of
 the next frame minus its own, so the file lasts the clip's length (a 30 fps clip: 3, 3, 4, 3, 3, 4 cs)."""
@@ -11,7 +11,7 @@ import numpy as np
 from PIL import GifImagePlugin, Image
 
 #: the shortest delay players honour: browsers play a delay of 0 or 1 cs as 10 cs, so a frame due sooner
-#: than this after the last one written is skipped (a 60 fps clip plays every other frame, in real time)
+#: than this after the last one written is skipped (a 60 fps clip keeps two frames in three, in real time)
 MIN_DELAY_CS = 2
 
 
