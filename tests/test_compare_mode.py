@@ -24,6 +24,7 @@ from PySide6.QtWidgets import QPushButton  # noqa: E402
 from compare_window import open_compare_window  # noqa: E402
 from s2h_viewer.hand import topology as topo  # noqa: E402
 from s2h_viewer.render.caption import BAND  # noqa: E402
+from s2h_viewer.render.compare_scene import COLOUR_BAR_SHARE  # noqa: E402
 from s2h_viewer.retarget.methods import METHODS  # noqa: E402
 from s2h_viewer.samples import ASSETS_DIR  # noqa: E402
 from s2h_viewer.widgets.asm_heatmap import CELL, LEFT, TOP  # noqa: E402
@@ -365,9 +366,10 @@ def test_double_click_solos_a_viewport_and_back(window, qtbot):
     assert view.hand_at(centre.x(), centre.y()) == hand
     qtbot.mouseDClick(view.interactor, Qt.MouseButton.LeftButton, pos=centre)
     assert view.solo == hand
-    drawn = [bool(r.GetDraw()) for r in view.plotter.renderers]
-    assert view._hands[hand].renderer.GetDraw() and sum(drawn) == 1
-    assert tuple(view._hands[hand].renderer.GetViewport()) == (0.0, 0.0, 1.0, 1.0)
+    drawn = [r for r in view.plotter.renderers if r.GetDraw()]
+    bar = view.plotter.renderers[view.plotter.renderers.loc_to_index((0, view.plotter.shape[1] - 1))]
+    assert len(drawn) == 2 and view._hands[hand].renderer in drawn and bar in drawn  # the hand and its colour bar
+    assert tuple(view._hands[hand].renderer.GetViewport()) == (0.0, 0.0, 1.0 - COLOUR_BAR_SHARE, 1.0)
     qtbot.mouseDClick(view.interactor, Qt.MouseButton.LeftButton, pos=centre)
     assert view.solo == -1 and all(r.GetDraw() for r in view.plotter.renderers)
 
@@ -797,3 +799,142 @@ def test_add_target_hand_opens_in_the_last_hand_folder_else_the_shipped_hands(wi
         window.add_target_file(str(hand))
     window.export_screenshot(str(tmp_path / "shot.png"))  # an export elsewhere does not move the hand folder
     assert Path(ask()) == folder.resolve()
+
+
+def test_a_gif_is_written_while_its_frames_render_and_cancel_leaves_no_file(window, qtbot, tmp_path):
+    """The GIF grows as the progress moves (Pillow once wrote it all after the last frame, the dialog at 100%
+    meanwhile); a cancel halfway leaves neither the file nor a temporary one."""
+    n = window.comparison.n_frames
+    written_at_half = []
+
+    def look(done: int, total: int) -> None:
+        if done >= total // 2 and not written_at_half:
+            written_at_half.append(sum(p.stat().st_size for p in tmp_path.glob(".clip.s2h-*.gif")))
+    job = window.export_video(str(tmp_path / "clip.gif"))
+    job.progress.connect(look)
+    with qtbot.waitSignal(job.written, timeout=300_000):
+        pass
+    assert written_at_half[0] > 0  # half the frames rendered: (about) half the file on disk already
+    frames = imageio.mimread(tmp_path / "clip.gif", memtest=False)
+    assert len(frames) == n and frames[0].shape[0] == window.view.interactor.height() + BAND
+
+    job = window.export_video(str(tmp_path / "late.gif"))
+    job.progress.connect(lambda done, total: done >= total // 2 and job.dialog.findChild(QPushButton).click())
+    with qtbot.waitSignal(job.cancelled, timeout=300_000):
+        pass
+    job.thread.join()
+    assert sorted(p.name for p in tmp_path.iterdir() if p.suffix != ".ini") == ["clip.gif"]
+
+
+def test_a_gif_lasts_as_long_as_its_clip(window, qtbot, tmp_path):
+    """GIF delays count centiseconds: at 30 fps the frames wait 3, 3 and 4 cs in turn, not 3 cs each (which
+    played the clip 11% fast)."""
+    n, fps = window.comparison.n_frames, window.comparison.motion.fps
+    job = window.export_video(str(tmp_path / "clip.gif"))
+    with qtbot.waitSignal(job.written, timeout=300_000):
+        pass
+    with Image.open(tmp_path / "clip.gif") as gif:
+        delays = []
+        for index in range(gif.n_frames):
+            gif.seek(index)
+            delays.append(gif.info["duration"])
+    assert abs(sum(delays) - 1000.0 * n / fps) <= 10.0
+    assert set(delays) <= {30, 40} and 40 in delays
+
+
+def test_a_take_name_with_a_bar_is_drawn_as_written(window, qtbot, sample_hands):
+    """An FBX take "Armature|counting": VTK's default text backend read the '|' as a column break (drawn as
+    "Armature   counting", a larger box in another font); the grid's legend draws it as plain text, as wide
+    as the same line with '!' (a glyph about as narrow) in its place."""
+    from vtkmodules.vtkRenderingCore import vtkTextRenderer
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.compare.add_target(sample_hands["laurel"])
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.load_motion(str(ASSETS_DIR / "hands" / "fbx" / "mixamo_right_hand.fbx"))
+    assert window.comparison.motion.name == "Armature|counting"
+    actor = next(a for r in window.view.plotter.renderers for a in r.GetViewProps()
+                 if hasattr(a, "GetInput") and "Armature" in (a.GetInput() or ""))  # the legend under the source
+    text = actor.GetInput()
+    boxes = []
+    for line in (text, text.replace("|", "!")):
+        box = [0, 0, 0, 0]
+        assert vtkTextRenderer.GetInstance().GetBoundingBox(actor.GetTextProperty(), line, box, 72)
+        boxes.append(box)
+    assert boxes[0][3] == boxes[1][3] and abs(boxes[0][1] - boxes[1][1]) <= 8, boxes
+
+
+def test_a_retarget_shown_alone_keeps_the_colour_bar(window, qtbot):
+    """Solo (Ctrl+M or a double-click) showed the hand over the whole view without the colour bar its skin's
+    colours are read against; the bar keeps its column, right of the hand, and the grid comes back whole."""
+    def bar_pixels() -> int:
+        image = window.view.grab_rgb().astype(int)
+        strip = image[:, int(image.shape[1] * (1 - COLOUR_BAR_SHARE)):]
+        return int(((strip.max(-1) - strip.min(-1)) > 120).sum())  # plasma is saturated, the skin not there
+
+    in_grid = bar_pixels()
+    assert in_grid > 1000
+    window.timeline.set_frame(40)
+    window.scores.selectRow(1)  # ASRN -> iris
+    window.activateWindow()
+    qtbot.waitUntil(lambda: window.isActiveWindow(), timeout=5000)
+    qtbot.keyClick(window.timeline.spin.lineEdit(), Qt.Key.Key_M, Qt.KeyboardModifier.ControlModifier)
+    assert window.view.solo == 2  # ASRN -> iris, the selected retarget
+    assert bar_pixels() > 0.5 * in_grid
+    solo = window.view._hands[2].renderer
+    assert solo.GetViewport()[2] <= 1 - COLOUR_BAR_SHARE + 1e-9  # the hand clear of the bar
+    qtbot.keyClick(window.timeline.spin.lineEdit(), Qt.Key.Key_M, Qt.KeyboardModifier.ControlModifier)
+    assert window.view.solo == -1 and all(r.GetDraw() for r in window.view.plotter.renderers)
+    assert tuple(window.view.plotter.renderers[-1].GetViewport()) == window.view._viewports[-1]
+
+
+def test_labels_stay_legible_with_five_methods(qtbot, sample_hands, tmp_path):
+    """Five methods on a 1000 x 700 window: the labels (method -> target, the scores) were drawn by corner
+    annotations that shrink with their cell, to glyphs 5 pixels high; now each line is as high as ever."""
+    window = open_compare_window(qtbot, sample_hands, tmp_path, methods=tuple(METHODS))
+    try:
+        image = window.view.grab_rgb()
+        h, w = image.shape[:2]
+        for x0, y0, x1, y1 in window.view.hand_viewports()[:2]:  # the source, the first retarget
+            cell = image[int(round((1 - y1) * h)):int(round((1 - y0) * h)), int(round(x0 * w)):int(round(x1 * w))]
+            dark = np.flatnonzero((cell[: cell.shape[0] // 3].max(-1) < 110).any(1))  # rows with black text
+            lines = np.split(dark, np.flatnonzero(np.diff(dark) > 1) + 1)
+            assert len(lines) >= 1 and len(lines[0]) >= 9, [len(line) for line in lines]  # a line of 13 px text
+    finally:
+        window.close()
+
+
+def test_ticking_a_method_and_adding_a_target_are_undone_and_redone_from_the_cache(window, qtbot):
+    """Ctrl+Z undid only a removed target; ticking a method and adding a target are undone and redone too,
+    the menus, the settings and the grid agreeing each time, and nothing computed twice."""
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.method_actions["dm"].trigger()
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.add_target_file(str(ASSETS_DIR / "hands" / "laurel.npz"))
+    results = list(window.comparison.results)
+    computed = len(window.compare.queue.computed)
+    window.activateWindow()
+    qtbot.waitActive(window)  # the keys go to the window's shortcuts
+    qtbot.wait(200)
+
+    def key(modifiers) -> None:
+        with qtbot.waitSignal(window.comparison_ready, timeout=10_000):
+            QTest.keyClick(window, Qt.Key.Key_Z, modifiers)
+
+    def agree(methods: list[str], targets: list[str]) -> None:
+        assert ticked(window) == methods == list(window.settings.value("compare/methods"))
+        assert grid_methods(window) == methods * len(targets)
+        assert list(dict.fromkeys(r.target.name for r in window.comparison.results)) == targets
+        assert [a.text() for a in window.targets_menu.actions()] == [f"Remove {t}" for t in targets]
+        assert all(any(r is s for s in results) for r in window.comparison.results)  # the results computed once
+
+    assert edit_menu_action(window, "Undo").text() == "Undo add laurel"
+    key(Qt.KeyboardModifier.ControlModifier)
+    agree(["tbs_copy", "dm", "asrn"], ["iris"])
+    assert edit_menu_action(window, "Undo").text() == "Undo tick DM"
+    key(Qt.KeyboardModifier.ControlModifier)
+    agree(["tbs_copy", "asrn"], ["iris"])
+    key(Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier)  # redo
+    agree(["tbs_copy", "dm", "asrn"], ["iris"])
+    key(Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier)
+    agree(["tbs_copy", "dm", "asrn"], ["iris", "laurel"])
+    assert len(window.compare.queue.computed) == computed

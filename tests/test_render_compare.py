@@ -48,3 +48,13 @@ def test_back_faces_are_skipped_only_where_they_cannot_be_seen(sample_hands):
     assert culling == ["back", "none", "none"]
     assert (images[0] != 255).any(axis=-1).mean() > 0.05  # the hand is in the picture
     assert np.abs(images[0] - images[1]).max() <= 2  # the culled closed skin looks exactly the same
+
+
+def test_gif_delays_keep_the_clips_length_and_no_delay_players_stretch():
+    """Delays in centiseconds add up to the clip's length; at 60 fps a frame due within 2 cs of the last is
+    skipped (players show a 1 cs delay as 10 cs), so every other frame is kept and the clip keeps its time."""
+    from s2h_viewer.render.gif import MIN_DELAY_CS, frame_delays
+    at_30 = frame_delays(510, 30.0)
+    assert len(at_30) == 510 and sum(at_30.values()) == 1700 and set(at_30.values()) == {3, 4}
+    at_60 = frame_delays(120, 60.0)
+    assert sum(at_60.values()) == 200 and min(at_60.values()) >= MIN_DELAY_CS and len(at_60) == 80

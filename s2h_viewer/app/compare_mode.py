@@ -8,8 +8,9 @@ method), so ticking a method computes that method alone. The grid shows the stat
 asks for is computed; Cancel goes back to what the grid showed, and the menus follow (before the
 first grid, to the methods computed for every target: none ticked, an empty grid, if none is).
 Results nothing asks for any more (an unticked method) stay in a bounded spare cache while the motion
-and their target stay, so ticking the method again is instant. Removing a target is undoable (its own
-undo stack: Edit > Undo in this tab), and brings the target back with its results, nothing recomputed."""
+and their target stay, so ticking the method again is instant. Ticking or unticking methods, adding and
+removing a target are undoable (its own undo stack: Edit > Undo in this tab): undo and redo bring back
+the results they had, nothing recomputed."""
 
 from __future__ import annotations
 
@@ -24,6 +25,7 @@ from s2h_viewer.app.progress_dialog import JobProgressDialog
 from s2h_viewer.app.retarget_queue import RetargetQueue
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
+from s2h_viewer.render.compare_scene import colour_bar_beside_solo
 from s2h_viewer.retarget.compare_state import CompareState, ResultKey
 from s2h_viewer.retarget.comparison import Comparison, MethodResult
 from s2h_viewer.retarget.methods import METHODS
@@ -58,6 +60,40 @@ def default_setup() -> CompareSetup:
 
 def label(result: MethodResult) -> str:
     return f"{METHODS[result.method].label} -> {result.target.name}"
+
+
+class SetMethodsCommand(QUndoCommand):
+    """Tick or untick methods (undoable): the results of an unticked method wait in the spare cache, so undo
+    and redo show them again without computing them."""
+
+    def __init__(self, mode: "CompareMode", methods: list[str]):
+        before = list(mode.state.methods)
+        ticked = [METHODS[m].label for m in methods if m not in before]
+        unticked = [METHODS[m].label for m in before if m not in methods]
+        super().__init__(", ".join([f"tick {m}" for m in ticked] + [f"untick {m}" for m in unticked]))
+        self.mode, self.before, self.after = mode, before, list(methods)
+
+    def redo(self) -> None:
+        self.mode._apply_methods(self.after)
+
+    def undo(self) -> None:
+        self.mode._apply_methods(self.before)
+
+
+class AddTargetCommand(QUndoCommand):
+    """Add a target (undoable): undo takes it away keeping its results, redo brings it back with them."""
+
+    def __init__(self, mode: "CompareMode", hand: HandModel):
+        super().__init__(f"add {hand.name}")
+        self.mode, self.hand = mode, hand
+        self.results: dict[ResultKey, MethodResult] = {}
+
+    def redo(self) -> None:
+        self.mode._restore_target(len(self.mode.state.targets), self.hand, self.results)
+
+    def undo(self) -> None:
+        self.results = {k: r for k, r in self.mode.state.results.items() if k.target == id(self.hand)}
+        self.mode._drop_target(next(i for i, t in enumerate(self.mode.state.targets) if t is self.hand))
 
 
 class RemoveTargetCommand(QUndoCommand):
@@ -144,12 +180,18 @@ class CompareMode(QWidget):
         self._sync()
 
     def set_methods(self, methods: list[str]) -> None:
-        self.state.methods = [m for m in METHODS if m in methods]
+        """Tick exactly ``methods`` (undoable)."""
+        methods = [m for m in METHODS if m in methods]
+        if methods != self.state.methods:
+            self.undo_stack.push(SetMethodsCommand(self, methods))
+
+    def _apply_methods(self, methods: list[str]) -> None:
+        self.state.methods = list(methods)
         self._sync()
 
     def add_target(self, hand: HandModel) -> None:
-        self.state.targets = [*self.state.targets, hand]
-        self._sync()
+        """One more target, the last row (undoable)."""
+        self.undo_stack.push(AddTargetCommand(self, hand))
 
     def remove_target(self, index: int) -> None:
         """Drop one target and its results (undoable); the rest stay as computed."""
@@ -346,8 +388,10 @@ class CompareMode(QWidget):
             self.select(self._shown_keys()[row])
 
     def _solo_changed(self, hand: int) -> None:
-        """A retarget shown alone (double-click, Ctrl+M) is the selected one; the source alone changes nothing."""
+        """A retarget shown alone (double-click, Ctrl+M) is the selected one, with the colour bar of its error
+        colours beside it; the source alone changes nothing."""
         if self.comparison is not None and hand >= 1:
+            colour_bar_beside_solo(self.view.plotter)
             self.select(self._shown_keys()[hand - 1])
 
     def _show_selected_curve(self) -> None:

@@ -30,6 +30,7 @@ ERROR_COLOURMAP = "plasma"
 DISPLAY_FACES = 10_000
 PLAYING_FACES = 3_000  # while the window plays: a third of the triangles, a quarter less time per frame
 COLOUR_BAR_SHARE = 0.065  # of the grid's width: the colour bar's column, however many hand columns
+LABEL_PX = 13  # the grid's labels' font size, in pixels
 CONTACT_COLOUR = "#1a9850"
 LOST_COLOUR = "#ff1f1f"
 #: each contact pair (``semantics.contacts.CONTACT_PAIRS``) as two indices into ``contact_sites``.
@@ -178,10 +179,27 @@ def source_cell_below(comparison: Comparison) -> tuple[int, int] | None:
     return (1, 0) if rows > 1 else None
 
 
+def plain_text() -> None:
+    """Draw every VTK text as it is written: by default VTK hands a string holding '|' or '$' to its MathText
+    backend, which makes '|' a column break (an FBX take "Armature|counting" read "Armature   counting")."""
+    import vtkmodules.vtkRenderingFreeType  # noqa: F401  (registers the text renderer GetInstance returns)
+    from vtkmodules.vtkRenderingCore import vtkTextRenderer
+    vtkTextRenderer.GetInstance().SetDefaultBackend(vtkTextRenderer.FreeType)
+
+
+def add_label(plotter: pv.Plotter, text: str) -> None:
+    """Text at the top left of the current subplot, LABEL_PX pixels high whatever the cell's size (pyvista's
+    corner annotation scales its font with the viewport: five methods made it unreadably small)."""
+    label = plotter.add_text(text, position=(0.02, 0.98), viewport=True, color="black")
+    label.prop.font_size = LABEL_PX
+    label.prop.SetVerticalJustificationToTop()
+
+
 def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
              display_faces: int | None = DISPLAY_FACES, playing_faces: int | None = None) -> list[PosedHand]:
     """Fill a plotter made with ``**grid_layout(comparison)``; returns the hands to update per frame.
     ``playing_faces``: each skin also at that many faces, drawn while playing (`PosedHand.set_playing`)."""
+    plain_text()
     lighter: dict[tuple[int, int | None], HandModel] = {}
 
     def light(hand: HandModel, faces: int | None) -> HandModel:
@@ -197,7 +215,7 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
     for row, target in enumerate(dict.fromkeys(id(r.target) for r in comparison.results)):
         results = [r for r in comparison.results if id(r.target) == target]
         panels += [((row, 1 + k), r.target, r.pose, r.joint_error, source_contacts,
-                    f"{METHODS[r.method].label} -> {r.target.name}\nS_palm {r.scores.s_palm:.3f}  "
+                    f"{METHODS[r.method].label} -> {r.target.name}\nS_palm {r.scores.s_palm:.3f}\n"
                     f"S_finger {r.scores.s_finger:.3f}") for k, r in enumerate(results)]
     hands = []
     for cell, hand, pose, error, expected, label in panels:
@@ -210,13 +228,13 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
         posed.overlay = Overlays(plotter, hand, pose, expected)
         posed.renderer = plotter.renderer
         hands.append(posed)
-        plotter.add_text(label, font_size=9, color="black", position="upper_left")
+        add_label(plotter, label)
     below = source_cell_below(comparison)
     if below is not None:
         plotter.subplot(*below)
         plotter.set_background("white")
-        plotter.add_text(f"clip: {comparison.motion.name}\n{comparison.n_frames} frames at {comparison.motion.fps:g} fps",
-                         font_size=9, color="black", position="upper_left")
+        add_label(plotter, f"clip: {comparison.motion.name}\n{comparison.n_frames} frames at "
+                           f"{comparison.motion.fps:g} fps")
     coloured = next((h.error_actor for h in hands if h.error_actor is not None), None)
     plotter.subplot(0, plotter.shape[1] - 1)
     plotter.set_background("white")
@@ -228,6 +246,16 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
     plotter.link_views()
     set_camera(plotter, "default", [h.hand for h in hands])
     return hands
+
+
+def colour_bar_beside_solo(plotter: pv.Plotter) -> None:
+    """A retarget shown alone keeps the colour bar of its error colours: the one hand viewport drawn gives
+    the bar's column (its share of the grid's width) back to the bar, drawn again on the right."""
+    bar = plotter.renderers[plotter.renderers.loc_to_index((0, plotter.shape[1] - 1))]
+    solo = next(r for r in plotter.renderers if r.GetDraw() and r is not bar)
+    solo.SetViewport(0.0, 0.0, 1.0 - COLOUR_BAR_SHARE, 1.0)
+    bar.SetViewport(1.0 - COLOUR_BAR_SHARE, 0.0, 1.0, 1.0)
+    bar.SetDraw(True)
 
 
 #: camera directions in view space (x = fingers, y = thumb side, z = back of the hand) and up vectors.
@@ -373,7 +401,8 @@ def render_comparison(comparison: Comparison, path: str | Path, frame: int | Non
 
     try:
         if path.suffix.lower() in VIDEO_SUFFIXES:
-            return write_video(path, (image(f) for f in range(comparison.n_frames)), comparison.motion.fps)
+            return write_video(path, (image(f) for f in range(comparison.n_frames)), comparison.motion.fps,
+                               comparison.n_frames)
         from PIL import Image
         with atomic_path(path) as tmp:
             Image.fromarray(image(frame or 0)).save(tmp, format="PNG")

@@ -1,4 +1,6 @@
-"""Video files from rendered frames (MP4 through imageio-ffmpeg, GIF through Pillow), written atomically."""
+"""Video files from rendered frames (MP4 through imageio-ffmpeg, GIF through `render.gif`), written
+atomically and as the frames come: the frames are never all held, and a stop between two frames (an
+exception from the frames' iterator) leaves no file."""
 
 from __future__ import annotations
 
@@ -9,25 +11,29 @@ import imageio.v2 as imageio
 import numpy as np
 
 from s2h_viewer.io.atomic import atomic_path
+from s2h_viewer.render.gif import GifWriter
 
 VIDEO_SUFFIXES = (".mp4", ".gif")
 
 
-def write_video(path: str | Path, frames: Iterable[np.ndarray], fps: float) -> Path:
-    """Write RGB frames (H, W, 3) uint8 as MP4 (H.264) or GIF by suffix; returns the path."""
+def write_video(path: str | Path, frames: Iterable[np.ndarray], fps: float, n_frames: int) -> Path:
+    """Write ``n_frames`` RGB frames (H, W, 3) uint8 as MP4 (H.264) or GIF by suffix; returns the path."""
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in VIDEO_SUFFIXES:
         raise ValueError(f"{path}: video must be {' or '.join(VIDEO_SUFFIXES)}")
     with atomic_path(path) as tmp:
         if suffix == ".mp4":
-            writer = imageio.get_writer(tmp, fps=fps, codec="libx264", quality=8, macro_block_size=16,
-                                        ffmpeg_log_level="error")
+            with imageio.get_writer(tmp, fps=fps, codec="libx264", quality=8, macro_block_size=16,
+                                    ffmpeg_log_level="error") as writer:
+                for frame in frames:
+                    writer.append_data(_even(np.asarray(frame)[..., :3]))
         else:
-            writer = imageio.get_writer(tmp, mode="I", duration=1000.0 / fps, loop=0)
-        with writer:
-            for frame in frames:
-                writer.append_data(_even(np.asarray(frame)[..., :3]) if suffix == ".mp4" else np.asarray(frame))
+            with open(tmp, "wb") as file:
+                gif = GifWriter(file, n_frames, fps)
+                for frame in frames:
+                    gif.append(frame)
+                gif.close()
     return path
 
 
