@@ -25,7 +25,6 @@ from s2h_viewer.app.progress_dialog import JobProgressDialog
 from s2h_viewer.app.retarget_queue import RetargetQueue
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
-from s2h_viewer.render.compare_scene import colour_bar_beside_solo
 from s2h_viewer.retarget.compare_state import CompareState, ResultKey
 from s2h_viewer.retarget.comparison import Comparison, MethodResult
 from s2h_viewer.retarget.methods import METHODS
@@ -388,10 +387,8 @@ class CompareMode(QWidget):
             self.select(self._shown_keys()[row])
 
     def _solo_changed(self, hand: int) -> None:
-        """A retarget shown alone (double-click, Ctrl+M) is the selected one, with the colour bar of its error
-        colours beside it; the source alone changes nothing."""
+        """A retarget shown alone (double-click, Ctrl+M) is the selected one; the source alone changes nothing."""
         if self.comparison is not None and hand >= 1:
-            colour_bar_beside_solo(self.view.plotter)
             self.select(self._shown_keys()[hand - 1])
 
     def _show_selected_curve(self) -> None:

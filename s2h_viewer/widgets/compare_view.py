@@ -19,7 +19,8 @@ import pyvista as pv
 from PySide6.QtCore import QEvent, QObject, Signal
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
-from s2h_viewer.render.compare_scene import (PLAYING_FACES, PosedHand, PosedSkin, ViewOptions, apply_options, fit_view_angle,
+from s2h_viewer.render.compare_scene import (PLAYING_FACES, PosedHand, PosedSkin, ViewOptions, apply_options,
+                                             colour_bar_beside_solo, fit_view_angle,
                                              grid_layout, populate)
 from s2h_viewer.retarget.comparison import Comparison
 from s2h_viewer.widgets.vtk_widget import PlotterWidget, window_plotter
@@ -72,6 +73,9 @@ class CompareView(QWidget):
         self.interactor.rendered.connect(self.drawn)
         self.interactor.render_started.connect(self._pose_ahead)
         self._layout.addWidget(self.interactor)
+        if self.isVisible():  # shown and sized now, not at the next event loop: a grab right after draws at its size
+            self.interactor.show()
+            self._layout.activate()
         self.interactor.Initialize()
         self._hands = populate(self.plotter, comparison, self.options.opacity, playing_faces=PLAYING_FACES)
         self._viewports = [tuple(r.GetViewport()) for r in self.plotter.renderers]
@@ -165,6 +169,8 @@ class CompareView(QWidget):
         for renderer, viewport in zip(self.plotter.renderers, self._viewports):
             renderer.SetViewport(*((0.0, 0.0, 1.0, 1.0) if renderer is solo else viewport))
             renderer.SetDraw(solo is None or renderer is solo)
+        if index >= 0 and self._hands[index].error_actor is not None:
+            colour_bar_beside_solo(self.plotter)  # a retarget alone keeps the colour bar of its error colours
         self._choose_skins()
         self.solo_changed.emit(index)
         self.interactor.update()
