@@ -75,7 +75,7 @@ class _Matrix(QWidget):
 
     def paintEvent(self, event) -> None:
         painter = QPainter(self)
-        painter.drawPixmap(0, 0, self.labels)
+        painter.drawPixmap(event.rect(), self.labels, event.rect())
         heatmap = self.heatmap
         if heatmap.current is not None:
             painter.drawImage(QRect(LEFT, TOP, topo.N_ASM_COLUMNS * CELL, topo.N_FINGER_JOINTS * CELL),
@@ -137,4 +137,5 @@ class AsmHeatmap(QWidget):
         """Show ``cell_error`` (20, 29), the matrix of ``frame``: new cell colours in the same image, a repaint."""
         self.current, self.frame = cell_error, frame
         self._rgb[..., :3] = self._colours[colour_indices(cell_error)]
-        self.matrix.update()
+        self.matrix.update(0, 0, LEFT, TOP)  # the frame number
+        self.matrix.update(LEFT, TOP, topo.N_ASM_COLUMNS * CELL, topo.N_FINGER_JOINTS * CELL)  # the cells: not the labels

@@ -100,7 +100,7 @@ class CompareView(QWidget):
             hand.show(frame, posed)
         self._ahead = None
         if self.interactor is not None:
-            self.interactor.update()
+            self.interactor.draw_now()
 
     def _pose_ahead(self) -> None:
         """While the render thread draws, skin the frame playback will most likely ask for next (one frame

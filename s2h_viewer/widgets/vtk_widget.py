@@ -97,6 +97,13 @@ class PlotterWidget(QWidget):
             QTimer.singleShot(0, self, self._start_queued_frame)
         super().update(*area)
 
+    def draw_now(self) -> None:
+        """Ask for a new frame and, threaded, start drawing it now (the caller changes the scene no more)."""
+        self._stale = True
+        if self._thread is not None and self._job is None and self._image is not None and self.alive:
+            self._start_frame()
+        super().update()
+
     def render(self) -> None:
         """Draw now (what picking and a drag's live feedback read), shown in the next paint."""
         if self.alive:
