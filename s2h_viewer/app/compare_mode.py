@@ -156,7 +156,6 @@ class CompareMode(QWidget):
         layout.addWidget(self.timeline)
         layout.addWidget(self.curve)
         self.timeline.frame_changed.connect(self.show_frame)
-        self.view.frame_due = self.timeline.due_frame
         self.view.drawn.connect(self.timeline.note_drawn)
         self.timeline.play_button.toggled.connect(self._playing_changed)
         self.curve.frame_clicked.connect(self.timeline.set_frame)

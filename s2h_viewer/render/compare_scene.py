@@ -47,16 +47,6 @@ class Skin:
     closed: bool
 
 
-@dataclass
-class PosedSkin:
-    """One skin's vertices (view space) and per-vertex error at one frame, ready to write into its mesh."""
-
-    frame: int
-    skin: Skin
-    points: np.ndarray
-    error: np.ndarray | None
-
-
 class PosedHand:
     """The pyvista data of one hand in one subplot, updated in place each frame. Given a ``playing_hand``
     (the same hand with fewer faces), that one is drawn while playing and the full one when paused."""
@@ -118,36 +108,21 @@ class PosedHand:
         for level in self.levels:
             level.actor.visibility = level is self.skin
 
-    def posed_skin(self, frame: int) -> PosedSkin | None:
-        """The drawn skin's vertices and error colours at ``frame``, computed without touching VTK (so while
-        another thread draws the last frame); None for a skeleton-only hand."""
-        if not self.levels:
-            return None
-        skin = self.skin
-        points = to_view(skin.hand, skin_vertices(skin.hand, self.pose, frame))
-        error = None
-        if self.joint_error is not None:
-            per_rotating = np.zeros(topo.N_ROTATING)  # wrist 0, then each articulated joint's ASM row
-            per_rotating[1:] = np.nan_to_num(self.joint_error[frame, topo.ARTICULATED_JOINTS - 1])
-            error = skin.hand.mesh.weights @ per_rotating
-        return PosedSkin(frame, skin, points, error)
-
-    def show(self, frame: int, posed: PosedSkin | None = None) -> None:
-        """Pose the hand at ``frame``; ``posed``: that frame's `posed_skin`, computed ahead."""
+    def show(self, frame: int) -> None:
         self.frame = frame
         if self.overlay is not None:
             self.overlay.show(frame)
         if not self.levels:
             self.bones.points = to_view(self.hand, self.pose.positions[frame].numpy().astype(np.float64))
             return
-        if posed is None or posed.frame != frame or posed.skin is not self.skin:
-            posed = self.posed_skin(frame)
-        mesh = posed.skin.mesh
-        mesh.points[:] = posed.points  # in place: no new VTK arrays per frame
-        mesh.GetPoints().Modified()
-        if posed.error is not None:
-            mesh.point_data["error"][:] = posed.error
-            mesh.point_data.GetArray("error").Modified()
+        skin = self.skin
+        skin.mesh.points[:] = to_view(skin.hand, skin_vertices(skin.hand, self.pose, frame))  # in place: no new
+        skin.mesh.GetPoints().Modified()  # VTK arrays per frame
+        if self.joint_error is not None:
+            per_rotating = np.zeros(topo.N_ROTATING)  # wrist 0, then each articulated joint's ASM row
+            per_rotating[1:] = np.nan_to_num(self.joint_error[frame, topo.ARTICULATED_JOINTS - 1])
+            skin.mesh.point_data["error"][:] = skin.hand.mesh.weights @ per_rotating
+            skin.mesh.point_data.GetArray("error").Modified()
 
     def set_opacity(self, opacity: float) -> None:
         """See-through below 1; an opaque closed skin skips its back faces (about a third of the drawing)."""

@@ -1,32 +1,27 @@
 """Compare mode's viewport: the compare grid (`render.compare_scene`) in one render window with
-linked cameras, drawn in a render thread (`widgets.vtk_widget`, threaded), redrawn on ``show_frame``.
+linked cameras, rendered off screen and shown as an image (`widgets.vtk_widget`), redrawn on ``show_frame``.
 
-A new frame asks for a render: one per frame for the whole grid. While the timeline plays, each skin of
-the grid is drawn with fewer faces, and while VTK draws one frame the GUI thread skins the frame the
-clock will most likely ask for next (`frame_due`), so showing it is a copy; paused or shown alone, the
-full display mesh. A double-click on a hand shows its viewport alone (solo), a second one brings the
-grid back. ``drawn`` fires for every frame drawn, so the timeline can show the frames drawn per
-second. Every method that changes the scene first waits for the frame being drawn."""
+A new frame asks for a repaint (``update``): one render per frame for the whole grid. While the
+timeline plays, each skin of the grid is drawn with fewer faces; paused or shown alone, the full
+display mesh. A double-click on a hand shows its viewport alone (solo), a second one brings the grid
+back. ``drawn`` fires after every render, so the timeline can show the frames actually drawn per
+second."""
 
 from __future__ import annotations
 
 import dataclasses
-import time
-from collections.abc import Callable
 
 import numpy as np
 import pyvista as pv
 from PySide6.QtCore import QEvent, QObject, Signal
+from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
-from s2h_viewer.render.compare_scene import (PLAYING_FACES, PosedHand, PosedSkin, ViewOptions, apply_options,
+from s2h_viewer.render.compare_scene import (PLAYING_FACES, PosedHand, ViewOptions, apply_options,
                                              colour_bar_beside_solo, fit_view_angle,
                                              grid_layout, populate)
 from s2h_viewer.retarget.comparison import Comparison
 from s2h_viewer.widgets.vtk_widget import PlotterWidget, window_plotter
-
-
-PERIOD_SMOOTHING = 0.2  # weight of the newest frame period in the smoothed one
 
 
 class CompareView(QWidget):
@@ -48,11 +43,6 @@ class CompareView(QWidget):
         self._viewports: list[tuple[float, ...]] = []
         self.frame = 0
         self.playing = False
-        #: the frame the timeline will ask for in so many seconds (`Timeline.due_frame`), for skinning ahead
-        self.frame_due: Callable[[float], int | None] | None = None
-        self._ahead: tuple[int, list[PosedSkin | None]] | None = None  # a frame skinned ahead
-        self._shown_at: float | None = None  # when the last frame was shown
-        self._period = 1 / 30  # seconds between shown frames while playing (smoothed)
 
     @property
     def opacity(self) -> float:
@@ -67,11 +57,10 @@ class CompareView(QWidget):
         self.comparison = comparison
         self.close_grid()  # pyvista fixes the subplot layout at construction: start afresh
         self.plotter = window_plotter(**grid_layout(comparison))
-        self.interactor = PlotterWidget(self.plotter, self, threaded=True)
+        self.interactor = PlotterWidget(self.plotter, self)
         self.interactor.installEventFilter(self)
-        self.interactor.before_render = self._fit_camera
-        self.interactor.rendered.connect(self.drawn)
-        self.interactor.render_started.connect(self._pose_ahead)
+        self.plotter.render_window.AddObserver("StartEvent", lambda *_: self._fit_camera())
+        self.plotter.render_window.AddObserver("EndEvent", lambda *_: self.drawn.emit())
         self._layout.addWidget(self.interactor)
         if self.isVisible():  # shown and sized now, not at the next event loop: a grab right after draws at its size
             self.interactor.show()
@@ -90,26 +79,11 @@ class CompareView(QWidget):
         self.show_frame(min(self.frame, comparison.n_frames - 1))
 
     def show_frame(self, frame: int) -> None:
-        self._wait()
-        now = time.perf_counter()
-        if self.playing and self._shown_at is not None:
-            self._period += PERIOD_SMOOTHING * (now - self._shown_at - self._period)
-        self.frame, self._shown_at = frame, now
-        ahead = self._ahead if self._ahead is not None and self._ahead[0] == frame else (frame, [None] * len(self._hands))
-        for hand, posed in zip(self._hands, ahead[1]):
-            hand.show(frame, posed)
-        self._ahead = None
+        self.frame = frame
+        for hand in self._hands:
+            hand.show(frame)
         if self.interactor is not None:
-            self.interactor.draw_now()
-
-    def _pose_ahead(self) -> None:
-        """While the render thread draws, skin the frame playback will most likely ask for next (one frame
-        period from the last one shown), so that showing it needs only a copy."""
-        if not self.playing or self.frame_due is None or self._shown_at is None:
-            return
-        frame = self.frame_due(self._shown_at + self._period - time.perf_counter())
-        if frame is not None and frame != self.frame:
-            self._ahead = (frame, [hand.posed_skin(frame) for hand in self._hands])
+            self.interactor.update()
 
     def _fit_camera(self) -> None:
         """Before each render: the camera's view angle for the hand viewports' shape now (the widget's size and
@@ -118,14 +92,8 @@ class CompareView(QWidget):
         if shown is not None:
             fit_view_angle(self.plotter, shown)
 
-    def _wait(self) -> None:
-        """Before the scene changes: let a frame being drawn in the render thread finish."""
-        if self.interactor is not None:
-            self.interactor.wait()
-
     def set_playing(self, playing: bool) -> None:
-        self._wait()
-        self.playing, self._shown_at, self._ahead = playing, None, None
+        self.playing = playing
         self._choose_skins()
         if self.interactor is not None:
             self.interactor.update()
@@ -138,7 +106,6 @@ class CompareView(QWidget):
 
     def set_options(self, **changes) -> None:
         """Change the camera preset, overlays or opacity (``ViewOptions`` fields) and redraw."""
-        self._wait()
         self.options = dataclasses.replace(self.options, **changes)
         if self.interactor is not None:  # the camera moves for a preset only, not for an overlay
             apply_options(self.plotter, self._hands, self.options, camera="camera" in changes)
@@ -163,7 +130,6 @@ class CompareView(QWidget):
 
     def set_solo(self, index: int) -> None:
         """Show hand ``index``'s viewport alone over the whole view; -1 restores the grid."""
-        self._wait()
         self.solo = index
         solo = self._hands[index].renderer if index >= 0 else None
         for renderer, viewport in zip(self.plotter.renderers, self._viewports):
@@ -184,13 +150,20 @@ class CompareView(QWidget):
 
     def grab_rgb(self) -> np.ndarray:
         """The current view as an (H, W, 3) uint8 image (what screenshot and video export save)."""
-        self._fit_camera()
-        return self.interactor.grab_frame()[..., :3].copy()
+        window = self.plotter.render_window
+        window.Render()
+        grab = vtkWindowToImageFilter()
+        grab.SetInput(window)
+        grab.SetInputBufferTypeToRGB()
+        grab.ReadFrontBufferOff()
+        grab.Update()
+        image = pv.wrap(grab.GetOutput())
+        width, height, _ = image.dimensions
+        return np.asarray(image.point_data.active_scalars).reshape(height, width, -1)[::-1, :, :3].copy()
 
     def close_grid(self) -> None:
         """Free the render window and its widget (a new grid, or the window closing)."""
         if self.interactor is not None:
-            self._wait()
             self.interactor.hide()
             self._layout.removeWidget(self.interactor)
             self.interactor.close_plotter()
