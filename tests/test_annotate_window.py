@@ -88,6 +88,14 @@ def turn_angle(before: np.ndarray, after: np.ndarray) -> float:
                                        np.dot(before[:, 1], after[:, 1]))))
 
 
+def ring_drag_path(view, joint: int, degrees: float) -> list[QPoint]:
+    """11 pointer positions along ``joint``'s ring, ``degrees`` round it from a point where that turn moves the
+    pointer well apart on screen."""
+    start = next(a for a in range(0, 360, 15) if (widget_point(view, ring_point(view, joint, a)) -
+                 widget_point(view, ring_point(view, joint, a + degrees))).manhattanLength() > 25)
+    return [widget_point(view, ring_point(view, joint, start + t)) for t in np.linspace(0, degrees, 11)]
+
+
 def keyboard_to(qtbot, widget) -> None:
     """The window active and ``widget`` focused, as after a user's click there: shortcuts reach the window."""
     widget.window().activateWindow()
@@ -120,10 +128,8 @@ def test_click_a_joint_drag_its_ring_and_undo(window, qtbot, hand_file):
     assert view.selected == joint and view.joints.currentRow() == joint
 
     # drag the ring from one of its points to another 50 deg further round: the frame turns by 50 deg
-    start, drag = next((a, 50.0) for a in range(0, 360, 15)
-                       if (widget_point(view, ring_point(view, joint, a)) -
-                           widget_point(view, ring_point(view, joint, a + 50))).manhattanLength() > 25)
-    path = [widget_point(view, ring_point(view, joint, start + t)) for t in np.linspace(0, drag, 11)]
+    drag = 50.0
+    path = ring_drag_path(view, joint, drag)
     before = window.annotation.frames[joint].copy()
     camera = np.array(view.plotter.camera.position)
     QTest.mousePress(view.interactor, Qt.MouseButton.LeftButton, pos=path[0])
@@ -273,3 +279,36 @@ def test_an_edge_on_ring_rolls_under_the_pointer(window, qtbot, hand_file):
     turned = centre + radius * (np.cos(angle) * frame[:, 2] - np.sin(angle) * frame[:, 1])
     moved = widget_point(view, turned)
     assert (moved - target).manhattanLength() <= 3
+
+
+def test_the_dial_and_its_readout_show_the_turn_a_ring_drag_made_and_follow_undo(window, qtbot, hand_file):
+    window.annotate_file(str(hand_file))
+    view = window.annotate_view
+    joint = 7  # middle_pip: turned face-on to the camera, so the drag follows the pointer exactly
+    view.select(joint)
+    frame = to_view(window.annotation.hand, window.annotation.frames[joint].T).T
+    camera = view.plotter.camera
+    camera.focal_point = view.joint_centres()[joint]
+    camera.position = view.joint_centres()[joint] + camera.distance * frame[:, 0]
+    view.interactor.render()
+    settle()
+    assert view.dial.value() == 0 and "+0 deg" in view.angle_label.text()
+    path = ring_drag_path(view, joint, 40.0)
+    QTest.mousePress(view.interactor, Qt.MouseButton.LeftButton, pos=path[0])
+    for point in path[1:]:
+        QTest.mouseMove(view.interactor, point)
+    turned = round(view.turn_from_opened())
+    assert abs(turned - 40) <= 3 and view.dial.value() == turned  # live, while the button is held
+    QTest.mouseRelease(view.interactor, Qt.MouseButton.LeftButton, pos=path[-1])
+    assert view.dial.value() == turned and f"{turned:+d} deg" in view.angle_label.text()  # not back to 0
+
+    view.turn_selected(-15)  # the dial turns on from where the ring left the frame
+    assert view.dial.value() == turned - 15 and round(view.turn_from_opened()) == turned - 15
+    window.undo_stack.undo()
+    assert view.dial.value() == turned and f"{turned:+d} deg" in view.angle_label.text()
+    window.undo_stack.undo()
+    assert view.dial.value() == 0 and "+0 deg" in view.angle_label.text()
+    window.undo_stack.redo()
+    assert view.dial.value() == turned
+    view.select(3)  # another joint: its own turn
+    assert view.dial.value() == 0 and view.angle_label.text().startswith(topo.ARTICULATED_NAMES[3])

@@ -1,7 +1,8 @@
 """Annotation mode's view: one hand at rest, see-through, each joint's TBS frame as three arrows
 (twist red, bend green, splay blue), a joint list with the solver's confidence, and two handles that
 turn the selected joint's frame about its twist axis while they are dragged: a ring about the joint in
-the 3D view and a dial beside it."""
+the 3D view and a dial beside it. The dial and its readout show how far the selected frame is turned from
+the frame it had when the hand was opened, whichever handle turned it (and after an undo or a redo)."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ import pyvista as pv
 from PySide6.QtCore import Signal
 from PySide6.QtWidgets import QDial, QHBoxLayout, QLabel, QListWidget, QSplitter, QVBoxLayout, QWidget
 
-from s2h_viewer.annotate.editing import AnnotationSession, rotate_about_twist
+from s2h_viewer.annotate.editing import AnnotationSession, rotate_about_twist, signed_angle_about
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.render.scene import (AXIS_COLOURS, BONE_COLOUR, SKIN_COLOUR, display_hand, pose_frame, skeleton,
                                      surface, to_view)
@@ -46,6 +47,8 @@ class AnnotationView(QWidget):
         self.session: AnnotationSession | None = None
         self.selected = 0
         self._drag_base: np.ndarray | None = None
+        self._dial_at_grab = 0
+        self._opened: np.ndarray | None = None  # (15, 3, 3) the frames the hand was opened with
         self.plotter = window_plotter()
         self.interactor = PlotterWidget(self.plotter, self)
         self.ring = RotationRing(self.interactor, self._begin_drag, self._turn_to, self._end_drag, self._clicked)
@@ -54,7 +57,7 @@ class AnnotationView(QWidget):
         self.dial.setRange(-180, 180)
         self.dial.setWrapping(True)
         self.dial.setNotchesVisible(True)
-        self.angle_label = QLabel("turn about twist: 0 deg")
+        self.angle_label = QLabel()
         self.legend = QLabel(LEGEND)
         self.legend.setWordWrap(True)
         side = QWidget()
@@ -80,6 +83,7 @@ class AnnotationView(QWidget):
         self.session = session
         self.selected = 0
         self._drag_base = None
+        self._opened = session.frames.copy()
         plotter = self.plotter
         plotter.clear()
         plotter.set_background("white")
@@ -132,7 +136,22 @@ class AnnotationView(QWidget):
             mesh.copy_from(_arrows(self.session, axis, self.selected))
         view_frame = to_view(self.session.hand, self.session.frames[self.selected].T).T
         self.ring.place(self.joint_centres()[self.selected], view_frame, RING_RADIUS * self.session.hand.hand_length)
+        self._show_turn()
         self.interactor.render()
+
+    def turn_from_opened(self) -> float:
+        """Degrees the selected joint's frame is turned about its twist axis from its frame at opening."""
+        opened, now = self._opened[self.selected], self.session.frames[self.selected]
+        return signed_angle_about(opened[:, 0], opened[:, 1], now[:, 1])
+
+    def _show_turn(self) -> None:
+        """The dial and the readout say the selected frame's turn, however it came (ring, dial, undo, solver)."""
+        degrees = self.turn_from_opened()
+        self.angle_label.setText(f"{topo.ARTICULATED_NAMES[self.selected]}: turned {degrees:+.0f} deg about its "
+                                 f"twist axis from its frame at opening")
+        self.dial.blockSignals(True)
+        self.dial.setValue(round(degrees))
+        self.dial.blockSignals(False)
 
     def select(self, joint: int) -> None:
         if joint < 0 or self.session is None:
@@ -144,13 +163,14 @@ class AnnotationView(QWidget):
 
     def _begin_drag(self) -> None:
         self._drag_base = self.session.frames[self.selected].copy() if self.session is not None else None
+        self._dial_at_grab = self.dial.value()
 
     def _dial_turned(self, degrees: int) -> None:
-        self._turn_to(float(degrees))
+        """The dial shows the turn from the frame at opening: a drag turns by what it moved since the grab."""
+        self._turn_to(float((degrees - self._dial_at_grab + 180) % 360 - 180))
 
     def _turn_to(self, degrees: float) -> None:
         """Live: the selected frame is its frame at the grab turned by ``degrees`` about its twist axis."""
-        self.angle_label.setText(f"turn about twist: {degrees:+.0f} deg")
         if self._drag_base is None or self.session is None:
             return
         self.session.frames[self.selected] = rotate_about_twist(self._drag_base, degrees)
@@ -161,15 +181,11 @@ class AnnotationView(QWidget):
             return
         before, after = self._drag_base, self.session.frames[self.selected].copy()
         self._drag_base = None
-        self.dial.blockSignals(True)
-        self.dial.setValue(0)
-        self.dial.blockSignals(False)
-        self.angle_label.setText("turn about twist: 0 deg")
         if not np.allclose(before, after):
             self.frame_edited.emit(self.selected, before, after)
 
     def turn_selected(self, degrees: int) -> None:
-        """What one drag of the dial does, for keyboard users and tests: press, turn, release."""
+        """What one drag of the dial by ``degrees`` does, for keyboard users and tests: press, turn, release."""
         self.dial.sliderPressed.emit()
-        self.dial.setValue(degrees)
+        self.dial.setValue((self.dial.value() + degrees + 180) % 360 - 180)
         self.dial.sliderReleased.emit()
