@@ -10,7 +10,9 @@ counting the renders the view really made, beside the CPU time per drawn frame (
 process; on a shared machine the load moves it less than the wall time). While playing the window
 draws each skin with `PLAYING_FACES` faces: the off-screen rate of the same scene (those skins, a
 viewport of the window's size) is timed right after each window round, with the window open and idle,
-so that both see the same load; the ratio of each round and their median are printed. Then the 1x
+so that both see the same load; the ratio of each round and their median are printed. The window poses
+the next frame's skins on a worker thread while it draws the current one (the share of frames shown so
+is printed); off screen poses each in line, as `s2h render` does. Then the 1x
 rate, the off-screen rate with the paused skins (`DISPLAY_FACES`), and ASM-Opt ticked in the Methods
 menu, timed until the grid shows it (only ASM-Opt's two retargets are computed: the rest is cached).
 """
@@ -34,10 +36,11 @@ def load() -> str:
     return "load {:.1f} {:.1f} {:.1f}".format(*os.getloadavg())
 
 
-def drawn_rate(window, speed: float) -> tuple[float, float, float]:
-    """(frames drawn per second, clip frames advanced per second, CPU seconds per drawn frame) while
-    playing at ``speed``."""
+def drawn_rate(window, speed: float) -> tuple[float, float, float, float]:
+    """(frames drawn per second, clip frames advanced per second, CPU seconds per drawn frame, share of the
+    frames shown whose skins were posed ahead on the worker thread) while playing at ``speed``."""
     drawn: list[float] = []
+    ahead, here = window.view.prefetched, window.view.posed_here
 
     def count() -> None:
         drawn.append(time.perf_counter())
@@ -52,7 +55,8 @@ def drawn_rate(window, speed: float) -> tuple[float, float, float]:
     elapsed, cpu = time.perf_counter() - t0, time.process_time() - cpu
     advanced = window.timeline.frame  # no loop wrap in 6 s at 1x; at 4x only the draw rate is used
     window.view.drawn.disconnect(count)
-    return len(drawn) / elapsed, advanced / elapsed, cpu / max(1, len(drawn))
+    ahead, here = window.view.prefetched - ahead, window.view.posed_here - here
+    return len(drawn) / elapsed, advanced / elapsed, cpu / max(1, len(drawn)), ahead / max(1, ahead + here)
 
 
 def off_screen(comparison, faces: int, viewport: tuple[int, int]) -> tuple[float, float, float, float]:
@@ -76,17 +80,18 @@ def main() -> None:
         ratios, cpu_ratios = [], []
         for round_ in range(1, args.rounds + 1):
             before = load()
-            fast, _, fast_cpu = drawn_rate(window, 4.0)
+            fast, _, fast_cpu, ahead = drawn_rate(window, 4.0)
             off, skin, render, off_cpu = off_screen(comparison, PLAYING_FACES, viewport)
             ratios.append(fast / off)
             cpu_ratios.append(off_cpu / fast_cpu)
-            print(f"round {round_}: window {fast:5.1f} frames/s (CPU {fast_cpu * 1000:4.1f} ms/frame), off screen "
+            print(f"round {round_}: window {fast:5.1f} frames/s (CPU {fast_cpu * 1000:4.1f} ms/frame, {ahead:.0%} of "
+                  f"frames posed ahead), off screen "
                   f"{off:5.1f} frames/s (skinning {skin * 1000:4.1f} + rendering {render * 1000:4.1f} ms; CPU "
                   f"{off_cpu * 1000:4.1f} ms/frame): window / off screen {ratios[-1]:.2f} x, CPU per frame off "
                   f"screen / window {cpu_ratios[-1]:.2f} [{before} -> {load()}]", flush=True)
         print(f"window / off screen, median of {args.rounds} rounds: {statistics.median(ratios):.2f} x frames/s, "
               f"{statistics.median(cpu_ratios):.2f} x CPU per frame (target >= 0.8 x and >= 30 frames/s)")
-        real, advanced, _ = drawn_rate(window, 1.0)
+        real, advanced, _, _ = drawn_rate(window, 1.0)
         print(f"in the window at 1x: {real:5.1f} frames/s drawn, the clip advanced {advanced:5.1f} frames/s "
               f"(real time: {comparison.motion.fps:g})")
         paused, _, _, paused_cpu = off_screen(comparison, DISPLAY_FACES, viewport)

@@ -297,6 +297,56 @@ def test_skins_are_lighter_while_the_grid_plays_and_full_when_paused_or_alone(wi
     np.testing.assert_allclose(full.mesh.points, to_view(full.hand, skin_vertices(full.hand, hand.pose, frame)))
 
 
+def test_frames_posed_ahead_are_the_frames_shown(window, qtbot):
+    from s2h_viewer.hand.skinning import skin_vertices
+    from s2h_viewer.render.scene import to_view
+    view = window.view
+    drawn_before = view.prefetched
+    window.timeline.set_frame(0)
+    window.timeline.set_playing(True)
+    checked = []
+
+    def check(frame: int) -> None:  # every skin shown equals the skin posed here for that frame
+        checked.append(all(np.allclose(h.mesh.points, to_view(h.skin.hand, skin_vertices(h.skin.hand, h.pose, frame)))
+                           and (h.skin.error is None or np.allclose(h.skin.error, h.posed_skin(frame).error))
+                           for h in view._hands))
+    window.timeline.frame_changed.connect(check)
+    qtbot.waitUntil(lambda: len(checked) >= 20, timeout=30_000)
+    window.timeline.set_playing(False)
+    window.timeline.frame_changed.disconnect(check)
+    assert all(checked)
+    assert view.prefetched - drawn_before >= 10  # at 1x the frame expected next is the frame asked for
+    view.prefetch(5)  # posed ahead for one frame, another one asked: posed when shown, still right
+    view.show_frame(9)
+    hand = view._hands[2]
+    np.testing.assert_allclose(hand.mesh.points, to_view(hand.skin.hand, skin_vertices(hand.skin.hand, hand.pose, 9)))
+
+
+def test_the_slider_and_readouts_follow_playback_at_their_rate_and_exactly_when_paused(qtbot):
+    from s2h_viewer.widgets.timeline import SPEEDS, WIDGET_RATE, Timeline
+    timeline = Timeline()  # the real widget, with a view that draws each frame at once (120 frames/s at 4x)
+    qtbot.addWidget(timeline)
+    timeline.show()
+    timeline.set_clip(2000, 30.0)
+    timeline.speed.setCurrentIndex(SPEEDS.index(4.0))
+    shown, slider = [], []
+    timeline.frame_changed.connect(lambda f: (shown.append(f), slider.append(timeline.slider.value()),
+                                              QTimer.singleShot(0, timeline.note_drawn)))
+    started = time.perf_counter()
+    timeline.set_playing(True)
+    qtbot.wait(1500)
+    timeline.set_playing(False)
+    elapsed = time.perf_counter() - started
+    moves = sum(a != b for a, b in zip(slider, slider[1:]))
+    assert len(shown) > 2 * moves  # the view got every frame, the slider a fraction of them
+    assert moves <= WIDGET_RATE * elapsed + 2
+    frame = timeline.frame  # paused: every widget shows the frame the view was given last
+    assert frame == shown[-1] and timeline.slider.value() == timeline.spin.value() == frame
+    assert timeline.readout.text().startswith(f"{frame}/") and timeline.fps_label.text() == "-- fps"
+    timeline.set_frame(frame + 1)  # stepping while paused moves them at once
+    assert timeline.slider.value() == timeline.spin.value() == frame + 1 == shown[-1]
+
+
 def test_playback_keys_reach_the_shortcuts_with_the_frame_box_focused(window, qtbot):
     window.activateWindow()
     qtbot.waitUntil(lambda: window.isActiveWindow(), timeout=5000)

@@ -407,6 +407,7 @@ class CompareMode(QWidget):
         if self.comparison is None:
             return
         self.view.show_frame(frame)
+        self.view.prefetch(self.timeline.next_frame())  # posed on a worker while this frame is drawn
         self.curve.set_frame(frame)
         self.heatmap.show_matrix(self.selected_result().cell_error[frame], frame)  # every frame: it is cheap
 

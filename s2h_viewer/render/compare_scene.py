@@ -45,6 +45,18 @@ class Skin:
     mesh: pv.PolyData
     actor: pv.Actor
     closed: bool
+    points: np.ndarray  # the mesh's points, a view of its VTK array (written each frame)
+    error: np.ndarray | None  # its error scalars, likewise; None on the source
+
+
+@dataclass
+class PosedSkin:
+    """One skin's vertices (view space) and per-vertex error at one frame, ready to write into its mesh."""
+
+    frame: int
+    skin: Skin
+    points: np.ndarray
+    error: np.ndarray | None
 
 
 class PosedHand:
@@ -77,7 +89,8 @@ class PosedHand:
                                      show_scalar_bar=False, reset_camera=False)
             mesh.set_active_scalars("error")  # the mesh straight into the mapper: pyvista puts a Python stage
             actor.mapper.SetInputData(mesh)  # between them that runs on every changed frame (~1 ms a frame)
-        return Skin(hand, mesh, actor, is_closed_outward(mesh))
+        error = np.asarray(mesh.point_data["error"]) if self.joint_error is not None else None
+        return Skin(hand, mesh, actor, is_closed_outward(mesh), np.asarray(mesh.points), error)
 
     @property
     def skin(self) -> Skin | None:
@@ -108,21 +121,36 @@ class PosedHand:
         for level in self.levels:
             level.actor.visibility = level is self.skin
 
-    def show(self, frame: int) -> None:
+    def posed_skin(self, frame: int) -> PosedSkin | None:
+        """The drawn skin's vertices (view space) and error colours at ``frame``, computed with numpy alone
+        (no VTK: a worker thread may pose the next frame while this one is drawn); None without a skin."""
+        if not self.levels:
+            return None
+        skin = self.skin
+        error = None
+        if self.joint_error is not None:
+            per_rotating = np.zeros(topo.N_ROTATING)  # wrist 0, then each articulated joint's ASM row
+            per_rotating[1:] = np.nan_to_num(self.joint_error[frame, topo.ARTICULATED_JOINTS - 1])
+            error = skin.hand.mesh.weights @ per_rotating
+        return PosedSkin(frame, skin, to_view(skin.hand, skin_vertices(skin.hand, self.pose, frame)), error)
+
+    def show(self, frame: int, posed: PosedSkin | None = None) -> None:
+        """Pose the hand at ``frame``; ``posed``: its `posed_skin`, if computed ahead (used when it is that
+        frame's and the skin drawn now)."""
         self.frame = frame
         if self.overlay is not None:
             self.overlay.show(frame)
         if not self.levels:
             self.bones.points = to_view(self.hand, self.pose.positions[frame].numpy().astype(np.float64))
             return
-        skin = self.skin
-        skin.mesh.points[:] = to_view(skin.hand, skin_vertices(skin.hand, self.pose, frame))  # in place: no new
-        skin.mesh.GetPoints().Modified()  # VTK arrays per frame
-        if self.joint_error is not None:
-            per_rotating = np.zeros(topo.N_ROTATING)  # wrist 0, then each articulated joint's ASM row
-            per_rotating[1:] = np.nan_to_num(self.joint_error[frame, topo.ARTICULATED_JOINTS - 1])
-            skin.mesh.point_data["error"][:] = skin.hand.mesh.weights @ per_rotating
-            skin.mesh.point_data.GetArray("error").Modified()
+        if posed is None or posed.frame != frame or posed.skin is not self.skin:
+            posed = self.posed_skin(frame)
+        skin = posed.skin
+        skin.points[:] = posed.points  # in place, through views made once: no new VTK arrays or wrappers per frame
+        skin.mesh.GetPoints().Modified()
+        if posed.error is not None:
+            skin.error[:] = posed.error
+            skin.mesh.GetPointData().GetArray("error").Modified()
 
     def set_opacity(self, opacity: float) -> None:
         """See-through below 1; an opaque closed skin skips its back faces (about a third of the drawing)."""

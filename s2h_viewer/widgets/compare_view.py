@@ -5,11 +5,13 @@ A new frame asks for a repaint (``update``): one render per frame for the whole 
 timeline plays, each skin of the grid is drawn with fewer faces; paused or shown alone, the full
 display mesh. A double-click on a hand shows its viewport alone (solo), a second one brings the grid
 back. ``drawn`` fires after every render, so the timeline can show the frames actually drawn per
-second."""
+second. While playing, the frame expected next is posed on a worker thread (numpy alone) while the
+current one is drawn (`prefetch`): the GUI thread then only copies it in."""
 
 from __future__ import annotations
 
 import dataclasses
+from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
 import pyvista as pv
@@ -17,7 +19,7 @@ from PySide6.QtCore import QEvent, QObject, Signal
 from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
-from s2h_viewer.render.compare_scene import (PLAYING_FACES, PosedHand, ViewOptions, apply_options,
+from s2h_viewer.render.compare_scene import (PLAYING_FACES, PosedHand, PosedSkin, ViewOptions, apply_options,
                                              colour_bar_beside_solo, fit_view_angle,
                                              grid_layout, populate)
 from s2h_viewer.retarget.comparison import Comparison
@@ -43,6 +45,9 @@ class CompareView(QWidget):
         self._viewports: list[tuple[float, ...]] = []
         self.frame = 0
         self.playing = False
+        self._posing = ThreadPoolExecutor(max_workers=1, thread_name_prefix="posing")
+        self._ahead: tuple[int, Future] | None = None  # a frame being posed ahead, and its skins to come
+        self.prefetched = self.posed_here = 0  # frames shown from the worker's skins / posed when shown
 
     @property
     def opacity(self) -> float:
@@ -80,10 +85,28 @@ class CompareView(QWidget):
 
     def show_frame(self, frame: int) -> None:
         self.frame = frame
-        for hand in self._hands:
-            hand.show(frame)
+        ahead = self._take_ahead(frame)
+        for index, hand in enumerate(self._hands):
+            hand.show(frame, ahead[index] if ahead else None)
         if self.interactor is not None:
             self.interactor.update()
+
+    def prefetch(self, frame: int | None) -> None:
+        """Pose ``frame``'s skins on the worker thread now (the frame expected next while playing), so that
+        showing it only copies them in. A frame asked for then that is another is posed when shown."""
+        if frame is None or not self._hands or (self._ahead is not None and self._ahead[0] == frame):
+            return
+        hands = list(self._hands)
+        self._ahead = (frame, self._posing.submit(lambda: [hand.posed_skin(frame) for hand in hands]))
+
+    def _take_ahead(self, frame: int) -> list[PosedSkin | None] | None:
+        """The skins posed ahead for ``frame`` (waiting for the worker if it is still at them), or None."""
+        ahead, self._ahead = self._ahead, None
+        if ahead is None or ahead[0] != frame:
+            self.posed_here += 1
+            return None
+        self.prefetched += 1
+        return ahead[1].result()
 
     def _fit_camera(self) -> None:
         """Before each render: the camera's view angle for the hand viewports' shape now (the widget's size and
@@ -170,7 +193,9 @@ class CompareView(QWidget):
             self.interactor.deleteLater()
             self.interactor = self.plotter = None
             self._hands = []
+            self._ahead = None
 
     def closeEvent(self, event) -> None:
         self.close_grid()
+        self._posing.shutdown(cancel_futures=True)
         super().closeEvent(event)

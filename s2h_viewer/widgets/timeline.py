@@ -4,7 +4,11 @@ count) and its time (of the clip's length), and the frame rate actually drawn.
 Playback runs against the clock: each tick shows the frame that real time (times the speed) has
 reached since play started, so a view that draws slower than the clip drops frames instead of
 slowing the clip down. Ticks come at twice the rate frames fall due at the chosen speed, and once
-more as soon as a frame is drawn: a view slower than that rate draws back to back, never waiting. Space, the arrow keys and the Ctrl shortcuts (Ctrl+E, Ctrl+S, ...) stay the
+more as soon as a frame is drawn: a view slower than that rate draws back to back, never waiting.
+``frame_changed`` fires for every frame shown (the view, the heatmap and the error curve follow each);
+the slider, the frame box and the readouts follow at most WIDGET_RATE times a second while playing, every
+frame otherwise: repainting the slider alone cost a frame drawn at 75 frames/s a twentieth of its time,
+and no eye reads a frame number changing faster. Space, the arrow keys and the Ctrl shortcuts (Ctrl+E, Ctrl+S, ...) stay the
 window's shortcuts even when the frame box has the focus (its line edit would take them otherwise)."""
 
 from __future__ import annotations
@@ -18,6 +22,7 @@ from PySide6.QtWidgets import (QCheckBox, QComboBox, QHBoxLayout, QLabel, QProxy
 from s2h_viewer.render.caption import frame_readout
 
 SPEEDS = (0.25, 0.5, 1.0, 2.0, 4.0)
+WIDGET_RATE = 30.0  # refreshes per second of the slider, the frame box and the readouts while playing
 MAX_DRAW_WAIT = 0.2  # seconds a tick waits for the view to draw the frame asked before asking anew
 PASSED_KEYS = (Qt.Key.Key_Space, Qt.Key.Key_Left, Qt.Key.Key_Right, Qt.Key.Key_Home, Qt.Key.Key_End)
 
@@ -83,6 +88,8 @@ class Timeline(QWidget):
         self._timer = QTimer(self)
         self._timer.setTimerType(Qt.TimerType.PreciseTimer)
         self._timer.timeout.connect(self._tick)
+        self._frame = 0
+        self._widgets_at = 0.0  # when the slider, the frame box and the readouts were last refreshed
         self._anchor = (0.0, 0)  # (clock, frame) when playback started or last changed speed / was scrubbed
         self._drawn: list[float] = []
         self._asked_at: float | None = None  # when playback asked for a frame the view has not drawn yet
@@ -94,7 +101,8 @@ class Timeline(QWidget):
 
     @property
     def frame(self) -> int:
-        return self.slider.value()
+        """The frame shown (while playing, the slider may lag it by one refresh of the widgets)."""
+        return self._frame
 
     @property
     def playing(self) -> bool:
@@ -108,13 +116,14 @@ class Timeline(QWidget):
             widget.setValue(0)
             widget.blockSignals(False)
         fixed_size(self.readout, self._readout_text(self.n_frames - 1))
-        self._show_readout(0)
+        self._frame = 0
+        self._show_widgets()
         self.frame_changed.emit(0)
 
     def set_frame(self, frame: int) -> None:
         frame = max(0, min(self.n_frames - 1, frame))
         if frame != self.frame:
-            self.slider.setValue(frame)  # the spin box follows through _set_from_widget
+            self._set_from_widget(frame)
 
     def step(self, delta: int) -> None:
         self.set_frame(self.frame + delta)
@@ -130,7 +139,7 @@ class Timeline(QWidget):
             self._timer.start(self._tick_interval())
         else:
             self._timer.stop()
-            self.fps_label.setText("-- fps")
+            self._show_widgets()  # the frame the view stopped at, wherever the throttled widgets were
 
     def toggle(self) -> None:
         self.set_playing(not self.playing)
@@ -142,7 +151,6 @@ class Timeline(QWidget):
             return
         now = time.perf_counter()
         self._drawn = [t for t in self._drawn if now - t < 1.0] + [now]
-        self.fps_label.setText(f"{len(self._drawn):d} fps")
         QTimer.singleShot(0, self, self._tick)  # the next due frame now, not at the timer's next tick
 
     def _tick_interval(self) -> int:
@@ -160,9 +168,6 @@ class Timeline(QWidget):
     def _readout_text(self, frame: int) -> str:
         return frame_readout(frame, self.n_frames, self.clip_fps)
 
-    def _show_readout(self, frame: int) -> None:
-        self.readout.setText(self._readout_text(frame))
-
     def _set_from_widget(self, frame: int) -> None:
         """The slider or the spin box moved (a person, or `set_frame`): while playing, play on from there."""
         if self.playing:
@@ -170,14 +175,22 @@ class Timeline(QWidget):
         self._show(frame)
 
     def _show(self, frame: int) -> None:
-        """Both widgets at ``frame`` (without their signals), the readout, then ``frame_changed``."""
-        for widget in (self.slider, self.spin):
-            if widget.value() != frame:
-                widget.blockSignals(True)
-                widget.setValue(frame)
-                widget.blockSignals(False)
-        self._show_readout(frame)
+        """``frame_changed`` for ``frame``, and the slider, the frame box and the readouts when due."""
+        self._frame = frame
+        if not self.playing or time.perf_counter() - self._widgets_at >= 1.0 / WIDGET_RATE:
+            self._show_widgets()
         self.frame_changed.emit(frame)
+
+    def _show_widgets(self) -> None:
+        """The slider and the frame box at the frame shown (without their signals), and the readouts."""
+        self._widgets_at = time.perf_counter()
+        for widget in (self.slider, self.spin):
+            if widget.value() != self._frame:
+                widget.blockSignals(True)
+                widget.setValue(self._frame)
+                widget.blockSignals(False)
+        self.readout.setText(self._readout_text(self._frame))
+        self.fps_label.setText(f"{len(self._drawn):d} fps" if self.playing else "-- fps")
 
     def due_frame(self, ahead: float = 0.0) -> int | None:
         """The frame the clock asks for ``ahead`` seconds from now; None past the end when not looping."""
@@ -189,6 +202,19 @@ class Timeline(QWidget):
                 return None
             due %= self.n_frames
         return due
+
+    def next_frame(self) -> int | None:
+        """While playing, the frame the clock will most likely ask for next: the one due a drawn frame's time
+        from now, at least the next frame (at 1x the view draws faster than the clip); None at the end."""
+        if not self.playing:
+            return None
+        drawing = (self._drawn[-1] - self._drawn[0]) / (len(self._drawn) - 1) if len(self._drawn) > 1 else 0.0
+        due = self.due_frame(ahead=drawing)
+        if due is None or due != self.frame:
+            return due
+        if self.frame + 1 < self.n_frames:
+            return self.frame + 1
+        return 0 if self.loop.isChecked() else None
 
     def _tick(self) -> None:
         if not self.playing:  # a tick queued by the last drawn frame, after a pause
