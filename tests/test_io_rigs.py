@@ -144,6 +144,20 @@ def test_a_bvh_round_trip_retargets_onto_iris_as_the_direct_path(sample_hands, g
     assert scores[1].violation_rate == scores[0].violation_rate
 
 
+def test_bvh_and_glb_exports_of_one_stem_keep_their_own_frames(sample_hands, gestures, tmp_path):
+    """The viewer names both exports of a retarget alike (clip_target_method): the BVH's frames go to
+    ``<name>.bvh.tbs.json``, not the GLB's sidecar name, so both open, each with its frames."""
+    iris = sample_hands["iris"]
+    motion = retarget(gestures, sample_hands[gestures.hand_name], iris, "tbs_copy")
+    glb = save_gltf_motion(tmp_path / "gestures_iris_tbs_copy.glb", motion, iris)
+    bvh = save_bvh(tmp_path / "gestures_iris_tbs_copy.bvh", motion, iris)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["gestures_iris_tbs_copy.bvh",
+                                                          "gestures_iris_tbs_copy.bvh.tbs.json",
+                                                          "gestures_iris_tbs_copy.glb"]
+    assert load_gltf_hand(glb).meta["annotation"] == "solver"
+    assert load_bvh(bvh)[0].meta["annotation"] == "sidecar"
+
+
 def test_npz_and_files_dispatch_round_trip(sample_hands, motion_on_birch, tmp_path):
     hand = sample_hands["birch"]
     path = save_motion_file(tmp_path / "m.npz", motion_on_birch, hand)
