@@ -6,8 +6,8 @@ is one, else from the palm plane. `save_bvh` writes that sidecar beside the file
 frames: TBS rotations are measured in them, and frames guessed from the palm plane (the thumb's some
 50 deg off) would read the same joint positions back as other TBS rotations. Rotation channels may
 come in any order; positions are read but only the hand's rotations are used (the wrist stays where it
-is). Written files use ZXY rotation channels,
-the order Blender and MotionBuilder expect, and the project's joint names.
+is). Written files use ZXY rotation channels, the order Blender and MotionBuilder expect, and the
+project's joint names.
 """
 
 from __future__ import annotations
