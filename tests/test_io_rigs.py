@@ -10,6 +10,7 @@ import sys
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 import torch
 
 from s2h_viewer.annotate.solver import frame_angle_errors
@@ -27,6 +28,7 @@ from s2h_viewer.motions.synthesis import synthesize
 from s2h_viewer.retarget import retarget
 from s2h_viewer.samples import ASSETS_DIR
 from s2h_viewer.semantics.anatomy import violation_rate
+from s2h_viewer.semantics.metrics import score_retarget
 
 WEBXR = ASSETS_DIR / "hands" / "webxr"
 FBX = ASSETS_DIR / "hands" / "fbx"
@@ -102,6 +104,58 @@ def test_bvh_round_trip(webxr_right, sample_hands, motion_on_birch, tmp_path, si
     np.testing.assert_allclose(skeleton.rest_positions @ skeleton.palm_frame,
                                hand.rest_positions @ hand.palm_frame, atol=1e-6)
     np.testing.assert_allclose(positions(skeleton, again), positions(hand, motion), atol=1e-5)
+
+
+def _rotation_angles(q_a: np.ndarray, q_b: np.ndarray) -> np.ndarray:
+    """(T, 15) angle in radians between two motions' TBS rotations, joint by joint (atan2, not the arccos
+    of a dot product, which reads float32 rounding as 1e-3 rad)."""
+    a, b = (Rotation.from_quat(q.reshape(-1, 4).astype(np.float64), scalar_first=True) for q in (q_a, q_b))
+    return (a.inv() * b).magnitude().reshape(q_a.shape[:-1])
+
+
+@pytest.fixture(scope="module")
+def gestures():
+    return load_motion(ASSETS_DIR / "motions" / "gestures.npz")
+
+
+@pytest.mark.parametrize("target", ["iris", "generic-hand-right.glb", "generic-hand-left.glb"])
+def test_bvh_export_reads_back_as_the_motion_it_was(target, sample_hands, gestures, tmp_path):
+    """The gestures clip TBS-copied onto a sample hand or a real rig, written as BVH and read back: the same
+    joint positions and the same TBS rotations, thumb included (what TBS Copy and ASRN carry on)."""
+    side = "left" if "left" in target else "right"
+    hand = sample_hands[target] if target in sample_hands else load_gltf_hand(WEBXR / target, side=side)
+    motion = retarget(gestures, sample_hands[gestures.hand_name], hand, "tbs_copy")
+    skeleton, again = load_bvh(save_bvh(tmp_path / "gestures.bvh", motion, hand), side=side)
+    error = np.linalg.norm(positions(skeleton, again) - positions(hand, motion), axis=-1)
+    assert error.max() < 1e-4 * hand.hand_length
+    assert _rotation_angles(again.q_tbs, motion.q_tbs).max() < 1e-4
+
+
+def test_a_bvh_round_trip_retargets_onto_iris_as_the_direct_path(sample_hands, gestures, tmp_path):
+    """The user's check: the BVH export of TBS Copy onto iris, reopened as a motion and TBS-copied onto iris
+    again, scores as the direct retarget (it lost the thumb: S_finger 0.89, violations 0.46)."""
+    source, iris = sample_hands[gestures.hand_name], sample_hands["iris"]
+    direct = retarget(gestures, source, iris, "tbs_copy")
+    skeleton, reopened = load_bvh(save_bvh(tmp_path / "on_iris.bvh", direct, iris))
+    again = retarget(reopened, skeleton, iris, "tbs_copy")
+    assert _rotation_angles(again.q_tbs, direct.q_tbs).max() < 1e-4
+    scores = [score_retarget(source, gestures.q_tbs, iris, m.q_tbs) for m in (direct, again)]
+    assert abs(scores[1].s_finger - scores[0].s_finger) < 1e-4
+    assert scores[1].violation_rate == scores[0].violation_rate
+
+
+def test_bvh_and_glb_exports_of_one_stem_keep_their_own_frames(sample_hands, gestures, tmp_path):
+    """The viewer names both exports of a retarget alike (clip_target_method): the BVH's frames go to
+    ``<name>.bvh.tbs.json``, not the GLB's sidecar name, so both open, each with its frames."""
+    iris = sample_hands["iris"]
+    motion = retarget(gestures, sample_hands[gestures.hand_name], iris, "tbs_copy")
+    glb = save_gltf_motion(tmp_path / "gestures_iris_tbs_copy.glb", motion, iris)
+    bvh = save_bvh(tmp_path / "gestures_iris_tbs_copy.bvh", motion, iris)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["gestures_iris_tbs_copy.bvh",
+                                                          "gestures_iris_tbs_copy.bvh.tbs.json",
+                                                          "gestures_iris_tbs_copy.glb"]
+    assert load_gltf_hand(glb).meta["annotation"] == "solver"
+    assert load_bvh(bvh)[0].meta["annotation"] == "sidecar"
 
 
 def test_npz_and_files_dispatch_round_trip(sample_hands, motion_on_birch, tmp_path):

@@ -1,4 +1,5 @@
-"""The TBS annotation sidecar: ``<hand file stem>.tbs.json`` beside the hand file, loaded with it.
+"""The TBS annotation sidecar: ``<hand file stem>.tbs.json`` beside the hand file, loaded with it
+(``<name>.bvh.tbs.json`` beside a BVH, which `save_bvh` writes).
 
 Schema (version 1)::
 
@@ -43,8 +44,11 @@ class Annotation:
 
 
 def sidecar_path(hand_file: str | Path) -> Path:
+    """``<stem>.tbs.json``; a BVH's keeps its suffix, so that the GLB export of the same motion under the
+    same stem, or the rig file it was exported from, keeps its own."""
     hand_file = Path(hand_file)
-    return hand_file.with_name(f"{hand_file.stem}.tbs.json")
+    stem = hand_file.name if hand_file.suffix.lower() == ".bvh" else hand_file.stem
+    return hand_file.with_name(f"{stem}.tbs.json")
 
 
 def file_sha256(path: str | Path) -> str:

@@ -2,9 +2,12 @@
 
 A BVH skeleton has every joint's rest orientation equal to the world axes, so its rig frames are the
 identity; it has no mesh, so a hand read from BVH takes TBS frames from an annotation sidecar if there
-is one, else from the palm plane. Rotation channels may come in any order; positions are read but only
-the hand's rotations are used (the wrist stays where it is). Written files use ZXY rotation channels,
-the order Blender and MotionBuilder expect, and the project's joint names.
+is one, else from the palm plane. `save_bvh` writes that sidecar beside the file with the hand's own
+frames: TBS rotations are measured in them, and frames guessed from the palm plane (the thumb's some
+50 deg off) would read the same joint positions back as other TBS rotations. Rotation channels may
+come in any order; positions are read but only the hand's rotations are used (the wrist stays where it
+is). Written files use ZXY rotation channels, the order Blender and MotionBuilder expect, and the
+project's joint names.
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ from s2h_viewer.errors import InputFileError, reading, require_readable_file
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
+from s2h_viewer.io.annotation import Annotation, save_annotation
 from s2h_viewer.io.atomic import atomic_path
 from s2h_viewer.hand.mirror import reflection
 from s2h_viewer.io.rig import (MIRROR_NORMAL, RigSkeleton, build_hand, motion_from_world_rotations, recognise,
@@ -211,11 +215,17 @@ def _load_bvh(path: Path, clip: BvhClip, side: str | None, scheme: str | None, j
 def save_bvh(path: str | Path, motion: Motion, hand: HandModel) -> Path:
     """Write ``motion`` on ``hand`` as BVH, atomically: with the rig's own bone names, hierarchy (under the
     wrist) and rest offsets (file units) when the hand was read from a rig file, so it re-imports onto the
-    avatar; else with the project's joint names (centimetres, the wrist as root)."""
+    avatar; else with the project's joint names (centimetres, the wrist as root). The hand's TBS frames
+    go beside it as its annotation sidecar, so that it reads back with the same TBS rotations."""
     path = Path(path)
     if "rig_joints" in hand.meta and Path(hand.source).exists():
         from s2h_viewer.io.files import read_rig_skeleton
         return _save_rig_bvh(path, motion, hand, read_rig_skeleton(hand.source))
+    return _save_frames(_write_hand_bvh(path, motion, hand), hand, np.eye(3))
+
+
+def _write_hand_bvh(path: Path, motion: Motion, hand: HandModel) -> Path:
+    """BVH of ``motion`` on ``hand``'s own skeleton, in hand space (see `save_bvh`)."""
     rotations = world_rotations_from_motion(hand, motion)  # (T, 16, 3, 3) the rig's frames over time
     rig, positions = hand.rig_frames, hand.rest_positions * 100.0
     if hand.meta.get("side") == "left":  # written as the left hand it was loaded from
@@ -328,7 +338,20 @@ def _save_rig_bvh(path: Path, motion: Motion, hand: HandModel, skeleton: RigSkel
         lines.append(f"{pad}}}")
 
     write(wrist, 0)
-    return _write_bvh(path, lines, motion, data)
+    to_file = rest_rot[wrist]  # hand space -> the written file's (a BVH hand's space is its world axes)
+    if hand.meta.get("side") == "left":  # both hands mirrored to right ones on load
+        s = reflection(MIRROR_NORMAL)
+        to_file = s @ to_file @ s
+    return _save_frames(_write_bvh(path, lines, motion, data), hand, to_file)
+
+
+def _save_frames(path: Path, hand: HandModel, to_file: np.ndarray) -> Path:
+    """Write the sidecar of the BVH just written at ``path``: ``hand``'s TBS frames turned by ``to_file``
+    into the hand space the file loads in, unscored (the hand's frames, not a solver run's)."""
+    n = topo.N_ARTICULATED
+    save_annotation(Annotation(to_file @ hand.rest_frames, ["solver"] * n, np.full(n, np.nan),
+                               [f"TBS frames of {hand.name}, written with this BVH"]), path)
+    return path
 
 
 def _write_bvh(path: Path, hierarchy: list[str], motion: Motion, channels: list[np.ndarray]) -> Path:
