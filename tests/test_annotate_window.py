@@ -1,7 +1,7 @@
 """Annotate mode in the real window (Xvfb, pytest-qt, shipped hands): a joint clicked in 3D through the
 render window, its ring dragged with the mouse and undone, a second hand opened, a sidecar reopened with
 who set each frame, the questions before manual frames or unsaved edits are lost (saving beside the hand,
-elsewhere, or failing to)."""
+elsewhere, or failing to), and shortcuts working again once a dialog closes."""
 
 from __future__ import annotations
 
@@ -331,6 +331,30 @@ def test_a_save_that_fails_says_where_and_why_and_loses_nothing(window, qtbot, h
     np.testing.assert_allclose(window.annotation.frames[5], edited)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["hand.glb", "hand.tbs.json", "notes.txt", "settings.ini"]
     assert not any((tmp_path / "hand.tbs.json").iterdir()) and not_a_folder.read_text() == "a file, not a folder"
+
+
+def test_shortcuts_work_again_once_a_dialog_closes(window, qtbot, hand_file):
+    window.annotate_file(str(hand_file))
+    before = window.annotation.frames[5].copy()
+    edit_a_frame(window)
+    keyboard_to(qtbot, window.annotate_view.interactor)
+    had_the_keyboard: list[bool] = []
+
+    def escape_once_it_has_the_keyboard(box: QMessageBox, tries: int = 250) -> None:
+        """Escape once the box holds the keyboard, as a user sees it and presses the key (5 s at most)."""
+        if box.isActiveWindow() or not tries:
+            had_the_keyboard.append(box.isActiveWindow())
+            QTest.keyClick(box, Qt.Key.Key_Escape)
+        else:
+            QTimer.singleShot(20, lambda: escape_once_it_has_the_keyboard(box, tries - 1))
+
+    shown = answer((QMessageBox, escape_once_it_has_the_keyboard))
+    QTest.keyClick(window, Qt.Key.Key_F1)  # Help > Keyboard shortcuts, closed with Escape
+    assert shown and "Ctrl+Z" in shown[0] and had_the_keyboard == [True]
+    # without a window manager the focus fell to the root window: the app hands it back to the main window
+    qtbot.waitUntil(window.isActiveWindow, timeout=5000)
+    QTest.keyClick(window, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
+    np.testing.assert_allclose(window.annotation.frames[5], before, atol=1e-12)
 
 
 def test_an_edge_on_ring_rolls_under_the_pointer(window, qtbot, hand_file):
