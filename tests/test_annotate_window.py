@@ -1,11 +1,14 @@
 """Annotate mode in the real window (Xvfb, pytest-qt, shipped hands): a joint clicked in 3D through the
 render window, its ring dragged with the mouse and undone, a second hand opened, a sidecar reopened with
-who set each frame, and the questions before manual frames or unsaved edits are lost."""
+who set each frame, the questions before manual frames or unsaved edits are lost (saving beside the hand,
+elsewhere, or failing to), and shortcuts working again once a dialog closes."""
 
 from __future__ import annotations
 
+import json
 import os
 import shutil
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -16,7 +19,7 @@ if not os.environ.get("DISPLAY"):
 
 from PySide6.QtCore import QPoint, QSettings, Qt, QTimer  # noqa: E402
 from PySide6.QtTest import QTest  # noqa: E402
-from PySide6.QtWidgets import QApplication, QMessageBox  # noqa: E402
+from PySide6.QtWidgets import QApplication, QFileDialog, QLineEdit, QMessageBox, QWidget  # noqa: E402
 from vtkmodules.vtkRenderingCore import vtkCoordinate  # noqa: E402
 
 from s2h_viewer.annotate.editing import rotate_about_twist  # noqa: E402
@@ -67,18 +70,43 @@ def ring_point(view, joint: int, degrees: float) -> np.ndarray:
     return view.joint_centres()[joint] + radius * (np.cos(a) * frame[:, 1] + np.sin(a) * frame[:, 2])
 
 
-def answer(qtbot, button_text: str, asked: list[str]) -> None:
-    """Click ``button_text`` in the next question box as soon as it opens; its text goes to ``asked``."""
-    def click() -> None:
-        box = QApplication.activeModalWidget()
-        if not isinstance(box, QMessageBox):
-            QTimer.singleShot(20, click)
-            return
-        asked.append(box.text())
-        button = next(b for b in box.buttons() if b.text() == button_text)
-        QTest.mouseClick(button, Qt.MouseButton.LeftButton)
+def answer(*steps: tuple[type[QWidget], Callable[[QWidget], None]], shown: list[str] | None = None) -> list[str]:
+    """Answer the modal dialogs that open next, in order, each once it is the active modal widget: a step is the
+    dialog's class and what the user does in it. What each showed (a box's text and detail, the file a file
+    dialog offers) goes to ``shown``, returned."""
+    shown = [] if shown is None else shown
+    left = list(steps)
 
-    QTimer.singleShot(0, click)
+    def look() -> None:
+        kind, act = left[0]
+        dialog = QApplication.activeModalWidget()
+        if isinstance(dialog, kind):
+            shown.append(f"{dialog.text()}\n{dialog.informativeText()}" if isinstance(dialog, QMessageBox)
+                         else dialog.selectedFiles()[0])
+            left.pop(0)
+            act(dialog)
+        if left:
+            QTimer.singleShot(20, look)
+
+    QTimer.singleShot(0, look)
+    return shown
+
+
+def click(button_text: str) -> tuple[type[QWidget], Callable[[QWidget], None]]:
+    """A step of `answer`: click ``button_text`` in a message box."""
+    return QMessageBox, lambda box: QTest.mouseClick(next(b for b in box.buttons() if b.text() == button_text),
+                                                     Qt.MouseButton.LeftButton)
+
+
+def choose_file(path) -> tuple[type[QWidget], Callable[[QWidget], None]]:
+    """A step of `answer`: type ``path`` into a file dialog and accept it (None: cancel the dialog)."""
+    def act(dialog: QFileDialog) -> None:
+        if path is None:
+            dialog.reject()
+            return
+        dialog.findChild(QLineEdit, "fileNameEdit").setText(str(path))
+        dialog.accept()
+    return QFileDialog, act
 
 
 def turn_angle(before: np.ndarray, after: np.ndarray) -> float:
@@ -195,19 +223,19 @@ def test_ctrl_r_asks_before_replacing_manual_frames_and_is_undoable(window, qtbo
     keyboard_to(qtbot, window.annotate_view.interactor)
     asked: list[str] = []
 
-    answer(qtbot, "Cancel", asked)
+    answer(click("Cancel"), shown=asked)
     QTest.keyClick(window, Qt.Key.Key_R, Qt.KeyboardModifier.ControlModifier)
     assert asked and topo.ARTICULATED_NAMES[3] in asked[0]
     np.testing.assert_allclose(window.annotation.frames[3], manual)
     assert window.undo_stack.count() == 1
 
-    answer(qtbot, "Keep manual frames", asked)
+    answer(click("Keep manual frames"), shown=asked)
     with qtbot.waitSignal(window.annotation_ready, timeout=60_000):
         QTest.keyClick(window, Qt.Key.Key_R, Qt.KeyboardModifier.ControlModifier)
     np.testing.assert_allclose(window.annotation.frames[3], manual)
     assert window.annotation.set_by[3] == "manual" and window.undo_stack.count() == 2  # the turn is still there
 
-    answer(qtbot, "Replace all", asked)
+    answer(click("Replace all"), shown=asked)
     with qtbot.waitSignal(window.annotation_ready, timeout=60_000):
         QTest.keyClick(window, Qt.Key.Key_R, Qt.KeyboardModifier.ControlModifier)
     assert len(asked) == 3 and window.annotation.set_by == ["solver"] * topo.N_ARTICULATED
@@ -217,32 +245,116 @@ def test_ctrl_r_asks_before_replacing_manual_frames_and_is_undoable(window, qtbo
     assert window.annotation.set_by[3] == "manual"
 
 
+IRIS = str(ASSETS_DIR / "hands" / "iris.npz")
+
+
+def edit_a_frame(window, joint: int = 5, degrees: int = -20) -> np.ndarray:
+    """Turn ``joint``'s frame as a drag of the dial does (press, turn, release); its frame after."""
+    window.annotate_view.select(joint)
+    window.annotate_view.turn_selected(degrees)
+    assert window.isWindowModified()
+    return window.annotation.frames[joint].copy()
+
+
 def test_unsaved_edits_are_asked_about_before_another_hand_or_quitting(window, qtbot, hand_file, tmp_path):
     window.annotate_file(str(hand_file))
-    window.annotate_view.select(5)
-    window.annotate_view.turn_selected(-20)
-    asked: list[str] = []
-    iris = str(ASSETS_DIR / "hands" / "iris.npz")
+    edited = edit_a_frame(window)
+    sidecar = tmp_path / "hand.tbs.json"
+    buttons: list[str] = []
+    asked = answer((QMessageBox, lambda box: (buttons.extend(b.text() for b in box.buttons()),
+                                              click("Cancel")[1](box))))
+    window.annotate_file(IRIS)
+    assert len(asked) == 1 and "before opening another hand" in asked[0] and str(sidecar) in asked[0]
+    assert sorted(buttons) == sorted(["Save", "Save As...", "Discard", "Cancel"])
+    assert window.annotation.hand.name == "hand" and window.isWindowModified()
 
-    answer(qtbot, "Cancel", asked)
-    window.annotate_file(iris)
-    assert len(asked) == 1 and "not saved" in asked[0] and window.annotation.hand.name == "hand"
-
-    answer(qtbot, "Cancel", asked)
+    answer(click("Cancel"), shown=asked)
     assert not window.close() and window.isVisible()  # quitting cancelled
+    assert "before quitting" in asked[1] and str(sidecar) in asked[1]
 
-    answer(qtbot, "Save", asked)
-    window.annotate_file(iris)
-    assert window.annotation.hand.name == "iris"
-    saved = (tmp_path / "hand.tbs.json").read_text()
-    assert '"set_by": "manual"' in saved
+    answer(click("Save"), shown=asked)
+    window.annotate_file(IRIS)
+    assert window.annotation.hand.name == "iris" and sidecar.exists()
+    saved = sidecar.read_text()
 
-    window.annotate_file(str(hand_file))
-    window.annotate_view.turn_selected(10)
-    answer(qtbot, "Discard", asked)
-    window.annotate_file(iris)
+    window.annotate_file(str(hand_file))  # reopened: the saved frames are back, nothing to save
+    assert len(asked) == 3 and window.annotation.frames_from == "sidecar" and not window.isWindowModified()
+    np.testing.assert_allclose(window.annotation.frames[5], edited, atol=1e-7)
+    assert window.annotation.set_by[5] == "manual"
+
+    edit_a_frame(window, 5, 10)
+    answer(click("Discard"), shown=asked)
+    window.annotate_file(IRIS)
     assert len(asked) == 4 and window.annotation.hand.name == "iris"
-    assert (tmp_path / "hand.tbs.json").read_text() == saved  # discarded, not written
+    assert sidecar.read_text() == saved  # discarded, not written
+
+
+def test_save_as_writes_where_the_user_chooses(window, qtbot, hand_file, tmp_path):
+    window.annotate_file(str(hand_file))
+    edited = edit_a_frame(window)
+    menu_entry = next(a for m in window.menuBar().actions() if m.text() == "&Annotate" for a in m.menu().actions()
+                      if a.text() == "Save annotation as...")
+    offered = answer(choose_file(None))  # Annotate > Save annotation as..., the file dialog cancelled
+    menu_entry.trigger()
+    assert offered == [str(tmp_path / "hand.tbs.json")]  # in the sidecar's folder, the sidecar's name
+    assert window.isWindowModified() and sorted(p.name for p in tmp_path.iterdir()) == ["hand.glb", "settings.ini"]
+
+    chosen = tmp_path / "elsewhere" / "mine.tbs.json"
+    chosen.parent.mkdir()
+    asked = answer(click("Save As..."), choose_file(chosen))
+    assert window.close() and not window.isVisible()  # saved, then quit
+    assert len(asked) == 2 and asked[1] == str(tmp_path / "hand.tbs.json")
+    assert not (tmp_path / "hand.tbs.json").exists()
+    document = json.loads(chosen.read_text())
+    assert document["hand_file"] == "hand.glb" and document["joints"][topo.ARTICULATED_NAMES[5]]["set_by"] == "manual"
+    np.testing.assert_allclose(document["joints"][topo.ARTICULATED_NAMES[5]]["frame"], edited, atol=1e-7)
+
+
+def test_a_save_that_fails_says_where_and_why_and_loses_nothing(window, qtbot, hand_file, tmp_path):
+    window.annotate_file(str(hand_file))
+    edited = edit_a_frame(window)
+    not_a_folder = tmp_path / "notes.txt"
+    not_a_folder.write_text("a file, not a folder")
+    inside = not_a_folder / "hand.tbs.json"
+    asked = answer(click("Save As..."), choose_file(inside), click("OK"))
+    assert not window.close() and window.isVisible()
+    assert len(asked) == 3 and asked[2].startswith(f"{inside}: could not save the annotation")
+    assert f"Not a directory: {not_a_folder}" in asked[2]
+
+    (tmp_path / "hand.tbs.json").mkdir()  # where Save writes is a folder
+    answer(click("Save"), click("OK"), shown=asked)
+    window.annotate_file(IRIS)
+    assert len(asked) == 5 and asked[4].startswith(f"{tmp_path / 'hand.tbs.json'}: could not save the annotation")
+    assert "Is a directory" in asked[4]
+    # nothing lost: the hand, its edit and the undo history are there, no file (or half a file) was written
+    assert window.annotation.hand.name == "hand" and window.isWindowModified() and window.undo_stack.count() == 1
+    np.testing.assert_allclose(window.annotation.frames[5], edited)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["hand.glb", "hand.tbs.json", "notes.txt", "settings.ini"]
+    assert not any((tmp_path / "hand.tbs.json").iterdir()) and not_a_folder.read_text() == "a file, not a folder"
+
+
+def test_shortcuts_work_again_once_a_dialog_closes(window, qtbot, hand_file):
+    window.annotate_file(str(hand_file))
+    before = window.annotation.frames[5].copy()
+    edit_a_frame(window)
+    keyboard_to(qtbot, window.annotate_view.interactor)
+    had_the_keyboard: list[bool] = []
+
+    def escape_once_it_has_the_keyboard(box: QMessageBox, tries: int = 250) -> None:
+        """Escape once the box holds the keyboard, as a user sees it and presses the key (5 s at most)."""
+        if box.isActiveWindow() or not tries:
+            had_the_keyboard.append(box.isActiveWindow())
+            QTest.keyClick(box, Qt.Key.Key_Escape)
+        else:
+            QTimer.singleShot(20, lambda: escape_once_it_has_the_keyboard(box, tries - 1))
+
+    shown = answer((QMessageBox, escape_once_it_has_the_keyboard))
+    QTest.keyClick(window, Qt.Key.Key_F1)  # Help > Keyboard shortcuts, closed with Escape
+    assert shown and "Ctrl+Z" in shown[0] and had_the_keyboard == [True]
+    # without a window manager the focus fell to the root window: the app hands it back to the main window
+    qtbot.waitUntil(window.isActiveWindow, timeout=5000)
+    QTest.keyClick(window, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
+    np.testing.assert_allclose(window.annotation.frames[5], before, atol=1e-12)
 
 
 def test_an_edge_on_ring_rolls_under_the_pointer(window, qtbot, hand_file):

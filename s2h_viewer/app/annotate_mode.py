@@ -1,6 +1,6 @@
 """Annotate mode (its own tab): one hand's TBS frames, the solver run off the GUI thread, undoable
-turns of a joint's frame and solver runs, the sidecar saved next to the hand file, and a question
-before unsaved edits or manual frames would be lost."""
+turns of a joint's frame and solver runs, the sidecar saved next to the hand file (or where the user
+chooses), and a question before unsaved edits or manual frames would be lost."""
 
 from __future__ import annotations
 
@@ -10,17 +10,30 @@ from pathlib import Path
 import numpy as np
 from PySide6.QtCore import QObject, Signal
 from PySide6.QtGui import QAction, QKeySequence, QUndoCommand, QUndoStack
-from PySide6.QtWidgets import QMenu, QMessageBox, QWidget
+from PySide6.QtWidgets import QFileDialog, QMenu, QMessageBox, QWidget
 
 from s2h_viewer.annotate.editing import AnnotationSession
 from s2h_viewer.annotate.solver import TbsSolution, solve_tbs_frames
 from s2h_viewer.app.tasks import TaskRunner
 from s2h_viewer.errors import S2HError
 from s2h_viewer.hand import topology as topo
-from s2h_viewer.io.annotation import Annotation
+from s2h_viewer.io.annotation import Annotation, save_annotation, sidecar_path
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.retarget.progress import report
 from s2h_viewer.widgets.annotation_view import AnnotationView
+
+SIDECAR_FILTER = "TBS annotation (*.tbs.json);;JSON (*.json)"
+
+
+def os_problem(exc: OSError, target: Path) -> str:
+    """What went wrong writing ``target``, in words: the system's reason and the file or folder it names, unless
+    that is ``target`` itself or a temporary file beside it (no errno numbers, no temporary names)."""
+    if exc.strerror is None:
+        return str(exc)
+    culprit = Path(exc.filename) if isinstance(exc.filename, str) else None
+    if culprit is None or culprit == target or (culprit.parent == target.parent and culprit.name.startswith(".")):
+        return exc.strerror
+    return f"{exc.strerror}: {culprit}"
 
 
 class EditFrameCommand(QUndoCommand):
@@ -64,10 +77,13 @@ class SolveCommand(QUndoCommand):
         self._set(self.before, self.before_from)
 
 
-def ask(parent: QWidget | None, title: str, text: str, buttons: list[tuple[str, QMessageBox.ButtonRole]]) -> int:
-    """A modal question; the index of the button the user chose (the last one, Cancel, if closed)."""
+def ask(parent: QWidget | None, title: str, text: str, buttons: list[tuple[str, QMessageBox.ButtonRole]],
+        detail: str = "") -> int:
+    """A modal question (``detail`` under it); the index of the button the user chose (the last one, Cancel,
+    if closed)."""
     box = QMessageBox(QMessageBox.Icon.Question, title, text, parent=parent)
     box.setObjectName("annotate_question")
+    box.setInformativeText(detail)
     added = [box.addButton(label, role) for label, role in buttons]
     box.setDefaultButton(added[0])
     box.setEscapeButton(added[-1])
@@ -93,10 +109,12 @@ class AnnotateMode(QObject):
     def fill_menu(self, annotate_menu: QMenu) -> None:
         """The solver and saving in Annotate (undo and redo are the window's: they follow the visible tab)."""
         for text, slot, shortcut in (("Run TBS solver", self.run_solver, "Ctrl+R"),
-                                     ("Save annotation", self.save, "Ctrl+Shift+S")):
+                                     ("Save annotation", self.save, "Ctrl+Shift+S"),
+                                     ("Save annotation as...", self.save_as, None)):
             action = QAction(text, annotate_menu)
-            action.setShortcut(QKeySequence(shortcut))
-            action.triggered.connect(slot)
+            if shortcut:
+                action.setShortcut(QKeySequence(shortcut))
+            action.triggered.connect(lambda _=False, run=slot: run())  # not `checked` as save_as's path
             annotate_menu.addAction(action)
 
     def open(self, hand: HandModel, path: str) -> None:
@@ -113,16 +131,29 @@ class AnnotateMode(QObject):
         review = sum(session.needs_review(j) for j in range(topo.N_ARTICULATED))
         self.status(f"{hand.name}: frames from {session.frames_from}, {review} joint(s) to review")
 
+    def sidecar(self) -> Path | None:
+        """Where Save writes: the sidecar beside the hand file, found there when the hand is opened again
+        (None for a sample hand opened by name: no file to put it beside)."""
+        hand_file = self.session.hand_file if self.session is not None else None
+        return sidecar_path(hand_file) if hand_file is not None and hand_file.suffix else None
+
     def confirm_discard(self, doing: str) -> bool:
         """True when nothing unsaved would be lost by ``doing`` (e.g. "opening another hand"), or the user
-        saved or chose to discard; False when they cancelled or the save failed."""
+        saved (beside the hand or elsewhere) or chose to discard; False when they cancelled or the save failed
+        (its error shown, the edits kept)."""
         if self.session is None or self.undo_stack.isClean():
             return True
-        choice = ask(self.view.window(), "Unsaved annotation",
-                     f"{self.session.hand.name} has frame edits that are not saved. Save them before {doing}?",
-                     [("Save", QMessageBox.ButtonRole.AcceptRole), ("Discard", QMessageBox.ButtonRole.DestructiveRole),
-                      ("Cancel", QMessageBox.ButtonRole.RejectRole)])
-        return choice == 1 or (choice == 0 and self.save() is not None)
+        target = self.sidecar()
+        where = (f"Save writes them to {target}, where they are read back when the hand is opened again."
+                 if target is not None else "This hand was opened by name: it has no file to save them with.")
+        choice = ask(self.view.window(), "s2h-viewer: unsaved annotation",
+                     f"Save the frame edits of {self.session.hand.name} before {doing}?",
+                     [("Save", QMessageBox.ButtonRole.AcceptRole), ("Save As...", QMessageBox.ButtonRole.AcceptRole),
+                      ("Discard", QMessageBox.ButtonRole.DestructiveRole),
+                      ("Cancel", QMessageBox.ButtonRole.RejectRole)],
+                     f"{where} Discarded edits are lost.")
+        saved = {0: self.save, 1: self.save_as}.get(choice)
+        return saved() is not None if saved is not None else choice == 2
 
     def run_solver(self) -> None:
         """Solve off the GUI thread; when joints were set by hand, ask first whether to keep them."""
@@ -165,15 +196,30 @@ class AnnotateMode(QObject):
         self.undo_stack.push(EditFrameCommand(self, joint, before, after, previous))
 
     def save(self) -> Path | None:
-        from s2h_viewer.io.annotation import save_annotation
-        session = self.session
-        if session is None or session.hand_file is None or session.hand_file.suffix == "":
+        """Write the sidecar beside the hand file; its path, or None after an error dialog."""
+        return self._write(self.sidecar())
+
+    def save_as(self, path: str | Path | None = None) -> Path | None:
+        """Write the annotation to ``path``, else where the user chooses (the dialog offers the sidecar); its
+        path, or None when the user cancelled or after an error dialog."""
+        target = self.sidecar()
+        if path is None and target is not None:
+            path = QFileDialog.getSaveFileName(self.view.window(), "Save annotation as", str(target),
+                                               SIDECAR_FILTER)[0]
+            if not path:
+                return None
+        return self._write(Path(path) if path else None)
+
+    def _write(self, target: Path | None) -> Path | None:
+        """Save to ``target`` atomically and mark the edits saved; on failure an error dialog naming the file
+        and the problem, the edits kept as unsaved and no file written."""
+        if target is None or self.sidecar() is None:
             self.error("Open a hand file to annotate first; sample hands by name have no file to annotate.")
             return None
         try:
-            path = save_annotation(session.annotation(), session.hand_file)
+            path = save_annotation(self.session.annotation(), self.session.hand_file, target)
         except OSError as exc:
-            self.error(f"{session.hand_file}: could not save the annotation ({exc})")
+            self.error(f"{target}: could not save the annotation ({os_problem(exc, target)})")
             return None
         self.undo_stack.setClean()
         self.status(f"wrote {path}")

@@ -14,6 +14,7 @@ from PySide6.QtWidgets import QFileDialog, QMainWindow, QMessageBox, QTabWidget
 from s2h_viewer.app import exports
 from s2h_viewer.app.annotate_mode import AnnotateMode
 from s2h_viewer.app.compare_mode import CompareMode, CompareSetup, default_setup
+from s2h_viewer.app.focus import FocusKeeper
 from s2h_viewer.app.tasks import TaskRunner
 from s2h_viewer.errors import S2HError
 from s2h_viewer.hand.model import HandModel
@@ -58,6 +59,7 @@ class MainWindow(QMainWindow):
         self.setCentralWidget(self.tabs)
         self.setAcceptDrops(True)
         self._build_menus()
+        self.focus_keeper = FocusKeeper(self)  # shortcuts keep working after a dialog closes without a window manager
         geometry = self.settings.value("window/geometry")
         if geometry is not None:
             self.restoreGeometry(geometry)
@@ -476,5 +478,6 @@ def run(setup: CompareSetup | None = None) -> int:
     app.setApplicationName("s2h-viewer")
     window = MainWindow(setup or default_setup())
     window.show()
+    window.activateWindow()  # without a window manager nobody else gives it the keyboard
     window.start_comparison()
     return app.exec()

@@ -60,15 +60,16 @@ def _confidence_json(confidence: float) -> float | None:
     return round(float(confidence), 4) if np.isfinite(confidence) else None
 
 
-def save_annotation(annotation: Annotation, hand_file: str | Path) -> Path:
-    """Write the sidecar of ``hand_file`` atomically; returns its path."""
+def save_annotation(annotation: Annotation, hand_file: str | Path, path: str | Path | None = None) -> Path:
+    """Write the annotation of ``hand_file`` atomically to ``path`` (default: its sidecar, where loading looks
+    for it); returns the path written. An `OSError` leaves no file, and an existing one as it was."""
     hand_file = Path(hand_file)
     joints = {name: {"frame": np.round(annotation.frames[a], 8).tolist(), "set_by": annotation.set_by[a],
                      "confidence": _confidence_json(annotation.confidence[a])}
               for a, name in enumerate(topo.ARTICULATED_NAMES)}
     document = {"schema": SCHEMA, "version": VERSION, "hand_file": hand_file.name,
                 "hand_sha256": file_sha256(hand_file), "joints": joints, "diagnostics": annotation.diagnostics}
-    path = sidecar_path(hand_file)
+    path = sidecar_path(hand_file) if path is None else Path(path)
     with atomic_path(path) as tmp:
         tmp.write_text(json.dumps(document, indent=1) + "\n")
     return path
