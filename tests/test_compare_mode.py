@@ -112,6 +112,11 @@ def test_cancel_a_retarget_goes_back_to_the_grid_and_the_menu_follows(long_windo
     assert ticked(window) == window.setup.methods == grid_methods(window) == ["tbs_copy", "asrn"]
     assert window.comparison is shown and window.compare._progress is None
     assert window.settings.value("compare/methods") == ["tbs_copy", "asrn"]  # remembered as shown
+    stack = window.compare.undo_stack  # the cancelled tick is undone: Redo ticks ASM-Opt again
+    assert not stack.canUndo() and stack.canRedo() and stack.redoText() == "tick ASM-Opt"
+    stack.redo()
+    assert ticked(window) == window.setup.methods == ["tbs_copy", "asrn", "asm_opt"]
+    assert window.compare._progress is not None  # computing it again
 
 
 def test_cancel_the_first_retarget_keeps_the_targets_and_ticking_a_method_computes_it(qtbot, sample_hands,

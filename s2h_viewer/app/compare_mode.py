@@ -6,7 +6,8 @@ remove a target, load a motion, select, cancel). Each action queues the retarget
 running ones it no longer needs (``RetargetQueue``); results are cached per (motion, source, target,
 method), so ticking a method computes that method alone. The grid shows the state once everything it
 asks for is computed; Cancel goes back to what the grid showed, and the menus follow (before the
-first grid, to the methods computed for every target: none ticked, an empty grid, if none is).
+first grid, to the methods computed for every target: none ticked, an empty grid, if none is); the
+changes it drops are undone on the undo stack, so Redo makes them again.
 Results nothing asks for any more (an unticked method) stay in a bounded spare cache while the motion
 and their target stay, so ticking the method again is instant. Ticking or unticking methods, adding and
 removing a target are undoable (its own undo stack: Edit > Undo in this tab): undo and redo bring back
@@ -125,6 +126,8 @@ class CompareMode(QWidget):
         self.error, self.status = error, status
         self.state = CompareState(setup.motion, setup.source, list(setup.targets), list(setup.methods))
         self._shown: tuple | None = None  # (motion, source, targets, methods) on screen: where Cancel returns
+        self._shown_index = 0  # the undo stack's index when the grid showed ``_shown``
+        self._reverting = False  # Cancel is undoing its dropped changes: they only set the state back
         self._spare: dict[ResultKey, MethodResult] = {}  # results no one asks for now, oldest first
         self.undo_stack = QUndoStack(self)
         self.comparison: Comparison | None = None
@@ -234,6 +237,11 @@ class CompareMode(QWidget):
         """Stop every queued and running retarget and go back to what the grid shows; the menus follow."""
         self.queue.cancel_all()
         if self._shown is not None:
+            self._reverting = True  # the changes Cancel drops become redoable, not stay undoable
+            try:
+                self.undo_stack.setIndex(self._shown_index)
+            finally:
+                self._reverting = False
             motion, source, targets, methods = self._shown
             self.state.motion, self.state.source = motion, source
             self.state.targets, self.state.methods = list(targets), list(methods)
@@ -249,6 +257,8 @@ class CompareMode(QWidget):
 
     def _sync(self) -> None:
         """Prune what nothing needs, queue what is missing (cancelling what is not wanted), show when complete."""
+        if self._reverting:
+            return
         keep = set(self.state.wanted())
         clips = {(id(self.state.motion), id(self.state.source))}
         if self._shown is not None:
@@ -326,11 +336,13 @@ class CompareMode(QWidget):
             return
         if self.comparison is not None and comparison.motion is self.comparison.motion and [
                 id(r) for r in comparison.results] == [id(r) for r in self.comparison.results]:
-            self.comparison_ready.emit()  # already on screen (a cancel went back to it)
+            self._shown_index = self.undo_stack.index()
+            self.comparison_ready.emit()  # already on screen (a cancel or an undo went back to it)
             return
         new_clip = self.comparison is None or self.comparison.motion is not comparison.motion
         self.comparison = comparison
         self._shown = (self.state.motion, self.state.source, tuple(self.state.targets), tuple(self.state.methods))
+        self._shown_index = self.undo_stack.index()
         self._keep_results(set(self.state.wanted()))
         self.view.set_comparison(comparison)
         self.scores.show_comparison(comparison)
