@@ -628,10 +628,32 @@ def test_quitting_during_a_video_export_asks_and_never_leaves_a_partial_file(win
     job = window.export_video(str(tmp_path / "dropped.mp4"))
     with qtbot.waitSignal(job.progress, timeout=60_000):
         pass
-    answer("Cancel export and quit")
-    assert window.close() and not window.isVisible() and len(asked) == 2
+    counts = []  # the question's frame count, read twice a second apart while it is up
+
+    def read_then_quit(box) -> None:
+        counts.append(box.text())
+        QTimer.singleShot(1000, lambda: (counts.append(box.text()),
+                                         next(b for b in box.buttons() if b.text() == "Cancel export and quit").click()))
+    when_shown(QMessageBox, read_then_quit)
+    assert window.close() and not window.isVisible() and len(counts) == 2
+    assert counts[0] != counts[1] and "dropped.mp4" in counts[1]  # the frames rendered meanwhile are counted
     assert not job.thread.is_alive()  # stopped before the window went
     assert sorted(p.name for p in tmp_path.iterdir() if p.suffix != ".ini") == ["kept.mp4"]  # no partial file
+
+
+def test_quitting_while_a_video_export_ends_quits_once_it_is_written(window, qtbot, tmp_path):
+    from PySide6.QtWidgets import QMessageBox
+
+    from compare_window import when_shown
+    job = window.export_video(str(tmp_path / "short.gif"))
+    with qtbot.waitSignal(job.progress, timeout=60_000):
+        pass
+    asked = []
+    when_shown(QMessageBox, asked.append)  # the user leaves the question up until the export is written
+    QTimer.singleShot(120_000, lambda: [b.click() for box in asked if box.isVisible() for b in box.buttons()
+                                        if b.text() == "Keep exporting"])  # else: a question that never goes
+    assert window.close() and not window.isVisible()  # the question went away with the export: quit
+    assert len(asked) == 1 and (tmp_path / "short.gif").stat().st_size > 0
 
 
 def viewport_pixels(window, renderer) -> np.ndarray:

@@ -7,7 +7,7 @@ import os
 from collections.abc import Callable
 from pathlib import Path
 
-from PySide6.QtCore import QSettings, Signal
+from PySide6.QtCore import QSettings, QTimer, Signal
 from PySide6.QtGui import QAction, QKeySequence, QUndoGroup
 from PySide6.QtWidgets import QFileDialog, QMainWindow, QMessageBox, QTabWidget
 
@@ -440,22 +440,34 @@ class MainWindow(QMainWindow):
 
     def _confirm_quit_during_export(self) -> bool:
         """Quitting with a video export running: keep exporting (no quit), or cancel it (nothing written) and
-        quit."""
+        quit. The question counts the frames as they render, and goes away if the export ends meanwhile
+        (nothing is left to lose: the quit goes on)."""
         if self.video_export is None:
             return True
         job = self.video_export
-        box = QMessageBox(QMessageBox.Icon.Question, "s2h-viewer: video export running",
-                          f"{Path(job.path).name} is still being rendered ({job.dialog.value()} of "
-                          f"{job.dialog.maximum()} frames). Quitting cancels it and writes no file.", parent=self)
+        box = QMessageBox(QMessageBox.Icon.Question, "s2h-viewer: video export running", "", parent=self)
         keep = box.addButton("Keep exporting", QMessageBox.ButtonRole.RejectRole)
         quit_button = box.addButton("Cancel export and quit", QMessageBox.ButtonRole.DestructiveRole)
         box.setDefaultButton(keep)
+
+        def refresh() -> None:
+            if self.video_export is not job:
+                box.done(0)
+            else:
+                box.setText(f"{Path(job.path).name} is still being rendered ({job.dialog.value()} of "
+                            f"{job.dialog.maximum()} frames). Quitting cancels it and writes no file.")
+        refresh()
+        live = QTimer(box)
+        live.timeout.connect(refresh)
+        live.start(250)
         box.exec()
+        live.stop()
+        if self.video_export is not job:  # it ended while the question was up
+            return True
         if box.clickedButton() is not quit_button:
             return False
-        if self.video_export is not None:  # it may have ended while the question was up
-            self.video_export.cancel()
-            self.video_export.thread.join()  # it stops after the frame it renders; its temporary file goes
+        job.cancel()
+        job.thread.join()  # it stops after the frame it renders; its temporary file goes
         return True
 
     def closeEvent(self, event) -> None:
