@@ -75,6 +75,31 @@ def save_annotation(annotation: Annotation, hand_file: str | Path) -> Path:
     return path
 
 
+def refuse_foreign_sidecar(motion_file: Path) -> None:
+    """Before a motion export to ``motion_file``: an `InputFileError` if its sidecar name holds another
+    file's frames (the hand-made ones of ``<stem>.fbx`` beside an export ``<stem>.glb``, say), which
+    `save_hand_frames` would overwrite; an earlier export's own sidecar may go."""
+    sidecar = sidecar_path(motion_file)
+    if not sidecar.exists() and not sidecar.is_symlink():
+        return
+    owner = _sidecar_owner(sidecar)
+    if owner != motion_file.name:
+        raise InputFileError(motion_file, f"would overwrite {sidecar.name}, the TBS frames of "
+                                          f"{owner or 'another file'}; export under another name")
+
+
+def _sidecar_owner(sidecar: Path) -> str | None:
+    """The hand file a sidecar says it was made for, None if it cannot be read as a sidecar."""
+    try:
+        if not sidecar.is_file() or sidecar.stat().st_size > MAX_SIDECAR_BYTES:
+            return None
+        document = json.loads(sidecar.read_text())
+    except (OSError, ValueError, RecursionError):  # JSON and Unicode decode errors are ValueErrors
+        return None
+    owner = document.get("hand_file") if isinstance(document, dict) else None
+    return owner if isinstance(owner, str) else None
+
+
 def save_hand_frames(motion_file: Path, hand: HandModel, to_file: np.ndarray) -> Path:
     """Write the sidecar of the motion file just written at ``motion_file``: ``hand``'s TBS frames turned by
     ``to_file`` into the hand space the file loads in, unscored (the hand's frames, not a solver run's), so

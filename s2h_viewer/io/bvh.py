@@ -23,7 +23,7 @@ from s2h_viewer.errors import InputFileError, reading, require_readable_file
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
-from s2h_viewer.io.annotation import save_hand_frames
+from s2h_viewer.io.annotation import refuse_foreign_sidecar, save_hand_frames
 from s2h_viewer.io.atomic import atomic_path
 from s2h_viewer.hand.mirror import reflection
 from s2h_viewer.io.rig import (MIRROR_NORMAL, RigSkeleton, build_hand, motion_from_world_rotations, recognise,
@@ -218,6 +218,7 @@ def save_bvh(path: str | Path, motion: Motion, hand: HandModel) -> Path:
     avatar; else with the project's joint names (centimetres, the wrist as root). The hand's TBS frames
     go beside it as its annotation sidecar, so that it reads back with the same TBS rotations."""
     path = Path(path)
+    refuse_foreign_sidecar(path)
     if "rig_joints" in hand.meta and Path(hand.source).exists():
         from s2h_viewer.io.files import read_rig_skeleton
         return _save_rig_bvh(path, motion, hand, read_rig_skeleton(hand.source))
