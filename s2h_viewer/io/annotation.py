@@ -1,5 +1,5 @@
 """The TBS annotation sidecar: ``<hand file stem>.tbs.json`` beside the hand file, loaded with it
-(``<name>.bvh.tbs.json`` beside a BVH, which `save_bvh` writes).
+(``<name>.bvh.tbs.json`` beside a BVH); motion exports write their hand's frames as one (`save_hand_frames`).
 
 Schema (version 1)::
 
@@ -25,6 +25,7 @@ import numpy as np
 
 from s2h_viewer.errors import InputFileError, reading, require_readable_file
 from s2h_viewer.hand import topology as topo
+from s2h_viewer.hand.model import HandModel
 from s2h_viewer.io.atomic import atomic_path
 
 SCHEMA = "s2h-tbs-annotation"
@@ -73,6 +74,41 @@ def save_annotation(annotation: Annotation, hand_file: str | Path, path: str | P
     with atomic_path(path) as tmp:
         tmp.write_text(json.dumps(document, indent=1) + "\n")
     return path
+
+
+def refuse_foreign_sidecar(motion_file: Path) -> None:
+    """Before a motion export to ``motion_file``: an `InputFileError` if its sidecar name holds another
+    file's frames (the hand-made ones of ``<stem>.fbx`` beside an export ``<stem>.glb``, say), which
+    `save_hand_frames` would overwrite; an earlier export's own sidecar may go."""
+    sidecar = sidecar_path(motion_file)
+    if not sidecar.exists() and not sidecar.is_symlink():
+        return
+    owner = _sidecar_owner(sidecar)
+    if owner != motion_file.name:
+        raise InputFileError(motion_file, f"would overwrite {sidecar.name}, the TBS frames of "
+                                          f"{owner or 'another file'}; export under another name")
+
+
+def _sidecar_owner(sidecar: Path) -> str | None:
+    """The hand file a sidecar says it was made for, None if it cannot be read as a sidecar."""
+    try:
+        if not sidecar.is_file() or sidecar.stat().st_size > MAX_SIDECAR_BYTES:
+            return None
+        document = json.loads(sidecar.read_text())
+    except (OSError, ValueError, RecursionError):  # JSON and Unicode decode errors are ValueErrors
+        return None
+    owner = document.get("hand_file") if isinstance(document, dict) else None
+    return owner if isinstance(owner, str) else None
+
+
+def save_hand_frames(motion_file: Path, hand: HandModel, to_file: np.ndarray) -> Path:
+    """Write the sidecar of the motion file just written at ``motion_file``: ``hand``'s TBS frames turned by
+    ``to_file`` into the hand space the file loads in, unscored (the hand's frames, not a solver run's), so
+    that it reads back with the TBS rotations it was written with; returns ``motion_file``."""
+    n = topo.N_ARTICULATED
+    save_annotation(Annotation(to_file @ hand.rest_frames, ["solver"] * n, np.full(n, np.nan),
+                               [f"TBS frames of {hand.name}, written with {motion_file.name}"]), motion_file)
+    return motion_file
 
 
 def _joint_entry(path: Path, name: str, entry) -> tuple[np.ndarray, str, float]:

@@ -23,7 +23,7 @@ from s2h_viewer.errors import InputFileError, reading, require_readable_file
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
-from s2h_viewer.io.annotation import Annotation, save_annotation
+from s2h_viewer.io.annotation import refuse_foreign_sidecar, save_hand_frames
 from s2h_viewer.io.atomic import atomic_path
 from s2h_viewer.hand.mirror import reflection
 from s2h_viewer.io.rig import (MIRROR_NORMAL, RigSkeleton, build_hand, motion_from_world_rotations, recognise,
@@ -218,10 +218,11 @@ def save_bvh(path: str | Path, motion: Motion, hand: HandModel) -> Path:
     avatar; else with the project's joint names (centimetres, the wrist as root). The hand's TBS frames
     go beside it as its annotation sidecar, so that it reads back with the same TBS rotations."""
     path = Path(path)
+    refuse_foreign_sidecar(path)
     if "rig_joints" in hand.meta and Path(hand.source).exists():
         from s2h_viewer.io.files import read_rig_skeleton
         return _save_rig_bvh(path, motion, hand, read_rig_skeleton(hand.source))
-    return _save_frames(_write_hand_bvh(path, motion, hand), hand, np.eye(3))
+    return save_hand_frames(_write_hand_bvh(path, motion, hand), hand, np.eye(3))
 
 
 def _write_hand_bvh(path: Path, motion: Motion, hand: HandModel) -> Path:
@@ -342,16 +343,7 @@ def _save_rig_bvh(path: Path, motion: Motion, hand: HandModel, skeleton: RigSkel
     if hand.meta.get("side") == "left":  # both hands mirrored to right ones on load
         s = reflection(MIRROR_NORMAL)
         to_file = s @ to_file @ s
-    return _save_frames(_write_bvh(path, lines, motion, data), hand, to_file)
-
-
-def _save_frames(path: Path, hand: HandModel, to_file: np.ndarray) -> Path:
-    """Write the sidecar of the BVH just written at ``path``: ``hand``'s TBS frames turned by ``to_file``
-    into the hand space the file loads in, unscored (the hand's frames, not a solver run's)."""
-    n = topo.N_ARTICULATED
-    save_annotation(Annotation(to_file @ hand.rest_frames, ["solver"] * n, np.full(n, np.nan),
-                               [f"TBS frames of {hand.name}, written with this BVH"]), path)
-    return path
+    return save_hand_frames(_write_bvh(path, lines, motion, data), hand, to_file)
 
 
 def _write_bvh(path: Path, hierarchy: list[str], motion: Motion, channels: list[np.ndarray]) -> Path:

@@ -3,7 +3,9 @@
 - `load_gltf_hand`: the skinned mesh and skeleton of a hand, or of one hand of a full-body character.
 - `load_gltf_motion`: an animation's bone rotations as a `Motion` on a hand loaded from the same rig.
 - `save_gltf_motion`: a GLB that opens in Blender with the avatar: the hand's own source file with the
-  motion added as an animation, or, for hands made here, the skinned hand written out with it.
+  motion added as an animation, or, for hands made here, the skinned hand written out with it; the
+  hand's TBS frames go beside it as its sidecar, since the ray solver's frames of the reopened file
+  (a few degrees off, or unlike frames set by hand) would read other TBS rotations back.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.hand.rig_mapping import RigMapping
+from s2h_viewer.io.annotation import refuse_foreign_sidecar, save_hand_frames
 from s2h_viewer.io.atomic import atomic_path
 from s2h_viewer.io.rig import (RigMesh, RigSkeleton, bone_indices, build_hand, motion_from_world_rotations,
                                recognise, rotation_part, world_rotations_from_motion)
@@ -455,8 +458,11 @@ def _save_glb(gltf: pygltflib.GLTF2, blob: bytearray, path: Path) -> None:
 
 def save_gltf_motion(path: str | Path, motion: Motion, hand: HandModel) -> Path:
     """Write ``motion`` on ``hand`` as a GLB: the hand's glTF source with the animation added when it has
-    one (so the avatar opens animated in Blender), else the hand itself, skinned, with the animation."""
+    one (so the avatar opens animated in Blender), else the hand itself, skinned, with the animation. The
+    hand's TBS frames go beside it as its annotation sidecar, so that it reads back with the same TBS
+    rotations; a sidecar of another file under that name is refused, before anything is written."""
     path = Path(path)
+    refuse_foreign_sidecar(path)
     source = Path(hand.source)
     if source.suffix.lower() in GLTF_SUFFIXES and source.exists() and "rig_joints" in hand.meta:
         doc = _Document(source)
@@ -466,7 +472,7 @@ def save_gltf_motion(path: str | Path, motion: Motion, hand: HandModel) -> Path:
         gltf, blob, node_rotations = _hand_document(hand, motion)
     _add_animation(gltf, blob, motion, node_rotations)
     _save_glb(gltf, blob, path)
-    return path
+    return save_hand_frames(path, hand, hand.rig_frames[0].T)  # the file loads in its wrist bone's frame
 
 
 def _source_node_rotations(doc: _Document, hand: HandModel, motion: Motion) -> dict[int, np.ndarray]:
