@@ -136,3 +136,13 @@ def test_add_target_offers_only_hand_files_and_each_kind_loads_as_a_hand(window,
     for pattern in patterns:  # every kind offered is a hand with a skin to colour
         hand = load_hand_file(ASSETS_DIR / "hands" / examples[pattern])
         assert hand.mesh is not None and len(hand.mesh.faces) > 100, pattern
+
+
+def test_playback_speed_and_looping_are_kept_for_the_next_launch(qtbot, sample_hands, tmp_path):
+    first = open_compare_window(qtbot, sample_hands, tmp_path, compute=False)
+    first.timeline.speed.setCurrentIndex(first.timeline.speed.findText("2x"))
+    first.timeline.loop.setChecked(False)
+    first.undo_stack.clear()
+    first.close()
+    again = open_compare_window(qtbot, sample_hands, tmp_path, compute=False)  # the same settings file
+    assert again.timeline.speed.currentText() == "2x" and not again.timeline.loop.isChecked()

@@ -65,6 +65,17 @@ class MainWindow(QMainWindow):
             self.restoreGeometry(geometry)
         else:
             self.resize(1400, 900)
+        self._remember_playback()
+
+    def _remember_playback(self) -> None:
+        """The playback speed and looping as the user last left them, kept for the next launch."""
+        timeline = self.timeline
+        speed = str(self.settings.value("playback/speed", ""))
+        if timeline.speed.findText(speed) >= 0:
+            timeline.speed.setCurrentIndex(timeline.speed.findText(speed))
+        timeline.loop.setChecked(str(self.settings.value("playback/loop", "true")).lower() == "true")
+        timeline.speed.currentTextChanged.connect(lambda text: self.settings.setValue("playback/speed", text))
+        timeline.loop.toggled.connect(lambda on: self.settings.setValue("playback/loop", on))
 
     def _show_unsaved(self, clean: bool) -> None:
         """A '*' in the title while the annotation has edits not saved."""
