@@ -30,6 +30,15 @@ def test_compare_mode_shows_two_methods_and_their_scores(window):
     assert window.timeline.n_frames == comparison.n_frames
 
 
+def test_a_retarget_that_makes_no_contact_has_no_precision_in_the_scores(window):
+    tbs_copy, asrn = window.comparison.results  # TBS Copy onto iris loses every touch of the clip; ASRN keeps them
+    assert np.isnan(tbs_copy.scores.contact_precision) and tbs_copy.scores.contact_recall == 0.0
+    precision = window.scores.item(0, 4)  # Contact P
+    assert precision.text() == "n/a" and "no pad contact" in precision.toolTip()
+    assert window.scores.item(0, 5).text() == "0.000"  # its recall is defined: nothing kept
+    assert window.scores.item(1, 4).text() == f"{asrn.scores.contact_precision:.3f}"
+
+
 def test_timeline_steps_and_keys_move_every_view(window, qtbot):
     before = window.view._hands[1].mesh.points.copy()
     window.timeline.step(5)
