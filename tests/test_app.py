@@ -126,7 +126,12 @@ def test_shortcut_help_lists_every_shortcut_the_menus_define(window, qtbot):
         key = action.shortcut().toString(QKeySequence.SequenceFormat.NativeText)
         assert any(line.startswith(key) and action.text() in line for line in lines), (key, action.text())
     assert any(line.startswith("Ctrl+H: View > Semi-transparent skin") for line in lines)
-    assert any(line.startswith("double-click a hand") for line in lines)
+    mouse = lines[lines.index("Mouse, in the 3D views of both tabs"):]  # the mouse after the keys
+    for entry in ("left drag: rotate the camera", "Shift+left drag or middle drag: pan", "right drag or wheel: zoom",
+                  "double-click a hand: show it alone", "click the error curve: jump to that frame",
+                  "click a joint (in 3D or the list): select it", "drag the ring"):
+        assert any(line.startswith(entry) for line in mouse), entry
+    assert "Mouse, in Compare" in mouse and "Mouse, in Annotate" in mouse
 
 
 def test_add_target_offers_only_hand_files_and_each_kind_loads_as_a_hand(window, qtbot):

@@ -19,6 +19,7 @@ from s2h_viewer.app.tasks import TaskRunner
 from s2h_viewer.errors import S2HError
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.retarget.methods import METHODS
+from s2h_viewer.widgets import annotation_view, compare_view, error_curve, vtk_widget
 
 __all__ = ["CompareSetup", "MainWindow", "default_setup", "run"]
 
@@ -26,12 +27,11 @@ RECENT_FILES = 8
 STATUS_MS_CANCELLED = 15_000  # a cancelled export says so this long in the status bar
 #: hand files a target can be (a BVH holds a motion on a skeleton, no mesh to colour: not offered)
 TARGET_HAND_FILTER = "Hands (*.glb *.gltf *.fbx *.npz)"
-#: what the mouse does (the keys are listed from the menus' own actions, `MainWindow.shortcut_lines`)
-MOUSE_GESTURES = (("double-click a hand", "show it alone and select it / the grid again"),
-                  ("drag in a 3D view", "turn the camera (every hand of the grid turns with it)"),
-                  ("click the error curve", "jump to that frame"),
-                  ("click a joint in 3D / the list (Annotate)", "select it"),
-                  ("drag the ring in 3D / the dial (Annotate)", "turn the selected joint's frame about its twist axis"))
+#: Help's mouse sections, (heading, (gesture, what it does)...), each list kept by the widget the mouse acts on
+#: (the keys are read from the menus' own actions, `MainWindow.shortcut_lines`)
+MOUSE_SECTIONS = (("Mouse, in the 3D views of both tabs", vtk_widget.MOUSE),
+                  ("Mouse, in Compare", compare_view.MOUSE + error_curve.MOUSE),
+                  ("Mouse, in Annotate", annotation_view.MOUSE))
 
 
 class MainWindow(QMainWindow):
@@ -189,9 +189,10 @@ class MainWindow(QMainWindow):
         self.undo_group.setActiveStack(self.annotate.undo_stack if annotating else self.compare.undo_stack)
 
     def shortcut_lines(self) -> list[str]:
-        """'key: Menu > entry' for every menu action with a shortcut, read from the actions themselves (so the
-        help cannot drift from the menus), then the mouse gestures."""
-        lines = []
+        """Help's text, a heading over each section: 'key: Menu > entry' for every menu action with a shortcut,
+        read from the actions themselves (so the help cannot drift from the menus), then 'gesture: what it does'
+        for the mouse in the 3D views, the grid and the annotation view (`MOUSE_SECTIONS`)."""
+        lines = ["Keyboard (from the menus)"]
 
         def walk(menu, path: str) -> None:
             for action in menu.actions():
@@ -203,10 +204,12 @@ class MainWindow(QMainWindow):
 
         for top in self.menuBar().actions():
             walk(top.menu(), top.text().replace("&", ""))
-        return lines + [f"{gesture}: {what}" for gesture, what in MOUSE_GESTURES]
+        for heading, gestures in MOUSE_SECTIONS:
+            lines += ["", heading, *(f"{gesture}: {what}" for gesture, what in gestures)]
+        return lines
 
     def show_shortcuts(self) -> None:
-        QMessageBox.information(self, "Keyboard shortcuts", "\n".join(self.shortcut_lines()))
+        QMessageBox.information(self, "Keyboard shortcuts and mouse", "\n".join(self.shortcut_lines()))
 
     def error(self, message: str) -> None:
         """Every failure the user caused or met ends here: a dialog with the message, nothing silent."""
