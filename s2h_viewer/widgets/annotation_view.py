@@ -22,7 +22,7 @@ from s2h_viewer.widgets.vtk_widget import PlotterWidget, window_plotter
 LEGEND = ("TBS frames: twist (along the bone) red, bend green, splay (out of the back) blue. Drag the "
           "selected joint's ring (or the dial) to turn its frame about the twist axis.")
 #: the mouse in the annotation view beyond the camera (`vtk_widget.MOUSE`), for Help's list
-MOUSE = (("click a joint (in 3D or the list)", "select it: its ring appears about its twist axis"),
+MOUSE = (("click a joint (in 3D or the list)", "select it and show its ring about its twist axis"),
          ("drag the ring (it lights up under the pointer) or the dial",
           "turn the selected joint's frame about its twist axis"))
 #: a click this many pixels from a joint on screen, or nearer, selects it
