@@ -424,3 +424,54 @@ def test_the_dial_and_its_readout_show_the_turn_a_ring_drag_made_and_follow_undo
     assert view.dial.value() == turned
     view.select(3)  # another joint: its own turn
     assert view.dial.value() == 0 and view.angle_label.text().startswith(topo.ARTICULATED_NAMES[3])
+
+
+def menu_named(window, title: str):
+    return next(a.menu() for a in window.menuBar().actions() if a.text().replace("&", "") == title)
+
+
+def action_named(window, menu: str, text: str):
+    return next(a for a in menu_named(window, menu).actions() if a.text() == text)
+
+
+def test_the_empty_annotate_tab_says_how_to_open_a_hand_and_each_tab_disables_the_others_menus(window, qtbot,
+                                                                                                hand_file):
+    view = window.annotate_view
+    compare_menus = [menu_named(window, m) for m in ("Methods", "Targets", "View", "Playback")]
+    compare_actions = [action_named(window, "File", t) for t in ("Open motion...", "Add target hand...",
+                                                                 "Export screenshot (PNG)...",
+                                                                 "Export video (MP4, GIF)...",
+                                                                 "Export retargeted motion...")]
+    annotate_actions = [action_named(window, "Annotate", t) for t in ("Run TBS solver", "Save annotation",
+                                                                      "Save annotation as...")]
+    assert all(m.isEnabled() for m in compare_menus) and all(a.isEnabled() for a in compare_actions)
+    assert not any(a.isEnabled() for a in annotate_actions)  # Compare shows: nothing to solve or save there
+    assert action_named(window, "Annotate", "Open hand...").isEnabled()  # it opens the Annotate tab
+
+    window.tabs.setCurrentWidget(view)
+    qtbot.waitUntil(view.hint.isVisible)
+    assert not view.interactor.isVisible()  # a hint, not a blank 3D view
+    assert view.hint.text() == ("Open a hand to annotate: Annotate > Open hand (Ctrl+Shift+O), or drop a GLB, glTF "
+                                "or FBX file here.")
+    assert not any(m.isEnabled() for m in compare_menus) and not any(a.isEnabled() for a in compare_actions)
+    assert not any(a.isEnabled() for a in annotate_actions)  # no hand yet
+    keyboard_to(qtbot, window.tabs)
+    QTest.keyClick(window, Qt.Key.Key_H, Qt.KeyboardModifier.ControlModifier)  # View > Semi-transparent skin
+    assert not window.see_through.isChecked()  # its shortcut is off with its menu
+
+    window.settings.setValue("files/recent", [f"motion:{ASSETS_DIR / 'motions' / 'counting.npz'}"])
+    window.annotate_file(str(hand_file))
+    qtbot.waitUntil(view.interactor.isVisible)
+    assert not view.hint.isVisible() and view.session is not None
+    assert all(a.isEnabled() for a in annotate_actions)
+    assert not any(m.isEnabled() for m in compare_menus)
+    recent = {a.text(): a for a in window.recent_menu.actions()}
+    assert recent["hand.glb (annotate)"].isEnabled() and not recent["counting.npz (motion)"].isEnabled()
+
+    window.tabs.setCurrentWidget(window.compare)
+    assert all(m.isEnabled() for m in compare_menus) and all(a.isEnabled() for a in compare_actions)
+    assert not any(a.isEnabled() for a in annotate_actions)
+    assert all(a.isEnabled() for a in recent.values())  # a hand to annotate opens the Annotate tab from here
+    keyboard_to(qtbot, window.tabs)
+    QTest.keyClick(window, Qt.Key.Key_H, Qt.KeyboardModifier.ControlModifier)
+    assert window.see_through.isChecked()  # back on Compare its shortcut works again

@@ -30,6 +30,15 @@ def test_compare_mode_shows_two_methods_and_their_scores(window):
     assert window.timeline.n_frames == comparison.n_frames
 
 
+def test_a_retarget_that_makes_no_contact_has_no_precision_in_the_scores(window):
+    tbs_copy, asrn = window.comparison.results  # TBS Copy onto iris loses every touch of the clip; ASRN keeps them
+    assert np.isnan(tbs_copy.scores.contact_precision) and tbs_copy.scores.contact_recall == 0.0
+    precision = window.scores.item(0, 4)  # Contact P
+    assert precision.text() == "n/a" and "no pad contact" in precision.toolTip()
+    assert window.scores.item(0, 5).text() == "0.000"  # its recall is defined: nothing kept
+    assert window.scores.item(1, 4).text() == f"{asrn.scores.contact_precision:.3f}"
+
+
 def test_timeline_steps_and_keys_move_every_view(window, qtbot):
     before = window.view._hands[1].mesh.points.copy()
     window.timeline.step(5)
@@ -117,7 +126,12 @@ def test_shortcut_help_lists_every_shortcut_the_menus_define(window, qtbot):
         key = action.shortcut().toString(QKeySequence.SequenceFormat.NativeText)
         assert any(line.startswith(key) and action.text() in line for line in lines), (key, action.text())
     assert any(line.startswith("Ctrl+H: View > Semi-transparent skin") for line in lines)
-    assert any(line.startswith("double-click a hand") for line in lines)
+    mouse = lines[lines.index("Mouse, in the 3D views of both tabs"):]  # the mouse after the keys
+    for entry in ("left drag: rotate the camera", "Shift+left drag or middle drag: pan", "right drag or wheel: zoom",
+                  "double-click a hand: show it alone", "click the error curve: jump to that frame",
+                  "click a joint (in 3D or the list): select it", "drag the ring"):
+        assert any(line.startswith(entry) for line in mouse), entry
+    assert "Mouse, in Compare" in mouse and "Mouse, in Annotate" in mouse
 
 
 def test_add_target_offers_only_hand_files_and_each_kind_loads_as_a_hand(window, qtbot):

@@ -12,6 +12,7 @@ from s2h_viewer.motions.synthesis import synthesize
 from s2h_viewer.retarget import METHODS, retarget
 from s2h_viewer.io.files import load_hand_file
 from s2h_viewer.retarget.asm_opt import contact_keyframes, keyframes
+from s2h_viewer.retarget.evaluation import EvaluationRow, format_markdown, summarise, write_results
 from s2h_viewer.samples import ASSETS_DIR, hand_names, load_sample_motions
 from s2h_viewer.retarget.asrn.dataset import build_training_set, sample_batch
 from s2h_viewer.retarget.asrn.inference import MODELS_DIR, load_network, run_network
@@ -20,7 +21,7 @@ from s2h_viewer.retarget.asrn.training import (TrainConfig, batch_loss, build_mo
                                                stored_config, train)
 from s2h_viewer.hand.kinematics import forward_kinematics
 from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, PAD_PAIRS, contact_gaps
-from s2h_viewer.semantics.metrics import score_retarget
+from s2h_viewer.semantics.metrics import RetargetScores, score_retarget
 
 
 def test_registry_lists_the_paper_table_in_order():
@@ -202,3 +203,25 @@ def test_train_is_seeded_and_resumes(sample_hands, tmp_path):
     assert c["step"] == 40
     for key in a["model"]:
         torch.testing.assert_close(c["model"][key], a["model"][key])
+
+
+def test_a_clip_without_target_contacts_has_no_precision_and_the_means_skip_it(sample_hands, tmp_path):
+    hand = sample_hands["iris"]
+    motion = synthesize(["pinch", "ok"], sample_hands["birch"], seed=3)  # pad contacts in the source
+    flat = np.zeros_like(motion.q_tbs)
+    flat[..., 0] = 1.0  # the canonical flat hand on every frame: no pad ever touches another
+    untouched = score_retarget(sample_hands["birch"], motion.q_tbs, hand, flat)
+    assert np.isnan(untouched.contact_precision) and untouched.contact_recall == 0.0  # undefined, not 1.000
+
+    def row(method: str, precision: float) -> EvaluationRow:
+        scores = RetargetScores(s_palm=1.0, s_finger=1.0, s_finger_paper=0.9, contact_precision=precision,
+                                contact_recall=0.5, palm_contact_recall=0.5, violation_rate=0.0, jitter=0.0)
+        return EvaluationRow(method, "clip", "birch", "iris", "same", scores)
+
+    rows = [row("copy", float("nan")), row("tbs_copy", 0.6), row("tbs_copy", float("nan")), row("tbs_copy", 0.8)]
+    summary = summarise(rows)
+    assert np.isnan(summary["copy"]["Contact P"]) and summary["tbs_copy"]["Contact P"] == pytest.approx(0.7)
+    table = format_markdown(summary).splitlines()
+    assert "| n/a | 0.500 |" in table[2] and "| 0.700 | 0.500 |" in table[3]  # Contact P, Contact R
+    csv_path = write_results(rows, summary, tmp_path)[0]
+    assert csv_path.read_text().splitlines()[1].split(",")[9] == ""  # contact_precision: no score, no "nan"

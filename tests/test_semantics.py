@@ -223,7 +223,12 @@ def test_contact_precision_and_recall():
     source = np.array([[1, 0, 1], [0, 0, 1]], dtype=bool)
     target = np.array([[1, 1, 0], [0, 0, 1]], dtype=bool)
     assert contact_precision_recall(source, target) == (pytest.approx(2 / 3), pytest.approx(2 / 3))
-    assert contact_precision_recall(np.zeros((2, 3), bool), np.zeros((2, 3), bool)) == (1.0, 1.0)
+    none = np.zeros((2, 3), bool)
+    assert np.isnan(contact_precision_recall(none, none)).all()  # ratios over no contacts: undefined, not 1.0
+    precision, recall = contact_precision_recall(source, none)  # a retarget that never touches
+    assert np.isnan(precision) and recall == 0.0
+    precision, recall = contact_precision_recall(none, target)  # touches the source never makes
+    assert precision == 0.0 and np.isnan(recall)
 
 
 def test_distance_matrix_is_scale_free(skeleton_hands, rng):

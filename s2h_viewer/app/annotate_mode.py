@@ -106,8 +106,10 @@ class AnnotateMode(QObject):
         self.undo_stack = QUndoStack(self)
         self.view.frame_edited.connect(self._frame_edited)
 
-    def fill_menu(self, annotate_menu: QMenu) -> None:
-        """The solver and saving in Annotate (undo and redo are the window's: they follow the visible tab)."""
+    def fill_menu(self, annotate_menu: QMenu) -> list[QAction]:
+        """The solver and saving in Annotate, returned: they act on an open hand (undo and redo are the
+        window's: they follow the visible tab)."""
+        actions = []
         for text, slot, shortcut in (("Run TBS solver", self.run_solver, "Ctrl+R"),
                                      ("Save annotation", self.save, "Ctrl+Shift+S"),
                                      ("Save annotation as...", self.save_as, None)):
@@ -116,6 +118,8 @@ class AnnotateMode(QObject):
                 action.setShortcut(QKeySequence(shortcut))
             action.triggered.connect(lambda _=False, run=slot: run())  # not `checked` as save_as's path
             annotate_menu.addAction(action)
+            actions.append(action)
+        return actions
 
     def open(self, hand: HandModel, path: str) -> None:
         """Show ``hand`` for annotation with its sidecar's frames, who set them and their confidence, or the

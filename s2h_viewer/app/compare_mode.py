@@ -434,7 +434,6 @@ class CompareMode(QWidget):
             action = menu.addAction(f"Remove {target.name}")
             action.triggered.connect(lambda _=False, i=index: self.remove_target(i))
             action.setEnabled(len(self.state.targets) > 1)
-        menu.setEnabled(bool(self.state.targets))
 
     def shutdown(self) -> None:
         """Stop the retargets and free the render window (the window is closing)."""

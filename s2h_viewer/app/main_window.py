@@ -19,6 +19,7 @@ from s2h_viewer.app.tasks import TaskRunner
 from s2h_viewer.errors import S2HError
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.retarget.methods import METHODS
+from s2h_viewer.widgets import annotation_view, compare_view, error_curve, vtk_widget
 
 __all__ = ["CompareSetup", "MainWindow", "default_setup", "run"]
 
@@ -26,12 +27,11 @@ RECENT_FILES = 8
 STATUS_MS_CANCELLED = 15_000  # a cancelled export says so this long in the status bar
 #: hand files a target can be (a BVH holds a motion on a skeleton, no mesh to colour: not offered)
 TARGET_HAND_FILTER = "Hands (*.glb *.gltf *.fbx *.npz)"
-#: what the mouse does (the keys are listed from the menus' own actions, `MainWindow.shortcut_lines`)
-MOUSE_GESTURES = (("double-click a hand", "show it alone and select it / the grid again"),
-                  ("drag in a 3D view", "turn the camera (every hand of the grid turns with it)"),
-                  ("click the error curve", "jump to that frame"),
-                  ("click a joint in 3D / the list (Annotate)", "select it"),
-                  ("drag the ring in 3D / the dial (Annotate)", "turn the selected joint's frame about its twist axis"))
+#: Help's mouse sections, (heading, (gesture, what it does)...), each list kept by the widget the mouse acts on
+#: (the keys are read from the menus' own actions, `MainWindow.shortcut_lines`)
+MOUSE_SECTIONS = (("Mouse, in the 3D views of both tabs", vtk_widget.MOUSE),
+                  ("Mouse, in Compare", compare_view.MOUSE + error_curve.MOUSE),
+                  ("Mouse, in Annotate", annotation_view.MOUSE))
 
 
 class MainWindow(QMainWindow):
@@ -135,20 +135,20 @@ class MainWindow(QMainWindow):
     def _build_menus(self) -> None:
         bar = self.menuBar()
         file_menu = bar.addMenu("&File")
-        self._action(file_menu, "Open motion...", self.open_motion, "Ctrl+O")
-        self._action(file_menu, "Add target hand...", self.add_target, "Ctrl+T")
+        compare_only = [self._action(file_menu, "Open motion...", self.open_motion, "Ctrl+O"),
+                        self._action(file_menu, "Add target hand...", self.add_target, "Ctrl+T")]
         self.recent_menu = file_menu.addMenu("Open recent")
         self._fill_recent()
         file_menu.addSeparator()
-        self._action(file_menu, "Export screenshot (PNG)...", self.export_screenshot, "Ctrl+S")
-        self._action(file_menu, "Export video (MP4, GIF)...", self.export_video, "Ctrl+E")
-        self._action(file_menu, "Export retargeted motion...", self.export_motion)
+        compare_only += [self._action(file_menu, "Export screenshot (PNG)...", self.export_screenshot, "Ctrl+S"),
+                         self._action(file_menu, "Export video (MP4, GIF)...", self.export_video, "Ctrl+E"),
+                         self._action(file_menu, "Export retargeted motion...", self.export_motion)]
         file_menu.addSeparator()
         self._action(file_menu, "Quit", self.close, "Ctrl+Q")
         edit_menu = bar.addMenu("&Edit")
         annotate_menu = bar.addMenu("&Annotate")
-        self._action(annotate_menu, "Open hand...", self.open_hand_to_annotate, "Ctrl+Shift+O")
-        self.annotate.fill_menu(annotate_menu)
+        open_hand = self._action(annotate_menu, "Open hand...", self.open_hand_to_annotate, "Ctrl+Shift+O")
+        self._annotate_only = self.annotate.fill_menu(annotate_menu)  # "Open hand" switches to Annotate: always on
         # one undo stack per tab: Edit > Undo acts on the visible tab's work only
         self.undo_group = QUndoGroup(self)
         for stack in (self.compare.undo_stack, self.annotate.undo_stack):
@@ -158,8 +158,6 @@ class MainWindow(QMainWindow):
         redo = self.undo_group.createRedoAction(edit_menu, "Redo")
         redo.setShortcut(QKeySequence.StandardKey.Redo)
         edit_menu.addActions([undo, redo])
-        self.tabs.currentChanged.connect(self._tab_changed)
-        self._tab_changed()
         methods_menu = bar.addMenu("&Methods")
         chosen = self.settings.value("compare/methods", self.setup.methods)
         chosen = [m for m in (chosen if isinstance(chosen, list) else [chosen]) if m in METHODS] or self.setup.methods
@@ -193,16 +191,39 @@ class MainWindow(QMainWindow):
         self._action(play, "Last frame", lambda: timeline.set_frame(timeline.n_frames - 1), "End")
         help_menu = bar.addMenu("&Help")
         self._action(help_menu, "Keyboard shortcuts", self.show_shortcuts, "F1")
+        # a disabled menu's actions are greyed and their shortcuts off (the targets menu: in `_follow_mode`)
+        self._compare_only = [*compare_only, methods_menu, view_menu, play]
+        keys = open_hand.shortcut().toString(QKeySequence.SequenceFormat.NativeText)
+        self.annotate.view.set_hint(f"Open a hand to annotate: Annotate > {open_hand.text().rstrip('.')} ({keys}), "
+                                    f"or drop a GLB, glTF or FBX file here.")
+        self.tabs.currentChanged.connect(self._tab_changed)
+        self._tab_changed()
+
+    def _annotating(self) -> bool:
+        return self.tabs.currentWidget() is self.annotate.view
 
     def _tab_changed(self, *_) -> None:
-        """Undo and redo follow the visible tab."""
-        annotating = self.tabs.currentWidget() is self.annotate.view
-        self.undo_group.setActiveStack(self.annotate.undo_stack if annotating else self.compare.undo_stack)
+        """Undo and redo follow the visible tab, and so do the menus (`_follow_mode`)."""
+        self.undo_group.setActiveStack(self.annotate.undo_stack if self._annotating() else self.compare.undo_stack)
+        self._follow_mode()
+
+    def _follow_mode(self) -> None:
+        """What acts on the other tab's hidden work is disabled (greyed, its shortcuts off) while a tab shows:
+        in Annotate, the motion, targets, exports, methods, view and playback of Compare; in Compare, the
+        solver and saving of Annotate, which also wait for a hand to be opened."""
+        annotating = self._annotating()
+        for item in self._compare_only:
+            item.setEnabled(not annotating)
+        self.targets_menu.setEnabled(not annotating and bool(self.setup.targets))
+        for action in self._annotate_only:
+            action.setEnabled(annotating and self.annotation is not None)
+        self._enable_recent()
 
     def shortcut_lines(self) -> list[str]:
-        """'key: Menu > entry' for every menu action with a shortcut, read from the actions themselves (so the
-        help cannot drift from the menus), then the mouse gestures."""
-        lines = []
+        """Help's text, a heading over each section: 'key: Menu > entry' for every menu action with a shortcut,
+        read from the actions themselves (so the help cannot drift from the menus), then 'gesture: what it does'
+        for the mouse in the 3D views, the grid and the annotation view (`MOUSE_SECTIONS`)."""
+        lines = ["Keyboard (from the menus)"]
 
         def walk(menu, path: str) -> None:
             for action in menu.actions():
@@ -214,10 +235,12 @@ class MainWindow(QMainWindow):
 
         for top in self.menuBar().actions():
             walk(top.menu(), top.text().replace("&", ""))
-        return lines + [f"{gesture}: {what}" for gesture, what in MOUSE_GESTURES]
+        for heading, gestures in MOUSE_SECTIONS:
+            lines += ["", heading, *(f"{gesture}: {what}" for gesture, what in gestures)]
+        return lines
 
     def show_shortcuts(self) -> None:
-        QMessageBox.information(self, "Keyboard shortcuts", "\n".join(self.shortcut_lines()))
+        QMessageBox.information(self, "Keyboard shortcuts and mouse", "\n".join(self.shortcut_lines()))
 
     def error(self, message: str) -> None:
         """Every failure the user caused or met ends here: a dialog with the message, nothing silent."""
@@ -244,6 +267,7 @@ class MainWindow(QMainWindow):
             action.setChecked(name in self.setup.methods)
             action.blockSignals(False)
         self.compare.fill_targets_menu(self.targets_menu)
+        self._follow_mode()
 
     def _toggle_solo(self) -> None:
         """Ctrl+M: the selected retarget alone in the view, or the grid again (double-click does it too)."""
@@ -269,6 +293,7 @@ class MainWindow(QMainWindow):
         return [recent] if isinstance(recent, str) else list(recent or [])
 
     def _fill_recent(self) -> None:
+        """The recent files, newest first (a hand to annotate opens in Annotate from either tab)."""
         self.recent_menu.clear()
         opens = {"motion": self.load_motion, "target": self.add_target_file, "annotate": self.annotate_file}
         for entry in self._recent():
@@ -276,7 +301,14 @@ class MainWindow(QMainWindow):
             if kind in opens:
                 action = self.recent_menu.addAction(f"{Path(path).name} ({kind})")
                 action.triggered.connect(lambda _=False, p=path, k=kind: opens[k](p))
+                action.setData(kind)
         self.recent_menu.setEnabled(bool(self.recent_menu.actions()))
+        self._enable_recent()
+
+    def _enable_recent(self) -> None:
+        """Recent motions and targets are for Compare: disabled in Annotate."""
+        for action in self.recent_menu.actions():
+            action.setEnabled(action.data() == "annotate" or not self._annotating())
 
     def _ask_to_open(self, title: str, file_filter: str, then: Callable[[str], None], folder: str | None = None) -> None:
         """A file dialog in ``folder`` (else the last folder); ``then(path)`` unless the user cancels."""
@@ -428,6 +460,7 @@ class MainWindow(QMainWindow):
         self._remember(path, "annotate")
         self.annotate.open(hand, path)
         self.tabs.setCurrentWidget(self.annotate.view)
+        self._follow_mode()  # the solver and saving now have a hand
 
     def run_solver(self) -> None:
         self.annotate.run_solver()

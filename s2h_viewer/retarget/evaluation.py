@@ -79,30 +79,33 @@ def evaluate(motions: list[Motion], hands: dict[str, HandModel], targets: list[s
 
 
 def summarise(rows: list[EvaluationRow]) -> dict[str, dict[str, float]]:
-    """Per method, each column of ``COLUMNS``: the mean over the rows of its family (NaN if none)."""
+    """Per method, each column of ``COLUMNS``: the mean over the rows of its family that have the score (not
+    None, not NaN: a contact score over no contacts is undefined, not 0 or 1), NaN if none has it."""
     out: dict[str, dict[str, float]] = {}
     for method in dict.fromkeys(r.method for r in rows):
         out[method] = {}
         for header, family, metric in COLUMNS:
             values = [r.scores.as_dict()[metric] for r in rows
                       if r.method == method and family in ("all", r.family)]
-            values = [v for v in values if v is not None]
+            values = [v for v in values if v is not None and not np.isnan(v)]
             out[method][header] = float(np.mean(values)) if values else float("nan")
     return out
 
 
 def format_markdown(summary: dict[str, dict[str, float]]) -> str:
-    """The summary as a Markdown table, one row per method."""
+    """The summary as a Markdown table, one row per method; "n/a" where no row had the score."""
     lines = ["| Method | " + " | ".join(h for h, _, _ in COLUMNS) + " |", "|---|" + "---:|" * len(COLUMNS)]
     for method, values in summary.items():
         label = METHODS[method].label if method in METHODS else method
-        cells = [f"{values[h]:.5f}" if m in ("mse", "jitter") else f"{values[h]:.3f}" for h, _, m in COLUMNS]
+        cells = ["n/a" if np.isnan(values[h]) else f"{values[h]:.5f}" if m in ("mse", "jitter") else
+                 f"{values[h]:.3f}" for h, _, m in COLUMNS]
         lines.append(f"| {label} | " + " | ".join(cells) + " |")
     return "\n".join(lines)
 
 
 def write_results(rows: list[EvaluationRow], summary: dict[str, dict[str, float]], out_dir: str | Path) -> list[Path]:
-    """Per-row CSV and the Markdown summary, each written atomically."""
+    """Per-row CSV (an empty cell where a row has no score: no MSE without ground truth, a contact score
+    over no contacts) and the Markdown summary, each written atomically."""
     out_dir = Path(out_dir)
     buffer = io.StringIO()
     writer = csv.writer(buffer)
@@ -110,7 +113,7 @@ def write_results(rows: list[EvaluationRow], summary: dict[str, dict[str, float]
     for r in rows:
         s = r.scores.as_dict()
         writer.writerow([r.method, r.motion, r.source, r.target, r.family,
-                         *("" if s[m] is None else s[m] for m in METRICS)])
+                         *("" if s[m] is None or np.isnan(s[m]) else s[m] for m in METRICS)])
     written = []
     for name, text in (("evaluation.csv", buffer.getvalue()), ("evaluation.md", format_markdown(summary) + "\n")):
         with atomic_path(out_dir / name) as tmp:

@@ -93,9 +93,10 @@ def detect_contacts(hand: HandModel, pose: HandPose, tolerance: float = CONTACT_
 def contact_precision_recall(source: np.ndarray, target: np.ndarray) -> tuple[float, float]:
     """Precision and recall of the target's contacts against the source's ((T, 15) bools).
 
-    With no contact on one side the corresponding score is 1.0 (nothing to get wrong).
+    A ratio over no contacts is undefined and NaN, not a perfect score: precision when the target makes
+    no contact (a retarget that never touches is not precise), recall when the source makes none.
     """
     true_pos = np.logical_and(source, target).sum()
-    precision = true_pos / target.sum() if target.sum() else 1.0
-    recall = true_pos / source.sum() if source.sum() else 1.0
+    precision = true_pos / target.sum() if target.sum() else np.nan
+    recall = true_pos / source.sum() if source.sum() else np.nan
     return float(precision), float(recall)

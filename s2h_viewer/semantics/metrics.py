@@ -50,7 +50,8 @@ def jitter(pose: HandPose, hand_length: float) -> float:
 
 @dataclass
 class RetargetScores:
-    """One retargeted clip's scores; ``mse`` only where a paired ground truth exists."""
+    """One retargeted clip's scores; ``mse`` only where a paired ground truth exists; a contact score over no
+    contacts is NaN (`contact_precision_recall`)."""
 
     s_palm: float
     s_finger: float

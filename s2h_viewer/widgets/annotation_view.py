@@ -2,14 +2,15 @@
 (twist red, bend green, splay blue), a joint list with the solver's confidence, and two handles that
 turn the selected joint's frame about its twist axis while they are dragged: a ring about the joint in
 the 3D view and a dial beside it. The dial and its readout show how far the selected frame is turned from
-the frame it had when the hand was opened, whichever handle turned it (and after an undo or a redo)."""
+the frame it had when the hand was opened, whichever handle turned it (and after an undo or a redo).
+Until a hand is opened the view is a hint saying how to open one (`set_hint`), not a blank 3D view."""
 
 from __future__ import annotations
 
 import numpy as np
 import pyvista as pv
-from PySide6.QtCore import Signal
-from PySide6.QtWidgets import QDial, QHBoxLayout, QLabel, QListWidget, QSplitter, QVBoxLayout, QWidget
+from PySide6.QtCore import Qt, Signal
+from PySide6.QtWidgets import QDial, QLabel, QListWidget, QSplitter, QStackedLayout, QVBoxLayout, QWidget
 
 from s2h_viewer.annotate.editing import AnnotationSession, rotate_about_twist, signed_angle_about
 from s2h_viewer.hand import topology as topo
@@ -20,6 +21,10 @@ from s2h_viewer.widgets.vtk_widget import PlotterWidget, window_plotter
 
 LEGEND = ("TBS frames: twist (along the bone) red, bend green, splay (out of the back) blue. Drag the "
           "selected joint's ring (or the dial) to turn its frame about the twist axis.")
+#: the mouse in the annotation view beyond the camera (`vtk_widget.MOUSE`), for Help's list
+MOUSE = (("click a joint (in 3D or the list)", "select it and show its ring about its twist axis"),
+         ("drag the ring (it lights up under the pointer) or the dial",
+          "turn the selected joint's frame about its twist axis"))
 #: a click this many pixels from a joint on screen, or nearer, selects it
 PICK_PIXELS = 24
 #: the ring's radius and the arrows' length as shares of the hand's length
@@ -64,13 +69,22 @@ class AnnotationView(QWidget):
         side_layout = QVBoxLayout(side)
         for widget in (QLabel("Joints (solver confidence)"), self.joints, self.angle_label, self.dial, self.legend):
             side_layout.addWidget(widget)
-        splitter = QSplitter()
-        splitter.addWidget(self.interactor)
-        splitter.addWidget(side)
-        splitter.setStretchFactor(0, 3)
-        layout = QHBoxLayout(self)
-        layout.setContentsMargins(0, 0, 0, 0)
-        layout.addWidget(splitter)
+        self.editor = QSplitter()
+        self.editor.addWidget(self.interactor)
+        self.editor.addWidget(side)
+        self.editor.setStretchFactor(0, 3)
+        self.hint = QLabel("Open a hand to annotate.")
+        self.hint.setObjectName("annotate_hint")
+        self.hint.setAlignment(Qt.AlignmentFlag.AlignCenter)
+        self.hint.setWordWrap(True)
+        self.hint.setMargin(24)
+        font = self.hint.font()
+        font.setPointSizeF(font.pointSizeF() * 1.3)
+        self.hint.setFont(font)
+        self.pages = QStackedLayout(self)
+        self.pages.setContentsMargins(0, 0, 0, 0)
+        self.pages.addWidget(self.hint)  # shown until a hand is opened
+        self.pages.addWidget(self.editor)
         self.interactor.Initialize()
         self.joints.currentRowChanged.connect(self.select)
         self.dial.sliderPressed.connect(self._begin_drag)
@@ -78,8 +92,14 @@ class AnnotationView(QWidget):
         self.dial.sliderReleased.connect(self._end_drag)
         self._arrow_meshes: list[pv.PolyData] = []
 
+    def set_hint(self, text: str) -> None:
+        """What the view says until a hand is opened (how to open one)."""
+        self.hint.setText(text)
+
     def set_session(self, session: AnnotationSession) -> None:
-        """Show a newly opened hand: its mesh, skeleton, frames and joint list replace the last hand's."""
+        """Show a newly opened hand: its mesh, skeleton, frames and joint list replace the last hand's (or the
+        hint)."""
+        self.pages.setCurrentWidget(self.editor)
         self.session = session
         self.selected = 0
         self._drag_base = None

@@ -25,6 +25,9 @@ from s2h_viewer.render.compare_scene import (PLAYING_FACES, PosedHand, PosedSkin
 from s2h_viewer.retarget.comparison import Comparison
 from s2h_viewer.widgets.vtk_widget import PlotterWidget, window_plotter
 
+#: the mouse in the grid beyond the camera (`vtk_widget.MOUSE`), for Help's list
+MOUSE = (("double-click a hand", "show it alone and select it; double-click again for the grid"),)
+
 
 class CompareView(QWidget):
     """Source + targets x methods, synchronised on ``show_frame``."""

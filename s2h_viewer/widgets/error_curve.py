@@ -9,6 +9,8 @@ from PySide6.QtGui import QColor, QPainter, QPen, QPixmap, QPolygonF
 from PySide6.QtWidgets import QWidget
 
 WORST = 5  # frames marked
+#: for Help's list
+MOUSE = (("click the error curve", "jump to that frame"),)
 MARGIN = 4
 
 

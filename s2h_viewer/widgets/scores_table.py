@@ -1,9 +1,12 @@
 """Per-method clip scores (S_palm, S_finger, contacts, violations) for every target, in a table.
 Names longer than ``NAME_WIDTH`` are elided in the middle (the full name in the cell's tooltip; drag a
 header edge to widen a column) and the table asks for the width of all its columns, so a long target
-name never pushes a score out of sight."""
+name never pushes a score out of sight. A score with nothing to count (the precision of a retarget that
+makes no contact, the recall of a source that makes none) reads "n/a", its reason in the tooltip."""
 
 from __future__ import annotations
+
+import math
 
 from PySide6.QtCore import Qt
 from PySide6.QtGui import QPalette
@@ -21,6 +24,10 @@ COLUMNS = (("Method", None, "retargeting method"), ("Target", None, "target hand
            ("Palm\nR", "palm_contact_recall", "fingertip-on-palm contacts of the source that are kept"),
            ("Viol-\nations", "violation_rate", "share of joint angles over 5 deg outside the anatomical limits"))
 NAME_WIDTH = 96  # pixels: widest a name column starts (drag the header edge for more)
+#: why a score is n/a (NaN), per score key
+UNDEFINED = {"contact_precision": "n/a: the retarget makes no pad contact, so no precision to measure",
+             "contact_recall": "n/a: the source makes no pad contact, so no recall to measure",
+             "palm_contact_recall": "n/a: the source puts no fingertip on the palm, so no recall to measure"}
 
 
 class ScoresTable(QTableWidget):
@@ -50,12 +57,13 @@ class ScoresTable(QTableWidget):
         self.setRowCount(len(comparison.results))
         for row, result in enumerate(comparison.results):
             values = result.scores.as_dict()
-            cells = [METHODS[result.method].label, result.target.name]
-            cells += [f"{values[key]:.3f}" for _, key, _ in COLUMNS[2:]]
-            for col, text in enumerate(cells):
+            cells = [(METHODS[result.method].label,) * 2, (result.target.name,) * 2]
+            cells += [("n/a", UNDEFINED.get(key, "n/a")) if math.isnan(values[key]) else (f"{values[key]:.3f}", None)
+                      for _, key, _ in COLUMNS[2:]]
+            for col, (text, tip) in enumerate(cells):
                 item = QTableWidgetItem(text)
-                if COLUMNS[col][1] is None:
-                    item.setToolTip(text)
+                if tip is not None:
+                    item.setToolTip(tip)
                 self.setItem(row, col, item)
         self.resizeColumnsToContents()
         for column, (_, key, _) in enumerate(COLUMNS):

@@ -23,6 +23,9 @@ from vtkmodules.vtkInteractionStyle import vtkInteractorStyleTrackballCamera
 from vtkmodules.vtkRenderingUI import vtkGenericRenderWindowInteractor
 
 WHEEL_STEP = 120  # Qt's angle delta of one wheel notch: one VTK zoom step
+#: what the mouse does to the camera of every 3D view (VTK's trackball camera style), for Help's list
+MOUSE = (("left drag", "rotate the camera"), ("Shift+left drag or middle drag", "pan"),
+         ("right drag or wheel", "zoom"))
 
 
 def window_plotter(**plotter_options) -> pv.Plotter:
