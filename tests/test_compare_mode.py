@@ -268,6 +268,22 @@ def test_playback_follows_the_clock(window, qtbot):
         assert frame >= first + (when - started) * fps - fps * 0.25 - 1  # at most a tick and a draw behind
 
 
+def test_the_fps_label_reads_the_clip_rate_at_1x_and_play_at_the_end_without_loop_starts_again(window, qtbot):
+    timeline = window.timeline
+    timeline.set_frame(0)
+    timeline.set_playing(True)
+    qtbot.wait(2500)
+    shown = int(timeline.fps_label.text().split()[0])
+    timeline.set_playing(False)
+    assert timeline.clip_fps - 3 <= shown <= timeline.clip_fps, shown  # at 1x never more frames/s than the clip's
+    timeline.loop.setChecked(False)
+    timeline.set_frame(timeline.n_frames - 1)
+    timeline.set_playing(True)  # at the end, not looping: Play plays the clip from its start
+    assert timeline.playing and timeline.frame < 5
+    qtbot.waitUntil(lambda: timeline.frame >= 3, timeout=10_000)
+    timeline.set_playing(False)
+
+
 def test_a_slow_view_drops_frames_to_keep_real_time(window, qtbot):
     slow = 0.3  # seconds each draw takes here: at 30 frames/s about 9 clip frames pass during one
     window.view.drawn.connect(lambda: time.sleep(slow) if window.timeline.playing else None)

@@ -135,6 +135,8 @@ class Timeline(QWidget):
         self.play_button.setText("Pause" if playing else "Play")
         self._drawn.clear()
         if playing:
+            if not self.loop.isChecked() and self.frame == self.n_frames - 1:
+                self.set_frame(0)  # played to the end without looping: Play plays the clip again
             self._restart_clock()
             self._timer.start(self._tick_interval())
         else:
@@ -152,6 +154,12 @@ class Timeline(QWidget):
         now = time.perf_counter()
         self._drawn = [t for t in self._drawn if now - t < 1.0] + [now]
         QTimer.singleShot(0, self, self._tick)  # the next due frame now, not at the timer's next tick
+
+    def drawn_rate(self) -> float:
+        """Frames drawn per second over the last second of playback (0 before two are drawn)."""
+        if len(self._drawn) < 2 or self._drawn[-1] <= self._drawn[0]:
+            return 0.0
+        return (len(self._drawn) - 1) / (self._drawn[-1] - self._drawn[0])
 
     def _tick_interval(self) -> int:
         """Milliseconds between ticks: half the time between frames at the chosen speed."""
@@ -190,7 +198,7 @@ class Timeline(QWidget):
                 widget.setValue(self._frame)
                 widget.blockSignals(False)
         self.readout.setText(self._readout_text(self._frame))
-        self.fps_label.setText(f"{len(self._drawn):d} fps" if self.playing else "-- fps")
+        self.fps_label.setText(f"{self.drawn_rate():.0f} fps" if self.playing else "-- fps")
 
     def due_frame(self, ahead: float = 0.0) -> int | None:
         """The frame the clock asks for ``ahead`` seconds from now; None past the end when not looping."""
@@ -208,8 +216,8 @@ class Timeline(QWidget):
         from now, at least the next frame (at 1x the view draws faster than the clip); None at the end."""
         if not self.playing:
             return None
-        drawing = (self._drawn[-1] - self._drawn[0]) / (len(self._drawn) - 1) if len(self._drawn) > 1 else 0.0
-        due = self.due_frame(ahead=drawing)
+        rate = self.drawn_rate()
+        due = self.due_frame(ahead=1.0 / rate if rate else 0.0)
         if due is None or due != self.frame:
             return due
         if self.frame + 1 < self.n_frames:
