@@ -229,6 +229,19 @@ def test_cancel_a_video_export_writes_nothing(window, qtbot, tmp_path):
     assert window.statusBar().currentMessage() == "video export cancelled: no file written (cancelled.mp4)"
 
 
+def test_cancelling_a_video_export_in_its_dialog_gives_the_keyboard_back_to_the_window(window, qtbot, tmp_path):
+    job = window.export_video(str(tmp_path / "cancelled.mp4"))
+    with qtbot.waitSignal(job.progress, timeout=60_000):
+        pass
+    qtbot.waitUntil(job.dialog.isVisible, timeout=30_000)
+    job.dialog.activateWindow()  # the user clicks into the progress dialog: it holds the keyboard
+    qtbot.waitUntil(job.dialog.isActiveWindow, timeout=5000)
+    with qtbot.waitSignal(job.cancelled, timeout=60_000):
+        qtbot.mouseClick(job.dialog.findChild(QPushButton), Qt.MouseButton.LeftButton)
+    # without a window manager the focus fell to the root window: the app hands it back to the main window
+    qtbot.waitUntil(window.isActiveWindow, timeout=5000)
+
+
 def test_png_export_carries_a_caption_of_the_selected_retarget(window, tmp_path):
     window.scores.selectRow(1)  # ASRN -> iris, picked in the scores table
     assert window.heatmap_choice.currentIndex() == 1
