@@ -572,6 +572,24 @@ def test_a_cancelled_target_is_not_recent(window, qtbot):
     assert recent(window) == ["laurel.npz (target)"]
 
 
+def test_a_recent_file_that_is_gone_leaves_the_menu_with_a_dialog(window, qtbot, tmp_path):
+    import shutil
+    from PySide6.QtWidgets import QMessageBox
+
+    from compare_window import when_shown
+    laurel = shutil.copy(ASSETS_DIR / "hands" / "laurel.npz", tmp_path / "laurel.npz")
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.add_target_file(str(laurel))
+    assert recent(window) == ["laurel.npz (target)"]
+    laurel.unlink()  # moved or deleted since
+    said = []
+    when_shown(QMessageBox, lambda box: (said.append(box.text()), box.accept()))
+    window.recent_menu.actions()[0].trigger()
+    qtbot.waitUntil(lambda: bool(said), timeout=10_000)
+    assert str(laurel) in said[0] and "removed from the recent files" in said[0]
+    assert recent(window) == [] and not window.recent_menu.isEnabled()
+
+
 def test_double_click_solo_selects_that_retarget(window, qtbot):
     view = window.view
     hand = 2  # ASRN -> iris

@@ -295,15 +295,23 @@ class MainWindow(QMainWindow):
     def _fill_recent(self) -> None:
         """The recent files, newest first (a hand to annotate opens in Annotate from either tab)."""
         self.recent_menu.clear()
-        opens = {"motion": self.load_motion, "target": self.add_target_file, "annotate": self.annotate_file}
         for entry in self._recent():
             kind, _, path = entry.partition(":")
-            if kind in opens:
+            if kind in ("motion", "target", "annotate"):
                 action = self.recent_menu.addAction(f"{Path(path).name} ({kind})")
-                action.triggered.connect(lambda _=False, p=path, k=kind: opens[k](p))
+                action.triggered.connect(lambda _=False, p=path, k=kind: self._open_recent(k, p))
                 action.setData(kind)
         self.recent_menu.setEnabled(bool(self.recent_menu.actions()))
         self._enable_recent()
+
+    def _open_recent(self, kind: str, path: str) -> None:
+        """Open a recent file; one that is gone leaves the menu, with a dialog saying so."""
+        if not Path(path).is_file():
+            self.settings.setValue("files/recent", [r for r in self._recent() if r != f"{kind}:{path}"])
+            self._fill_recent()
+            self.error(f"{path}: no longer there (moved or deleted); removed from the recent files.")
+            return
+        {"motion": self.load_motion, "target": self.add_target_file, "annotate": self.annotate_file}[kind](path)
 
     def _enable_recent(self) -> None:
         """Recent motions and targets are for Compare: disabled in Annotate."""
