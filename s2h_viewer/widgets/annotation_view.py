@@ -63,6 +63,7 @@ class AnnotationView(QWidget):
         self.dial.setWrapping(True)
         self.dial.setNotchesVisible(True)
         self.angle_label = QLabel()
+        self.angle_label.setWordWrap(True)  # a longer joint name or angle wraps: the panel keeps its width
         self.legend = QLabel(LEGEND)
         self.legend.setWordWrap(True)
         side = QWidget()
