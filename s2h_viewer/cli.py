@@ -131,20 +131,17 @@ def _rig_options(args: argparse.Namespace):
 
 def _cmd_rig(args: argparse.Namespace) -> int:
     """`s2h rig FILE`: what was recognised; an editable joint-map template where recognition fails."""
-    import json
-
-    from s2h_viewer.errors import UnrecognisedRigError
+    from s2h_viewer.errors import TooFewBonesError, UnrecognisedRigError
     from s2h_viewer.hand import topology as topo
-    from s2h_viewer.io.atomic import atomic_path
-    from s2h_viewer.io.files import joint_map_sidecar, joint_map_template, list_animations, recognise_file
+    from s2h_viewer.io.files import joint_map_template, list_animations, recognise_file, save_joint_map
 
     path = Path(args.file)
     try:
         mapping = recognise_file(path, _rig_options(args))
+    except TooFewBonesError:
+        raise  # no joint map can make it a hand: no template
     except UnrecognisedRigError as exc:
-        template = Path(args.template) if args.template else joint_map_sidecar(path)
-        with atomic_path(template) as tmp:
-            tmp.write_text(json.dumps(joint_map_template(path, args.side), indent=2) + "\n")
+        template = save_joint_map(path, joint_map_template(path, args.side), args.template)
         print(f"s2h: error: {exc}", file=sys.stderr)
         print(f"wrote {template}: fill in the empty joints (bone names of {path.name}); it is picked up "
               f"beside the file, or pass it with --joint-map")

@@ -74,3 +74,8 @@ def reading(path: str | Path, what: str) -> Iterator[None]:
 
 class UnrecognisedRigError(InputFileError):
     """A rig file whose hand cannot be found; the message says what was found and what to do."""
+
+
+class TooFewBonesError(UnrecognisedRigError):
+    """A rig with fewer free bones than the joints its names leave unmapped (a four-finger hand): no joint map
+    can make it a hand, so none is asked for."""

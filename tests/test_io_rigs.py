@@ -15,7 +15,7 @@ from scipy.spatial.transform import Rotation
 import torch
 
 from s2h_viewer.annotate.solver import frame_angle_errors
-from s2h_viewer.errors import InputFileError
+from s2h_viewer.errors import InputFileError, TooFewBonesError
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
@@ -353,9 +353,11 @@ def test_corrupt_glb_fbx_bvh_give_clear_errors(tmp_path, sample_hands, motion_on
         load_bvh(broken)
 
 
-def test_four_finger_rigs_are_refused_naming_the_missing_finger(tmp_path, sample_hands, motion_on_birch):
-    with pytest.raises(InputFileError, match=r"four_finger_hand\.fbx: .*missing pinky_mcp, pinky_pip, pinky_dip "
-                                             r"\(no pinky finger"):
+def test_four_finger_rigs_are_refused_early_naming_the_missing_finger(tmp_path, sample_hands, motion_on_birch):
+    """No bone is left for the pinky: refused as not a hand (no joint map asked for), not as unrecognised."""
+    with pytest.raises(TooFewBonesError, match=r"four_finger_hand\.fbx: 0 bones left for 3 joints \(pinky_mcp, "
+                                               r"pinky_pip, pinky_dip\): a hand needs 5 fingers of 3 bones each; "
+                                               r".*missing pinky_mcp, pinky_pip, pinky_dip \(no pinky finger"):
         load_fbx_hand(FBX / "four_finger_hand.fbx")
 
 

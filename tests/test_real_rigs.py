@@ -9,6 +9,7 @@ samples, and a BVH parser, with their own forward kinematics), not by the projec
 from __future__ import annotations
 
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -20,11 +21,13 @@ import torch
 from scipy.spatial.transform import Rotation
 
 from s2h_viewer.annotate.solver import solve_tbs_frames
-from s2h_viewer.errors import InputFileError
+from s2h_viewer.errors import InputFileError, TooFewBonesError, UnrecognisedRigError
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.kinematics import forward_kinematics
 from s2h_viewer.hand.mirror import reflection
-from s2h_viewer.io.files import RigOptions, load_hand_file, load_motion_file, save_motion_file
+from s2h_viewer.hand.rig_mapping import check_user_mapping
+from s2h_viewer.io.files import (RigOptions, load_hand_file, load_motion_file, read_rig_skeleton, save_joint_map,
+                                 save_motion_file, suggested_joint_map)
 from s2h_viewer.io.gltf import load_gltf_motion, save_gltf_motion
 from s2h_viewer.io.rig import MIRROR_NORMAL
 from s2h_viewer.motions.synthesis import synthesize
@@ -148,6 +151,64 @@ def test_joint_map_beside_a_hand_file_is_picked_up_and_keeps_the_palm(tmp_path):
     # the metacarpals and Palm_L are named nowhere in the map: their vertices stay, weighted to the wrist
     assert len(hand.mesh.vertices) == len(named.mesh.vertices)
     np.testing.assert_allclose(hand.mesh.weights, named.mesh.weights, atol=1e-6)
+
+
+# --- a joint map the user makes (the app's dialog) for a hand whose bones say nothing ---
+
+@pytest.fixture
+def renamed_webxr(tmp_path) -> tuple[Path, dict[str, str]]:
+    """A copy of the WebXR hand with meaningless bone names (its bones hang side by side under one root, so
+    topology cannot find the hand either), and the joint map that gives it back its named hand."""
+    renamed = _anonymous_copy(WEBXR / "generic-hand-right.glb", tmp_path / "hand.glb")
+    named = load_hand_file(WEBXR / "generic-hand-right.glb")
+    return tmp_path / "hand.glb", {j: renamed[b] for j, b in named.meta["rig_joints"].items()}
+
+
+def test_a_joint_map_is_checked_against_the_rig_naming_the_joint_and_the_bone(renamed_webxr):
+    path, good = renamed_webxr
+    with pytest.raises(UnrecognisedRigError) as refused:
+        load_hand_file(path)
+    assert not isinstance(refused.value, TooFewBonesError)  # a joint map can make it a hand: the app offers one
+    bones = read_rig_skeleton(path).names
+    assert check_user_mapping(good, bones, path) == good
+    tipless = {j: b for j, b in good.items() if j != "index_tip"}
+    assert check_user_mapping(tipless, bones, path) == tipless  # a tip left out is extrapolated
+    cases = [({**good, "index_pip": "bone99"}, "joint map names bones the rig does not have: bone99 (index_pip)"),
+             ({**good, "middle_dip": good["index_dip"]},
+              f"one bone to several joints: index_dip and middle_dip both use {good['index_dip']!r}"),
+             ({j: b for j, b in good.items() if j != "thumb_mcp"}, "the joint map does not name thumb_mcp"),
+             ({**good, "wrist": " "}, "joint map leaves wrist empty"),
+             ({**good, "index_knuckle": "bone3"}, "unknown joint names index_knuckle")]
+    for mapping, message in cases:
+        with pytest.raises(InputFileError, match=rf"hand\.glb: .*{re.escape(message)}"):
+            check_user_mapping(mapping, bones, path)
+
+
+def test_a_joint_map_given_as_a_dict_loads_the_hand_the_names_give(renamed_webxr):
+    path, good = renamed_webxr
+    hand = load_hand_file(path, RigOptions(joint_map=good))
+    named = load_hand_file(WEBXR / "generic-hand-right.glb")
+    assert hand.meta["rig_scheme"] == "user" and hand.meta["side"] == named.meta["side"] == "right"
+    np.testing.assert_allclose(hand.rest_positions, named.rest_positions, atol=1e-9)
+    np.testing.assert_allclose(hand.mesh.vertices, named.mesh.vertices, atol=1e-9)
+    np.testing.assert_allclose(hand.mesh.weights, named.mesh.weights, atol=1e-6)  # metacarpals with the wrist
+
+
+def test_a_saved_joint_map_is_the_sidecar_used_when_the_hand_is_opened_again(renamed_webxr):
+    path, good = renamed_webxr
+    stale = {**good, "index_mcp": "gone"}
+    assert save_joint_map(path, stale) == path.with_name("hand.joints.json")
+    suggested = suggested_joint_map(path)  # what the app's dialog starts from: the sidecar where it fits the rig
+    assert suggested["index_mcp"] == "" and {j: b for j, b in suggested.items() if j != "index_mcp"} == {
+        j: b for j, b in good.items() if j != "index_mcp"}
+    assert save_joint_map(path, good) == path.with_name("hand.joints.json")  # replaced whole, nothing left beside
+    assert json.loads(path.with_name("hand.joints.json").read_text()) == good
+    assert sorted(p.name for p in path.parent.iterdir()) == ["hand.glb", "hand.joints.json"]
+    reopened = load_hand_file(path)
+    assert reopened.meta["rig_scheme"] == "user"
+    np.testing.assert_allclose(reopened.rest_positions, load_hand_file(WEBXR / "generic-hand-right.glb").rest_positions,
+                               atol=1e-9)
+    assert suggested_joint_map(path) == good
 
 
 # --- export onto a full-body character, checked by an independent reader ---
@@ -403,15 +464,13 @@ def _one_line_error(path: Path, *extra: str) -> str:
 def test_four_finger_character_is_refused_naming_the_chains_found(tmp_path):
     four = _edit_glb(REAL / "human-female.glb", tmp_path / "four.glb", _cut_off({"pinky_01_r", "pinky_01_l"}))
     line = _one_line_error(four)
+    assert "0 bones left for 3 joints (pinky_mcp, pinky_pip, pinky_dip): a hand needs 5 fingers" in line
     assert "missing pinky_mcp, pinky_pip, pinky_dip (no pinky finger" in line
     assert "found 4 finger chains (index_01_r, middle_01_r, ring_01_r, thumb_01_r) under 'hand_r'" in line
-    assert "s2h rig FILE" in line
+    assert "joint map" not in line  # refused early: no joint map can make it a hand
     done = run_cli("rig", str(four), "--template", str(tmp_path / "four.joints.json"))
-    assert done.returncode == 2 and "wrote" in done.stdout
-    template = json.loads((tmp_path / "four.joints.json").read_text())
-    assert template["index_mcp"] == "index_01_r" and template["pinky_mcp"] == ""
-    with pytest.raises(InputFileError, match=r"joint map leaves pinky_mcp, pinky_pip, pinky_dip, pinky_tip empty"):
-        load_hand_file(four, RigOptions(joint_map=tmp_path / "four.joints.json"))
+    assert done.returncode == 2 and "a hand needs 5 fingers" in done.stderr and "wrote" not in done.stdout
+    assert not (tmp_path / "four.joints.json").exists()
 
 
 def test_bones_forming_a_cycle_are_refused(tmp_path):

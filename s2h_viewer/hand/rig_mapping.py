@@ -189,8 +189,24 @@ def describe_missing(missing: list[str]) -> str:
     return text
 
 
+def _joint_map_problem(mapping: dict[str, str]) -> str | None:
+    """What is wrong with a joint map by itself (not a joint -> bone name object, unknown joints, empty
+    names), or None."""
+    if not isinstance(mapping, dict) or not all(isinstance(v, str) for v in mapping.values()):
+        return 'joint map must be a JSON object {"wrist": "<bone>", "index_mcp": "<bone>", ...}'
+    unknown = sorted(set(mapping) - set(topo.JOINT_NAMES))
+    if unknown:
+        return f"unknown joint names {', '.join(unknown)}; use {', '.join(topo.JOINT_NAMES)}"
+    empty = [joint for joint, bone in mapping.items() if not bone.strip()]
+    if empty:
+        return (f"joint map leaves {', '.join(empty)} empty: write the rig's bone name for each (or remove an "
+                f"unknown tip)")
+    return None
+
+
 def load_user_mapping(path: str | Path) -> dict[str, str]:
-    """A JSON object canonical joint name -> rig bone name; an `InputFileError` naming the file if malformed."""
+    """A JSON object canonical joint name -> rig bone name, read and checked by itself (`check_user_mapping`
+    checks it against a rig); an `InputFileError` naming the file if malformed."""
     path = Path(path)
     if not path.exists():
         raise InputFileError(path, "joint map not found")
@@ -201,28 +217,40 @@ def load_user_mapping(path: str | Path) -> dict[str, str]:
         raise InputFileError(path, "joint map is nested too deeply") from None
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise InputFileError(path, f"joint map is not valid JSON ({exc})") from None
-    if not isinstance(document, dict) or not all(isinstance(v, str) for v in document.values()):
-        raise InputFileError(path, 'joint map must be a JSON object {"wrist": "<bone>", "index_mcp": "<bone>", ...}')
-    unknown = sorted(set(document) - set(topo.JOINT_NAMES))
-    if unknown:
-        raise InputFileError(path, f"unknown joint names {', '.join(unknown)}; use {', '.join(topo.JOINT_NAMES)}")
-    empty = [joint for joint, bone in document.items() if not bone.strip()]
-    if empty:
-        raise InputFileError(path, f"joint map leaves {', '.join(empty)} empty: write the rig's bone name for each "
-                                   f"(or remove an unknown tip)")
+    problem = _joint_map_problem(document)
+    if problem:
+        raise InputFileError(path, problem)
     return document
 
 
-def map_user(rig_names: list[str], source: str | Path, user_map: dict[str, str], side: str) -> RigMapping:
-    """The mapping a user's joint map gives; an `InputFileError` for bones the rig lacks or joints left out."""
-    present = set(rig_names)
-    absent = [bone for bone in user_map.values() if bone not in present]
+def check_user_mapping(mapping: dict[str, str], bones: list[str], source: str | Path) -> dict[str, str]:
+    """``mapping`` if it maps every joint but the tips (extrapolated when left out) to its own bone of ``bones``;
+    else an `InputFileError` naming ``source``, the joints and the bones at fault."""
+    problem = _joint_map_problem(mapping)
+    if problem:
+        raise InputFileError(source, problem)
+    present = set(bones)
+    absent = [f"{bone} ({joint})" for joint, bone in mapping.items() if bone not in present]
     if absent:
         raise InputFileError(source, f"joint map names bones the rig does not have: {', '.join(absent)}")
-    mapping = RigMapping("user", dict(user_map), [], side, "user")
-    if mapping.missing:
-        raise InputFileError(source, f"the joint map does not name {', '.join(mapping.missing)}")
+    joints_of: dict[str, list[str]] = {}
+    for joint, bone in mapping.items():
+        joints_of.setdefault(bone, []).append(joint)
+    shared = [f"{' and '.join(joints)} both use {bone!r}" for bone, joints in joints_of.items() if len(joints) > 1]
+    if shared:
+        raise InputFileError(source, f"joint map gives one bone to several joints: {'; '.join(shared)}; each joint "
+                                     f"needs its own bone")
+    missing = RigMapping("user", mapping).missing
+    if missing:
+        raise InputFileError(source, f"the joint map does not name {', '.join(missing)}")
     return mapping
+
+
+def map_user(rig_names: list[str], source: str | Path, user_map: dict[str, str], side: str) -> RigMapping:
+    """The mapping a user's joint map gives; an `InputFileError` (`check_user_mapping`) if it does not fit the
+    rig."""
+    check_user_mapping(user_map, rig_names, source)
+    return RigMapping("user", dict(user_map), [], side, "user")
 
 
 def map_rig(rig_names: list[str], source: str | Path, side: str | None = "right", scheme: str | None = None,

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from s2h_viewer.errors import UnrecognisedRigError
+from s2h_viewer.errors import TooFewBonesError, UnrecognisedRigError
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.rig_mapping import (SCHEMES, SIDES, RigMapping, best_name_match, describe_missing, map_user,
                                          sides_named, split_side)
@@ -220,6 +220,7 @@ def recognise_rig(skeleton: Skeleton, source: str | Path, side: str | None = Non
     if user_map is not None:
         mapped_sides = sides_named(list(user_map.values()))
         mapping = map_user(names, source, user_map, side or next(iter(mapped_sides), "right"))
+        mapping.palm_bones = bones_beside_the_wrist(skeleton, mapping)
         return _settle_side(skeleton, mapping, side, mapped_sides)
     if humanoid:
         chosen = side or ("right" if "right" in humanoid else next(iter(humanoid)))
@@ -252,7 +253,14 @@ def recognise_rig(skeleton: Skeleton, source: str | Path, side: str | None = Non
         wrist = by_name.joints.get("wrist")
         partial.sort(key=lambda p: (names[p.wrist] != wrist, split_side(names[p.wrist])[1] not in (chosen, None),
                                     -len(p.chains)))
-        raise UnrecognisedRigError(source, _refusal(skeleton, by_name, partial[0] if partial else None, chosen))
+        found = partial[0] if partial else None
+        free = free_bones(skeleton, by_name, found)
+        if len(free) < len(by_name.missing):
+            raise TooFewBonesError(source, f"{len(free)} bone{'' if len(free) == 1 else 's'} left for "
+                                           f"{len(by_name.missing)} joints ({', '.join(by_name.missing)}): a hand "
+                                           f"needs 5 fingers of 3 bones each; "
+                                           f"{_refusal(skeleton, by_name, found, chosen, hint=False)}")
+        raise UnrecognisedRigError(source, _refusal(skeleton, by_name, found, chosen))
     candidates = [_topology_mapping(skeleton, h) for h in hands]
     if len(candidates) > 1:
         sides = [_side_of(skeleton, m)[0] for m in candidates]
@@ -286,8 +294,40 @@ def _settle_side(skeleton: Skeleton, mapping: RigMapping, side: str | None, name
     return mapping
 
 
-def _refusal(skeleton: Skeleton, by_name: RigMapping, partial: FingerChains | None, side: str) -> str:
-    """One line: what names matched, what the topology found, what to do."""
+def bones_beside_the_wrist(skeleton: Skeleton, mapping: RigMapping) -> list[str]:
+    """Where a rig hangs its finger bones beside the wrist, not under it (WebXR), the unmapped bones beside the
+    wrist: its palm bones (metacarpals), whose skin moves with the wrist; none in a rig with a hierarchy (there
+    a bone moves with its nearest mapped ancestor)."""
+    lookup = {n: i for i, n in enumerate(skeleton.names)}
+    wrist = lookup[mapping.joints["wrist"]]
+    parent = skeleton.parents[wrist]
+    mapped = {lookup[bone] for bone in mapping.joints.values()}
+    if parent < 0 or not any(skeleton.parents[b] == parent for b in mapped - {wrist}):
+        return []
+    return [n for b, n in enumerate(skeleton.names) if skeleton.parents[b] == parent and b not in mapped]
+
+
+def free_bones(skeleton: Skeleton, by_name: RigMapping, partial: FingerChains | None) -> list[str]:
+    """Bones a joint map could still give the joints names leave unmapped: those under the hand's wrist (by name,
+    else the bone the finger chains hang from) when the rig hangs its fingers from it, else every bone; neither
+    mapped nor palm bones."""
+    lookup = {n: i for i, n in enumerate(skeleton.names)}
+    wrist = lookup[by_name.joints["wrist"]] if "wrist" in by_name.joints else (partial.wrist if partial else None)
+    pool = range(len(skeleton.names))
+    if wrist is not None:
+        below = [b for b in pool if _is_ancestor(skeleton, wrist, b)]
+        fingers = {lookup[bone] for joint, bone in by_name.joints.items() if joint != "wrist"}
+        if fingers & set(below) or (partial is not None and partial.wrist == wrist):
+            pool = below
+    used = set(by_name.joints.values()) | set(by_name.palm_bones)
+    if partial is not None:
+        used |= {skeleton.names[b] for b in partial.between}
+    return [skeleton.names[b] for b in pool if b != wrist and skeleton.names[b] not in used]
+
+
+def _refusal(skeleton: Skeleton, by_name: RigMapping, partial: FingerChains | None, side: str,
+             hint: bool = True) -> str:
+    """One line: what names matched, what the topology found, and (``hint``) what to do."""
     parts = []
     if set(by_name.joints) == {"wrist"}:
         parts.append(f"only the wrist has a known name ({by_name.joints['wrist']!r}): no finger bone is named as one")
@@ -301,4 +341,4 @@ def _refusal(skeleton: Skeleton, by_name: RigMapping, partial: FingerChains | No
             "" if by_name.joints else ": s2h needs a hand with 5 fingers and does not guess one"))
     else:
         parts.append("no bone has finger chains (3 or more bones) under it: no hand in this skeleton")
-    return "; ".join(parts) + f"; {TEMPLATE_HINT}"
+    return "; ".join(parts + ([TEMPLATE_HINT] if hint else []))

@@ -7,10 +7,12 @@ Retargeted motion out: ``.npz``, ``.bvh``, ``.glb``.
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 from pathlib import Path
 
 from s2h_viewer.errors import InputFileError, reading, require_readable_file
+from s2h_viewer.io.atomic import atomic_path
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.hand.rig_mapping import load_user_mapping
@@ -29,18 +31,30 @@ def joint_map_sidecar(hand_file: str | Path) -> Path:
     return hand_file.with_name(f"{hand_file.stem}{JOINT_MAP_SUFFIX}")
 
 
+def save_joint_map(hand_file: str | Path, mapping: dict[str, str], path: str | Path | None = None) -> Path:
+    """Write ``mapping`` atomically to ``path`` (default: ``hand_file``'s sidecar, where loading the hand looks
+    for it); returns the path written."""
+    path = joint_map_sidecar(hand_file) if path is None else Path(path)
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(mapping, indent=2) + "\n")
+    return path
+
+
 @dataclass(frozen=True)
 class RigOptions:
     """How to read a rig: which hand (None: as names or geometry say), which naming scheme, a user joint
-    map (else the file's own ``<stem>.joints.json`` if there is one), which animation or take."""
+    map (a JSON file or a dict; else the file's own ``<stem>.joints.json`` if there is one), which animation
+    or take."""
 
     side: str | None = None
     scheme: str | None = None
-    joint_map: str | Path | None = None
+    joint_map: str | Path | dict[str, str] | None = None
     animation: str | int | None = None
 
     def mapping(self, hand_file: str | Path | None = None) -> dict[str, str] | None:
         """The user's joint map, else ``hand_file``'s sidecar joint map, else None (recognise the rig)."""
+        if isinstance(self.joint_map, dict):
+            return dict(self.joint_map)
         if self.joint_map:
             return load_user_mapping(self.joint_map)
         if hand_file is not None and joint_map_sidecar(hand_file).exists():
@@ -174,3 +188,19 @@ def joint_map_template(path: str | Path, side: str | None = None) -> dict[str, s
     chosen = side or ("left" if sides_named(names) == {"left"} else "right")
     found = best_name_match(names, chosen).joints
     return {joint: found.get(joint, "") for joint in topo.JOINT_NAMES}
+
+
+def suggested_joint_map(path: str | Path, side: str | None = None) -> dict[str, str]:
+    """A joint map to start editing from: the file's sidecar map where it names bones the rig has (a sidecar
+    that cannot be read is skipped: it is what is being replaced), the names' guesses (`joint_map_template`)
+    elsewhere."""
+    template = joint_map_template(path, side)
+    sidecar = joint_map_sidecar(path)
+    if not sidecar.exists():
+        return template
+    try:
+        saved = load_user_mapping(sidecar)
+    except InputFileError:
+        return template
+    names = set(read_rig_skeleton(path).names)
+    return {joint: saved[joint] if saved.get(joint) in names else bone for joint, bone in template.items()}
