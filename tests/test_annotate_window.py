@@ -11,6 +11,7 @@ import shutil
 from collections.abc import Callable
 
 import numpy as np
+import pygltflib
 import pytest
 
 pytest.importorskip("pytestqt")
@@ -25,10 +26,12 @@ from vtkmodules.vtkRenderingCore import vtkCoordinate  # noqa: E402
 from s2h_viewer.annotate.editing import rotate_about_twist  # noqa: E402
 from s2h_viewer.app.main_window import CompareSetup, MainWindow  # noqa: E402
 from s2h_viewer.hand import topology as topo  # noqa: E402
+from s2h_viewer.io.files import load_hand_file  # noqa: E402
 from s2h_viewer.motions.synthesis import synthesize  # noqa: E402
 from s2h_viewer.render.scene import to_view  # noqa: E402
 from s2h_viewer.samples import ASSETS_DIR  # noqa: E402
 from s2h_viewer.widgets.annotation_view import RING_RADIUS  # noqa: E402
+from s2h_viewer.widgets.joint_map_dialog import NO_BONE, JointMapDialog  # noqa: E402
 
 WEBXR = ASSETS_DIR / "hands" / "webxr" / "generic-hand-right.glb"
 
@@ -82,7 +85,8 @@ def answer(*steps: tuple[type[QWidget], Callable[[QWidget], None]], shown: list[
         dialog = QApplication.activeModalWidget()
         if isinstance(dialog, kind):
             shown.append(f"{dialog.text()}\n{dialog.informativeText()}" if isinstance(dialog, QMessageBox)
-                         else dialog.selectedFiles()[0])
+                         else (dialog.selectedFiles() or [""])[0] if isinstance(dialog, QFileDialog)
+                         else dialog.windowTitle())
             left.pop(0)
             act(dialog)
         if left:
@@ -475,3 +479,89 @@ def test_the_empty_annotate_tab_says_how_to_open_a_hand_and_each_tab_disables_th
     keyboard_to(qtbot, window.tabs)
     QTest.keyClick(window, Qt.Key.Key_H, Qt.KeyboardModifier.ControlModifier)
     assert window.see_through.isChecked()  # back on Compare its shortcut works again
+
+
+# --- a hand whose bones s2h does not recognise: the user maps them in the joint map dialog ---
+
+@pytest.fixture
+def renamed_hand(tmp_path):
+    """A copy of the WebXR hand whose index finger's bones no scheme names (its bones hang side by side, so the
+    topology cannot find them either): the file and the joint map that makes it the WebXR hand again."""
+    gltf = pygltflib.GLTF2().load(str(WEBXR))
+    for node in gltf.nodes:
+        node.name = node.name.replace("index-finger-", "pointer-")
+    gltf.save(str(tmp_path / "renamed.glb"))
+    named = load_hand_file(WEBXR).meta["rig_joints"]
+    return tmp_path / "renamed.glb", {j: b.replace("index-finger-", "pointer-") for j, b in named.items()}
+
+
+def map_the_index(joint_map: dict[str, str], seen: dict) -> tuple[type[QWidget], Callable[[QWidget], None]]:
+    """A step of `answer`: in the joint map dialog, note what it offers (into ``seen``), choose the index finger's
+    bones of ``joint_map`` and press OK."""
+    def act(dialog: JointMapDialog) -> None:
+        ok = dialog.buttons.button(dialog.buttons.StandardButton.Ok)
+        seen.update(prefilled=dialog.mapping(), ok_at_first=ok.isEnabled(), problem=dialog.problem.text(),
+                    offered=[dialog.combos["index_mcp"].itemText(i) for i in range(dialog.combos["index_mcp"].count())])
+        for joint in ("index_mcp", "index_pip", "index_dip", "index_tip"):
+            dialog.combos[joint].setCurrentText(joint_map[joint])
+        seen.update(ok_when_mapped=ok.isEnabled(), problem_when_mapped=dialog.problem.text())
+        QTest.mouseClick(ok, Qt.MouseButton.LeftButton)
+    return JointMapDialog, act
+
+
+def test_an_unrecognised_hand_is_mapped_in_the_dialog_opened_and_its_map_saved(window, qtbot, renamed_hand):
+    path, joint_map = renamed_hand
+    seen: dict = {}
+    asked = answer(click("Map the bones..."), map_the_index(joint_map, seen))
+    window.annotate_file(str(path))
+    assert "renamed.glb: s2h does not recognise its hand" in asked[0] and "renamed.joints.json" in asked[0]
+    assert "--joint-map" not in asked[0] and asked[1] == "Map the bones of renamed.glb"
+    # prefilled with what the names give: all but the index finger; OK only once the index is mapped
+    assert seen["prefilled"] == {j: b for j, b in joint_map.items() if not j.startswith("index")}
+    assert not seen["ok_at_first"] and seen["problem"] == "the joint map does not name index_mcp, index_pip, index_dip"
+    assert seen["offered"][0] == NO_BONE and "pointer-phalanx-proximal" in seen["offered"]
+    assert seen["ok_when_mapped"] and seen["problem_when_mapped"] == ""
+    hand = window.annotation.hand
+    assert hand.name == "renamed" and hand.meta["rig_scheme"] == "user"
+    np.testing.assert_allclose(hand.rest_positions, load_hand_file(WEBXR).rest_positions, atol=1e-9)
+    assert json.loads(path.with_name("renamed.joints.json").read_text()) == joint_map
+    window.annotate_file(str(path))  # opened again: the saved map, no question (one would block here)
+    assert len(asked) == 2 and window.annotation.hand.meta["rig_scheme"] == "user"
+
+
+def test_cancelling_the_joint_map_leaves_the_window_as_it_was(window, qtbot, renamed_hand, tmp_path):
+    path, _ = renamed_hand
+    window.annotate_file(IRIS)
+    asked = answer(click("Cancel"))
+    window.annotate_file(str(path))  # "Map the bones..." not taken
+    answer(click("Map the bones..."), (JointMapDialog, lambda dialog: dialog.reject()), shown=asked)
+    window.annotate_file(str(path))  # the dialog cancelled
+    assert len(asked) == 3 and window.annotation.hand.name == "iris"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["renamed.glb", "settings.ini"]  # no map written
+
+
+def test_a_four_finger_hand_is_refused_without_offering_a_joint_map(window, qtbot):
+    window.annotate_file(IRIS)
+    asked = answer(click("OK"))
+    window.annotate_file(str(ASSETS_DIR / "hands" / "fbx" / "four_finger_hand.fbx"))
+    assert len(asked) == 1 and "0 bones left for 3 joints (pinky_mcp, pinky_pip, pinky_dip): a hand needs 5 " \
+                               "fingers" in asked[0]
+    assert window.annotation.hand.name == "iris"
+
+
+def test_open_hand_with_joint_map_edits_the_saved_map(window, qtbot, renamed_hand):
+    path, joint_map = renamed_hand
+    path.with_name("renamed.joints.json").write_text(json.dumps({**joint_map, "index_pip": "pointer-phalanx-distal",
+                                                                 "index_dip": "pointer-phalanx-intermediate"}))
+    entry = next(a for m in window.menuBar().actions() if m.text() == "&Annotate" for a in m.menu().actions()
+                 if a.text() == "Open hand with joint map...")
+    filters: list[str] = []
+    answer((QFileDialog, lambda dialog: (filters.extend(dialog.nameFilters()), dialog.reject())))
+    entry.trigger()  # Annotate > Open hand with joint map...: a rig file to choose (the dialog cancelled)
+    assert filters == ["Rigs (*.glb *.gltf *.fbx)"] and window.annotation is None
+    seen: dict = {}
+    answer(map_the_index(joint_map, seen))
+    window.annotate_file(str(path), map_joints=True)  # the file chosen
+    assert seen["prefilled"]["index_pip"] == "pointer-phalanx-distal" and seen["ok_at_first"]  # the saved map
+    assert json.loads(path.with_name("renamed.joints.json").read_text()) == joint_map
+    np.testing.assert_allclose(window.annotation.hand.rest_positions, load_hand_file(WEBXR).rest_positions, atol=1e-9)

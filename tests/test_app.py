@@ -66,6 +66,41 @@ def test_export_retargeted_motion_and_a_bad_file_gives_a_dialog(window, tmp_path
 
 
 
+def test_add_target_with_unrecognised_bones_maps_them_in_the_dialog(window, qtbot, tmp_path):
+    """A target hand whose bones say nothing (a WebXR hand renamed ``bone0``..): Add target offers the joint map
+    dialog (nothing to prefill), and the hand mapped there joins the grid; the map is saved beside it."""
+    import json
+
+    import pygltflib
+
+    from s2h_viewer.io.files import load_hand_file
+    from s2h_viewer.samples import ASSETS_DIR
+    from s2h_viewer.widgets.joint_map_dialog import JointMapDialog
+    webxr = ASSETS_DIR / "hands" / "webxr" / "generic-hand-right.glb"
+    gltf = pygltflib.GLTF2().load(str(webxr))
+    renamed = {}
+    for i, node in enumerate(gltf.nodes):
+        renamed[node.name], node.name = f"bone{i}", f"bone{i}"
+    gltf.save(str(tmp_path / "anon.glb"))
+    joint_map = {j: renamed[b] for j, b in load_hand_file(webxr).meta["rig_joints"].items()}
+    prefilled = []
+
+    def map_every_joint(dialog: JointMapDialog) -> None:
+        prefilled.append(dialog.mapping())
+        for joint, bone in joint_map.items():
+            dialog.combos[joint].setCurrentText(bone)
+        dialog.buttons.button(dialog.buttons.StandardButton.Ok).click()
+
+    when_shown(QMessageBox, lambda box: next(b for b in box.buttons() if b.text() == "Map the bones...").click())
+    when_shown(JointMapDialog, map_every_joint)
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.add_target_file(str(tmp_path / "anon.glb"))
+    assert prefilled == [{}]
+    assert [t.name for t in window.setup.targets] == ["iris", "anon"]
+    assert {r.target.name for r in window.comparison.results} == {"iris", "anon"}
+    assert json.loads((tmp_path / "anon.joints.json").read_text()) == joint_map
+
+
 def test_annotation_mode_solve_turn_undo_save(window, qtbot, tmp_path):
     import shutil
 

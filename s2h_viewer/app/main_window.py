@@ -9,14 +9,14 @@ from pathlib import Path
 
 from PySide6.QtCore import QSettings, QTimer, Signal
 from PySide6.QtGui import QAction, QKeySequence, QUndoGroup
-from PySide6.QtWidgets import QFileDialog, QMainWindow, QMessageBox, QTabWidget
+from PySide6.QtWidgets import QDialog, QFileDialog, QMainWindow, QMessageBox, QTabWidget
 
 from s2h_viewer.app import exports
-from s2h_viewer.app.annotate_mode import AnnotateMode
+from s2h_viewer.app.annotate_mode import AnnotateMode, ask, os_problem
 from s2h_viewer.app.compare_mode import CompareMode, CompareSetup, default_setup
 from s2h_viewer.app.focus import FocusKeeper
 from s2h_viewer.app.tasks import TaskRunner
-from s2h_viewer.errors import S2HError
+from s2h_viewer.errors import S2HError, TooFewBonesError, UnrecognisedRigError, reading
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.widgets import annotation_view, compare_view, error_curve, vtk_widget
@@ -27,6 +27,7 @@ RECENT_FILES = 8
 STATUS_MS_CANCELLED = 15_000  # a cancelled export says so this long in the status bar
 #: hand files a target can be (a BVH holds a motion on a skeleton, no mesh to colour: not offered)
 TARGET_HAND_FILTER = "Hands (*.glb *.gltf *.fbx *.npz)"
+RIG_FILTER = "Rigs (*.glb *.gltf *.fbx)"  # hand files with bones to map
 #: Help's mouse sections, (heading, (gesture, what it does)...), each list kept by the widget the mouse acts on
 #: (the keys are read from the menus' own actions, `MainWindow.shortcut_lines`)
 MOUSE_SECTIONS = (("Mouse, in the 3D views of both tabs", vtk_widget.MOUSE),
@@ -148,7 +149,8 @@ class MainWindow(QMainWindow):
         edit_menu = bar.addMenu("&Edit")
         annotate_menu = bar.addMenu("&Annotate")
         open_hand = self._action(annotate_menu, "Open hand...", self.open_hand_to_annotate, "Ctrl+Shift+O")
-        self._annotate_only = self.annotate.fill_menu(annotate_menu)  # "Open hand" switches to Annotate: always on
+        self._action(annotate_menu, "Open hand with joint map...", self.open_hand_with_joint_map)
+        self._annotate_only = self.annotate.fill_menu(annotate_menu)  # opening a hand switches to Annotate: always on
         # one undo stack per tab: Edit > Undo acts on the visible tab's work only
         self.undo_group = QUndoGroup(self)
         for stack in (self.compare.undo_stack, self.annotate.undo_stack):
@@ -324,16 +326,63 @@ class MainWindow(QMainWindow):
         if path:
             then(path)
 
-    def _load_hand(self, path: str) -> HandModel | None:
-        """The hand in ``path`` (its folder remembered), or None after an error dialog."""
-        from s2h_viewer.io.files import load_hand_file
+    def _load_hand(self, path: str, map_joints: bool = False) -> HandModel | None:
+        """The hand in ``path`` (its folder remembered), or None after an error dialog or a cancel; with
+        ``map_joints`` the user maps its bones first (the joint map dialog)."""
         try:
-            hand = load_hand_file(path)
+            hand = self._map_and_load(path) if map_joints else self._load_or_map(path)
         except S2HError as exc:
             self.error(str(exc))
             return None
+        if hand is None:
+            return None
         self._remember(path)
         self.settings.setValue("files/hand_dir", str(Path(path).resolve().parent))
+        return hand
+
+    def _load_or_map(self, path: str) -> HandModel | None:
+        """The hand in ``path``; where s2h does not recognise its bones (and a joint map can make it a hand: not
+        for four fingers), the hand the user maps in the joint map dialog if they want to, else None."""
+        from s2h_viewer.hand.rig_recognition import TEMPLATE_HINT
+        from s2h_viewer.io.files import joint_map_sidecar, load_hand_file
+        try:
+            return load_hand_file(path)
+        except UnrecognisedRigError as exc:
+            if isinstance(exc, TooFewBonesError):
+                raise
+            finding = exc.problem.removesuffix(f"; {TEMPLATE_HINT}")  # the CLI's way: here the dialog is the way
+        choice = ask(self, "s2h-viewer: bones not recognised", f"{Path(path).name}: s2h does not recognise its hand.",
+                     [("Map the bones...", QMessageBox.ButtonRole.AcceptRole),
+                      ("Cancel", QMessageBox.ButtonRole.RejectRole)],
+                     f"{finding}.\n\nMap the bones to the hand's joints yourself? The map is saved beside the file "
+                     f"({joint_map_sidecar(path).name}) and used whenever the hand is opened again.")
+        if choice != 0:
+            self.statusBar().showMessage(f"{Path(path).name}: not opened (its bones not mapped)", 5000)
+            return None
+        return self._map_and_load(path, finding)
+
+    def _map_and_load(self, path: str, finding: str = "") -> HandModel | None:
+        """The hand in ``path`` with the joint map the user makes in the dialog (prefilled with the file's saved
+        map and what its names say), the map then saved beside the file; None if cancelled or failed (shown)."""
+        from s2h_viewer.io.files import (RigOptions, joint_map_sidecar, load_hand_file, read_rig_skeleton,
+                                         save_joint_map, suggested_joint_map)
+        from s2h_viewer.widgets.joint_map_dialog import JointMapDialog
+        with reading(path, "a rig"):
+            bones, initial = read_rig_skeleton(path).names, suggested_joint_map(path)
+        dialog = JointMapDialog(path, bones, initial, finding, self)
+        if dialog.exec() != QDialog.DialogCode.Accepted:
+            self.statusBar().showMessage(f"{Path(path).name}: not opened (joint map cancelled)", 5000)
+            return None
+        mapping = dialog.mapping()
+        hand = load_hand_file(path, RigOptions(joint_map=mapping))
+        sidecar = joint_map_sidecar(path)
+        try:
+            save_joint_map(path, mapping)
+        except OSError as exc:
+            self.error(f"{sidecar}: could not save the joint map ({os_problem(exc, sidecar)}); the hand is open, "
+                       f"but opening it again will ask for its bones again")
+        else:
+            self.statusBar().showMessage(f"wrote {sidecar}: {Path(path).name} opens with this joint map", 5000)
         return hand
 
     def _remember_shown(self) -> None:
@@ -457,12 +506,18 @@ class MainWindow(QMainWindow):
     def open_hand_to_annotate(self) -> None:
         self._ask_to_open("Open hand to annotate", TARGET_HAND_FILTER, self.annotate_file, self._hand_dir())
 
-    def annotate_file(self, path: str) -> None:
-        """Load a hand (its sidecar or solver frames come with it) and show it in annotation mode; unsaved
-        edits of the last hand are saved or dropped first, as the user says."""
+    def open_hand_with_joint_map(self) -> None:
+        """Annotate > Open hand with joint map...: choose the bone of each joint first, then annotate."""
+        self._ask_to_open("Open hand with joint map", RIG_FILTER,
+                          lambda path: self.annotate_file(path, map_joints=True), self._hand_dir())
+
+    def annotate_file(self, path: str, map_joints: bool = False) -> None:
+        """Load a hand (its sidecar or solver frames come with it; with ``map_joints`` the user maps its bones
+        first) and show it in annotation mode; unsaved edits of the last hand are saved or dropped first, as the
+        user says."""
         if not self.annotate.confirm_discard("opening another hand"):
             return
-        hand = self._load_hand(path)
+        hand = self._load_hand(path, map_joints)
         if hand is None:
             return
         self._remember(path, "annotate")
