@@ -696,9 +696,12 @@ def test_quitting_while_a_video_export_ends_quits_once_it_is_written(window, qtb
     with qtbot.waitSignal(job.progress, timeout=60_000):
         pass
     asked = []
-    when_shown(QMessageBox, asked.append)  # the user leaves the question up until the export is written
-    QTimer.singleShot(120_000, lambda: [b.click() for box in asked if box.isVisible() for b in box.buttons()
-                                        if b.text() == "Keep exporting"])  # else: a question that never goes
+
+    def leave_it_up(box) -> None:  # the user leaves the question up until the export is written
+        asked.append(box.text())
+        keep = next(b for b in box.buttons() if b.text() == "Keep exporting")
+        QTimer.singleShot(120_000, box, keep.click)  # else: a question that never goes (gone with the box)
+    when_shown(QMessageBox, leave_it_up)
     assert window.close() and not window.isVisible()  # the question went away with the export: quit
     assert len(asked) == 1 and (tmp_path / "short.gif").stat().st_size > 0
 
