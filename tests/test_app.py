@@ -57,6 +57,10 @@ def test_timeline_steps_and_keys_move_every_view(window, qtbot):
 def test_export_retargeted_motion_and_a_bad_file_gives_a_dialog(window, tmp_path, monkeypatch):
     out = window.export_motion(str(tmp_path / "on_iris.bvh"))
     assert out.exists() and out.read_text().startswith("HIERARCHY")
+    message = window.statusBar().currentMessage()  # the status names both files the export wrote
+    assert message == f"wrote {out} and its TBS frames on_iris.bvh.tbs.json" and (tmp_path / "on_iris.bvh.tbs.json").is_file()
+    window.export_motion(str(tmp_path / "on_iris.npz"))
+    assert window.statusBar().currentMessage() == f"wrote {tmp_path / 'on_iris.npz'}"
     shown = []
     monkeypatch.setattr(QMessageBox, "critical", lambda parent, title, text: shown.append(text))
     broken = tmp_path / "broken.glb"

@@ -928,6 +928,32 @@ def test_add_target_hand_opens_in_the_last_hand_folder_else_the_shipped_hands(wi
     assert Path(ask()) == folder.resolve()
 
 
+def test_open_motion_opens_in_the_last_motion_folder_not_the_last_hand_folder(window, qtbot, tmp_path):
+    import shutil
+
+    from PySide6.QtWidgets import QFileDialog
+
+    from compare_window import when_shown
+    offered = []
+
+    def ask() -> str:
+        when_shown(QFileDialog, lambda dialog: (offered.append(dialog.directory().absolutePath()), dialog.reject()))
+        window.open_motion()
+        return offered.pop()
+
+    assert Path(ask()) == (ASSETS_DIR / "motions").resolve()  # no motion opened yet: the shipped motions
+    clips, avatars = tmp_path / "clips", tmp_path / "avatars"
+    clips.mkdir()
+    avatars.mkdir()
+    motion = shutil.copy(ASSETS_DIR / "motions" / "gestures.npz", clips / "gestures.npz")
+    with qtbot.waitSignal(window.comparison_ready, timeout=300_000):
+        window.load_motion(str(motion))
+    hand = shutil.copy(ASSETS_DIR / "hands" / "laurel.npz", avatars / "laurel.npz")
+    with qtbot.waitSignal(window.comparison_ready, timeout=300_000):
+        window.add_target_file(str(hand))  # a target from elsewhere does not move the motion folder
+    assert Path(ask()) == clips.resolve()
+
+
 def test_a_gif_is_written_while_its_frames_render_and_cancel_leaves_no_file(window, qtbot, tmp_path):
     """The GIF grows as the progress moves (Pillow once wrote it all after the last frame, the dialog at 100%
     meanwhile); a cancel halfway leaves neither the file nor a temporary one."""

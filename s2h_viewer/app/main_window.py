@@ -18,6 +18,7 @@ from s2h_viewer.app.focus import FocusKeeper
 from s2h_viewer.app.tasks import TaskRunner
 from s2h_viewer.errors import S2HError, TooFewBonesError, UnrecognisedRigError, reading
 from s2h_viewer.hand.model import HandModel
+from s2h_viewer.io.annotation import sidecar_path
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.widgets import annotation_view, compare_view, error_curve, vtk_widget
 
@@ -395,7 +396,8 @@ class MainWindow(QMainWindow):
         self._loading = []
 
     def open_motion(self) -> None:
-        self._ask_to_open("Open motion", "Motions (*.npz *.bvh *.glb *.gltf *.fbx)", self.load_motion)
+        self._ask_to_open("Open motion", "Motions (*.npz *.bvh *.glb *.gltf *.fbx)", self.load_motion,
+                          self._start_dir("files/motion_dir", "motions"))
 
     def load_motion(self, path: str) -> None:
         from s2h_viewer.io.files import load_motion_file
@@ -407,14 +409,19 @@ class MainWindow(QMainWindow):
             self.error(str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc))
             return
         self._remember(path)
+        self.settings.setValue("files/motion_dir", str(Path(path).resolve().parent))
         self._loading.append(("motion", path, motion))
         self.compare.load(motion, source)
 
     def _hand_dir(self) -> str:
-        """Where hand dialogs start: the last hand's folder, else the shipped hands, else the working directory."""
+        return self._start_dir("files/hand_dir", "hands")
+
+    def _start_dir(self, setting: str, shipped: str) -> str:
+        """Where an open dialog starts: the folder in ``setting`` (the last hand's, the last motion's), else the
+        shipped ``assets/<shipped>``, else the working directory."""
         from s2h_viewer.samples import ASSETS_DIR
-        last = Path(str(self.settings.value("files/hand_dir", "")))
-        for folder in (last, ASSETS_DIR / "hands"):
+        last = Path(str(self.settings.value(setting, "")))
+        for folder in (last, ASSETS_DIR / shipped):
             if str(folder) not in ("", ".") and folder.is_dir():
                 return str(folder)
         return str(Path.cwd())
@@ -497,10 +504,13 @@ class MainWindow(QMainWindow):
         if not path:
             return None
         try:
-            return self._wrote(exports.export_motion(self.compare, path))
+            written = exports.export_motion(self.compare, path)
         except S2HError as exc:
             self.error(str(exc))
             return None
+        sidecar = sidecar_path(written)  # BVH and GLB exports carry the hand's TBS frames beside them
+        carried = written.suffix.lower() in (".bvh", ".glb", ".gltf") and sidecar.is_file()
+        return self._wrote(written, f" and its TBS frames {sidecar.name}" if carried else "")
 
     # --- annotate mode's entry points ---
     def open_hand_to_annotate(self) -> None:
