@@ -905,43 +905,34 @@ def test_the_selected_retarget_is_a_highlighted_row_of_the_scores_table(window, 
         QPalette.ColorGroup.Active, QPalette.ColorRole.Highlight)
 
 
-def test_add_target_hand_opens_in_the_last_hand_folder_else_the_shipped_hands(window, qtbot, tmp_path):
-    import shutil
-
+def folder_offered(open_dialog) -> Path:
+    """The folder the file dialog that ``open_dialog()`` shows starts in (the dialog then cancelled)."""
     from PySide6.QtWidgets import QFileDialog
 
     from compare_window import when_shown
     offered = []
+    when_shown(QFileDialog, lambda dialog: (offered.append(dialog.directory().absolutePath()), dialog.reject()))
+    open_dialog()
+    return Path(offered.pop())
 
-    def ask() -> str:
-        when_shown(QFileDialog, lambda dialog: (offered.append(dialog.directory().absolutePath()), dialog.reject()))
-        window.add_target()
-        return offered.pop()
 
-    assert Path(ask()) == (ASSETS_DIR / "hands").resolve()  # no hand opened yet: the shipped hands
+def test_add_target_hand_opens_in_the_last_hand_folder_else_the_shipped_hands(window, qtbot, tmp_path):
+    import shutil
+
+    assert folder_offered(window.add_target) == (ASSETS_DIR / "hands").resolve()  # no hand opened yet: the shipped ones
     folder = tmp_path / "avatars"
     folder.mkdir()
     hand = shutil.copy(ASSETS_DIR / "hands" / "laurel.npz", folder / "laurel.npz")
     with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
         window.add_target_file(str(hand))
     window.export_screenshot(str(tmp_path / "shot.png"))  # an export elsewhere does not move the hand folder
-    assert Path(ask()) == folder.resolve()
+    assert folder_offered(window.add_target) == folder.resolve()
 
 
 def test_open_motion_opens_in_the_last_motion_folder_not_the_last_hand_folder(window, qtbot, tmp_path):
     import shutil
 
-    from PySide6.QtWidgets import QFileDialog
-
-    from compare_window import when_shown
-    offered = []
-
-    def ask() -> str:
-        when_shown(QFileDialog, lambda dialog: (offered.append(dialog.directory().absolutePath()), dialog.reject()))
-        window.open_motion()
-        return offered.pop()
-
-    assert Path(ask()) == (ASSETS_DIR / "motions").resolve()  # no motion opened yet: the shipped motions
+    assert folder_offered(window.open_motion) == (ASSETS_DIR / "motions").resolve()  # none opened: the shipped ones
     clips, avatars = tmp_path / "clips", tmp_path / "avatars"
     clips.mkdir()
     avatars.mkdir()
@@ -951,7 +942,7 @@ def test_open_motion_opens_in_the_last_motion_folder_not_the_last_hand_folder(wi
     hand = shutil.copy(ASSETS_DIR / "hands" / "laurel.npz", avatars / "laurel.npz")
     with qtbot.waitSignal(window.comparison_ready, timeout=300_000):
         window.add_target_file(str(hand))  # a target from elsewhere does not move the motion folder
-    assert Path(ask()) == clips.resolve()
+    assert folder_offered(window.open_motion) == clips.resolve()
 
 
 def test_a_gif_is_written_while_its_frames_render_and_cancel_leaves_no_file(window, qtbot, tmp_path):
