@@ -18,6 +18,7 @@ if not os.environ.get("DISPLAY"):
 import imageio.v2 as imageio  # noqa: E402
 from PIL import Image  # noqa: E402
 from PySide6.QtCore import QPoint, Qt, QTimer  # noqa: E402
+from PySide6.QtGui import QImage  # noqa: E402
 from PySide6.QtTest import QTest  # noqa: E402
 from PySide6.QtWidgets import QPushButton  # noqa: E402
 
@@ -350,7 +351,9 @@ def test_frames_posed_ahead_are_the_frames_shown(window, qtbot):
     window.timeline.frame_changed.disconnect(check)
     assert all(checked)
     assert view.prefetched - drawn_before >= 10  # at 1x the frame expected next is the frame asked for
-    view.prefetch(5)  # posed ahead for one frame, another one asked: posed when shown, still right
+    view.prefetch(5)  # posed ahead for one frame (from the render's start), another one asked: posed when shown
+    view.interactor.render()
+    assert view._ahead is not None and view._ahead[0] == 5
     view.show_frame(9)
     hand = view._hands[2]
     np.testing.assert_allclose(hand.mesh.points, to_view(hand.skin.hand, skin_vertices(hand.skin.hand, hand.pose, 9)))
@@ -499,6 +502,25 @@ def test_heatmap_tooltip_names_the_joint_pair(window):
     value = heatmap.current[row, column]
     assert text.startswith("index_tip to palm anchor 3") and (f"{value:.3f}" in text or "masked" in text)
     assert heatmap.cell_text(2, 2) == ""
+
+
+def test_heatmap_draws_each_cell_in_its_colour_beside_its_labels(window):
+    from s2h_viewer.widgets.asm_heatmap import MASKED_GREY, colour_indices, colour_table
+    heatmap = window.heatmap
+    cell_error = np.linspace(0.0, 0.5, topo.N_FINGER_JOINTS * topo.N_ASM_COLUMNS).reshape(topo.N_FINGER_JOINTS, -1)
+    cell_error[3, 7] = np.nan
+    heatmap.show_matrix(cell_error, 12)
+    image = heatmap.matrix.grab().toImage().convertToFormat(QImage.Format.Format_RGB888)
+    assert (image.width(), image.height()) == (heatmap.matrix.width(), heatmap.matrix.height())
+    pixels = np.frombuffer(image.constBits(), np.uint8).reshape(image.height(), image.bytesPerLine())
+    pixels = pixels[:, :3 * image.width()].reshape(image.height(), image.width(), 3)
+    expected = colour_table()[colour_indices(cell_error)]
+    for row, column in ((0, 0), (3, 7), (19, 28), (10, 21)):
+        centre = pixels[TOP + row * CELL + CELL // 2, LEFT + column * CELL + CELL // 2]
+        np.testing.assert_array_equal(centre, expected[row, column])  # the colour map's colour, not swapped
+    assert (pixels[TOP + 3 * CELL + 1, LEFT + 7 * CELL + 1] == MASKED_GREY).all()
+    labels = pixels[TOP:, :LEFT - 4]  # the row names: dark text on white
+    assert (labels.min(-1) < 100).any() and (labels.min(-1) == 255).mean() > 0.5
 
 
 def test_camera_presets_turn_the_one_shared_camera(window):

@@ -6,7 +6,9 @@ timeline plays, each skin of the grid is drawn with fewer faces; paused or shown
 display mesh. A double-click on a hand shows its viewport alone (solo), a second one brings the grid
 back. ``drawn`` fires after every render, so the timeline can show the frames actually drawn per
 second. While playing, the frame expected next is posed on a worker thread (numpy alone) while the
-current one is drawn (`prefetch`): the GUI thread then only copies it in."""
+current one is drawn (`prefetch`): the GUI thread then only copies it in. The worker starts when the
+render does: VTK lets go of Python's lock while it draws, where the GUI thread's own Python (the heatmap,
+the curve, the paint) would wait for the worker to let go of it."""
 
 from __future__ import annotations
 
@@ -50,6 +52,7 @@ class CompareView(QWidget):
         self.playing = False
         self._posing = ThreadPoolExecutor(max_workers=1, thread_name_prefix="posing")
         self._ahead: tuple[int, Future] | None = None  # a frame being posed ahead, and its skins to come
+        self._wanted: int | None = None  # the frame to pose ahead once the next render starts
         self.prefetched = self.posed_here = 0  # frames shown from the worker's skins / posed when shown
 
     @property
@@ -67,7 +70,7 @@ class CompareView(QWidget):
         self.plotter = window_plotter(**grid_layout(comparison))
         self.interactor = PlotterWidget(self.plotter, self)
         self.interactor.installEventFilter(self)
-        self.plotter.render_window.AddObserver("StartEvent", lambda *_: self._fit_camera())
+        self.plotter.render_window.AddObserver("StartEvent", lambda *_: self._render_starts())
         self.plotter.render_window.AddObserver("EndEvent", lambda *_: self.drawn.emit())
         self._layout.addWidget(self.interactor)
         if self.isVisible():  # shown and sized now, not at the next event loop: a grab right after draws at its size
@@ -95,8 +98,15 @@ class CompareView(QWidget):
             self.interactor.update()
 
     def prefetch(self, frame: int | None) -> None:
-        """Pose ``frame``'s skins on the worker thread now (the frame expected next while playing), so that
-        showing it only copies them in. A frame asked for then that is another is posed when shown."""
+        """Pose ``frame``'s skins on the worker thread (the frame expected next while playing) from the start
+        of the next render, so that showing it only copies them in. A frame asked for then that is another
+        is posed when shown."""
+        self._wanted = frame
+
+    def _render_starts(self) -> None:
+        """The render window starts drawing: the worker poses the frame wanted next meanwhile."""
+        self._fit_camera()
+        frame, self._wanted = self._wanted, None
         if frame is None or not self._hands or (self._ahead is not None and self._ahead[0] == frame):
             return
         hands = list(self._hands)
@@ -196,7 +206,7 @@ class CompareView(QWidget):
             self.interactor.deleteLater()
             self.interactor = self.plotter = None
             self._hands = []
-            self._ahead = None
+            self._ahead = self._wanted = None
 
     def closeEvent(self, event) -> None:
         self.close_grid()
