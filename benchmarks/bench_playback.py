@@ -23,10 +23,10 @@ REPEATS = 3  # this machine's timings wander by +-20%; each figure is the median
 
 
 def playback(comparison, display_faces: int | None, size=(1400, 900),
-             plain: bool = False) -> tuple[float, float, int, float]:
+             plain: bool = False, repeats: int = REPEATS) -> tuple[float, float, int, float]:
     """(skinning s/frame, rendering s/frame, fewest faces of a drawn hand, CPU s/frame of this process, all
-    threads: the load on a shared machine changes it less than the wall time) of the median of REPEATS runs."""
-    runs = sorted((playback_once(comparison, display_faces, size, plain) for _ in range(REPEATS)),
+    threads: the load on a shared machine changes it less than the wall time) of the median of ``repeats`` runs."""
+    runs = sorted((playback_once(comparison, display_faces, size, plain) for _ in range(repeats)),
                   key=lambda r: sum(r[:2]))
     return runs[len(runs) // 2]
 

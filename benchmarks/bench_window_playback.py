@@ -1,7 +1,7 @@
 """Benchmark: playback in the real window (needs an X display; under Xvfb that is software OpenGL),
 against the same scene rendered off screen in the same run, and the cost of adding one method.
 
-    xvfb-run -a -s "-screen 0 1600x1000x24" python benchmarks/bench_window_playback.py [--rounds 3] [--no-asm-opt]
+    xvfb-run -a -s "-screen 0 1600x1000x24" python benchmarks/bench_window_playback.py [--rounds 7] [--no-asm-opt]
 
 The window: the default samples (source + 2 targets x TBS Copy, ASRN), 1400 x 900. Playback runs
 against the clock, so at 1x it can never draw more than the clip's 30 frames/s: the window's drawing
@@ -10,7 +10,9 @@ counting the renders the view really made, beside the CPU time per drawn frame (
 process; on a shared machine the load moves it less than the wall time). While playing the window
 draws each skin with `PLAYING_FACES` faces: the off-screen rate of the same scene (those skins, a
 viewport of the window's size) is timed right after each window round, with the window open and idle,
-so that both see the same load; the ratio of each round and their median are printed. The window poses
+so that both see the same load: rounds are short (SECONDS of playing, one off-screen run of `bench_playback.FRAMES`
+frames) because this machine's speed wanders within minutes, and the ratio of each round and their
+median are printed. The window poses
 the next frame's skins on a worker thread while it draws the current one (the share of frames shown so
 is printed); off screen poses each in line, as `s2h render` does. Then the 1x
 rate, the off-screen rate with the paused skins (`DISPLAY_FACES`), and ASM-Opt ticked in the Methods
@@ -29,7 +31,7 @@ from s2h_viewer.app.scripted import scripted_window, wait_for
 from s2h_viewer.render.compare_scene import DISPLAY_FACES, PLAYING_FACES
 from s2h_viewer.widgets.timeline import SPEEDS
 
-SECONDS = 6.0
+SECONDS = 3.0
 
 
 def load() -> str:
@@ -53,21 +55,23 @@ def drawn_rate(window, speed: float) -> tuple[float, float, float, float]:
     wait_for(seconds=SECONDS)
     window.timeline.set_playing(False)
     elapsed, cpu = time.perf_counter() - t0, time.process_time() - cpu
-    advanced = window.timeline.frame  # no loop wrap in 6 s at 1x; at 4x only the draw rate is used
+    advanced = window.timeline.frame  # no loop wrap in SECONDS at 1x; at 4x only the draw rate is used
     window.view.drawn.disconnect(count)
     ahead, here = window.view.prefetched - ahead, window.view.posed_here - here
     return len(drawn) / elapsed, advanced / elapsed, cpu / max(1, len(drawn)), ahead / max(1, ahead + here)
 
 
-def off_screen(comparison, faces: int, viewport: tuple[int, int]) -> tuple[float, float, float, float]:
-    """(frames/s, skinning s/frame, rendering s/frame, CPU s/frame) off screen, median of `bench_playback`'s runs."""
-    skin, render, _, cpu = playback(comparison, faces, size=viewport)
+def off_screen(comparison, faces: int, viewport: tuple[int, int],
+               repeats: int = 1) -> tuple[float, float, float, float]:
+    """(frames/s, skinning s/frame, rendering s/frame, CPU s/frame) off screen, median of ``repeats`` of
+    `bench_playback`'s runs."""
+    skin, render, _, cpu = playback(comparison, faces, size=viewport, repeats=repeats)
     return 1 / (skin + render), skin, render, cpu
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--rounds", type=int, default=3, help="window / off-screen pairs timed (default 3)")
+    parser.add_argument("--rounds", type=int, default=7, help="window / off-screen pairs timed (default 7)")
     parser.add_argument("--no-asm-opt", action="store_true", help="skip timing ASM-Opt's addition")
     args = parser.parse_args()
     with scripted_window() as window:
@@ -94,7 +98,7 @@ def main() -> None:
         real, advanced, _, _ = drawn_rate(window, 1.0)
         print(f"in the window at 1x: {real:5.1f} frames/s drawn, the clip advanced {advanced:5.1f} frames/s "
               f"(real time: {comparison.motion.fps:g})")
-        paused, _, _, paused_cpu = off_screen(comparison, DISPLAY_FACES, viewport)
+        paused, _, _, paused_cpu = off_screen(comparison, DISPLAY_FACES, viewport, repeats=3)
         print(f"off screen, the paused skins ({DISPLAY_FACES} faces): {paused:5.1f} frames/s "
               f"(CPU {paused_cpu * 1000:4.1f} ms/frame) [{load()}]")
         if args.no_asm_opt:
