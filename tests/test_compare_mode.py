@@ -168,6 +168,21 @@ def test_add_and_remove_a_target(window, qtbot):
     assert window.scores.rowCount() == 2 and len(window.view._hands) == 3
 
 
+def test_undoing_a_removal_brings_the_target_back_selected(window, qtbot):
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.add_target_file(str(ASSETS_DIR / "hands" / "laurel.npz"))
+    window.scores.selectRow(3)  # ASRN -> laurel
+    with qtbot.waitSignal(window.comparison_ready, timeout=10_000):
+        window.compare.remove_target(1)
+    assert window.compare.selected_result().target.name == "iris"  # its selection went with it
+    with qtbot.waitSignal(window.comparison_ready, timeout=10_000):
+        window.compare.undo_stack.undo()
+    selected = window.compare.selected_result()
+    assert (selected.method, selected.target.name) == ("asrn", "laurel")
+    assert window.heatmap_choice.currentIndex() == 3 and window.scores.currentRow() == 3
+    np.testing.assert_array_equal(window.compare.curve.error, selected.frame_error)
+
+
 def test_playback_pauses_for_a_new_retarget_and_plays_on_after_it(window, qtbot):
     window.timeline.set_playing(True)
     with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
@@ -590,7 +605,8 @@ def test_a_cancelled_target_is_not_recent(window, qtbot):
         window.compare.cancel()
     assert "laurel.npz (target)" not in recent(window) and len(window.comparison.results) == 2
     with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
-        window.add_target_file(laurel)
+        window.compare.undo_stack.redo()  # Cancel left the addition redoable: Redo shows laurel, so it is recent
+    assert [r.target.name for r in window.comparison.results][2:] == ["laurel", "laurel"]
     assert recent(window) == ["laurel.npz (target)"]
 
 

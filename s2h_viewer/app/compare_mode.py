@@ -81,36 +81,40 @@ class SetMethodsCommand(QUndoCommand):
 
 
 class AddTargetCommand(QUndoCommand):
-    """Add a target (undoable): undo takes it away keeping its results, redo brings it back with them."""
+    """Add a target (undoable): undo takes it away keeping its results (and its selection), redo brings it
+    back with them."""
 
     def __init__(self, mode: "CompareMode", hand: HandModel):
         super().__init__(f"add {hand.name}")
         self.mode, self.hand = mode, hand
         self.results: dict[ResultKey, MethodResult] = {}
+        self.selected: ResultKey | None = None
 
     def redo(self) -> None:
-        self.mode._restore_target(len(self.mode.state.targets), self.hand, self.results)
+        self.mode._restore_target(len(self.mode.state.targets), self.hand, self.results, self.selected)
 
     def undo(self) -> None:
-        self.results = {k: r for k, r in self.mode.state.results.items() if k.target == id(self.hand)}
-        self.mode._drop_target(next(i for i, t in enumerate(self.mode.state.targets) if t is self.hand))
+        index = next(i for i, t in enumerate(self.mode.state.targets) if t is self.hand)
+        self.results, self.selected = self.mode._drop_target(index)
 
 
 class RemoveTargetCommand(QUndoCommand):
-    """Remove one target (undoable): undo puts it back where it was, with the results it had."""
+    """Remove one target (undoable): undo puts it back where it was, with the results it had, selected again
+    if one of its retargets was."""
 
     def __init__(self, mode: "CompareMode", index: int):
         self.hand = mode.state.targets[index]
         super().__init__(f"remove {self.hand.name}")
         self.mode, self.index = mode, index
         self.results: dict[ResultKey, MethodResult] = {}
+        self.selected: ResultKey | None = None
 
     def redo(self) -> None:
-        self.results = {k: r for k, r in self.mode.state.results.items() if k.target == id(self.hand)}
-        self.mode._drop_target(self.index)
+        self.results, self.selected = self.mode._drop_target(self.index)
 
     def undo(self) -> None:
-        self.mode._restore_target(min(self.index, len(self.mode.state.targets)), self.hand, self.results)
+        self.mode._restore_target(min(self.index, len(self.mode.state.targets)), self.hand, self.results,
+                                  self.selected)
 
 
 class CompareMode(QWidget):
@@ -198,18 +202,27 @@ class CompareMode(QWidget):
         """Drop one target and its results (undoable); the rest stay as computed."""
         self.undo_stack.push(RemoveTargetCommand(self, index))
 
-    def _drop_target(self, index: int) -> None:
+    def _drop_target(self, index: int) -> tuple[dict[ResultKey, MethodResult], ResultKey | None]:
+        """Take target ``index`` away; returns its results and the selection if it was one of them."""
+        hand = self.state.targets[index]
+        results = {k: r for k, r in self.state.results.items() if k.target == id(hand)}
+        selected = self.state.selected if self.state.selected in results else None
         targets = list(self.state.targets)
         del targets[index]
         self.state.targets = targets
         self._sync()
+        return results, selected
 
-    def _restore_target(self, index: int, hand: HandModel, results: dict[ResultKey, MethodResult]) -> None:
-        """Put a removed target back at ``index``; its results come back from ``results``, not recomputed."""
+    def _restore_target(self, index: int, hand: HandModel, results: dict[ResultKey, MethodResult],
+                        selected: ResultKey | None = None) -> None:
+        """Put a removed target back at ``index``; its results come back from ``results``, not recomputed, and
+        ``selected`` (one of them) is the selection again."""
         self._spare.update(results)
         targets = list(self.state.targets)
         targets.insert(index, hand)
         self.state.targets = targets
+        if selected is not None:
+            self.state.selected = selected
         self._sync()
 
     def load(self, motion: Motion, source: HandModel) -> None:

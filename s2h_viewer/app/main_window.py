@@ -387,13 +387,14 @@ class MainWindow(QMainWindow):
         return hand
 
     def _remember_shown(self) -> None:
-        """Loads the grid now shows become recent files; loads it does not show (cancelled, failed) never do."""
+        """Loads the grid now shows become recent files; loads it does not show (cancelled, failed) wait: a
+        Redo may bring a cancelled target back, and it is recent then."""
         comparison = self.comparison
         shown = {id(comparison.motion)} | {id(r.target) for r in comparison.results} if comparison else set()
         for kind, path, loaded in self._loading:
             if id(loaded) in shown:
                 self._remember(path, kind)
-        self._loading = []
+        self._loading = [entry for entry in self._loading if id(entry[2]) not in shown]
 
     def open_motion(self) -> None:
         self._ask_to_open("Open motion", "Motions (*.npz *.bvh *.glb *.gltf *.fbx)", self.load_motion,
