@@ -166,6 +166,23 @@ def test_glb_export_reads_back_as_the_motion_it_was(target, sample_hands, gestur
     assert rig.meta["annotation"] == "sidecar"
 
 
+def test_an_export_over_the_rigs_own_file_keeps_its_hand_set_frames_marked(sample_hands, gestures, tmp_path):
+    """A rig annotated by hand, its retarget exported over its own GLB: the sidecar now pinned to the new
+    file keeps the frames "manual" (it was rewritten as the solver's); a frame that moved would not be."""
+    from s2h_viewer.io.annotation import load_annotation
+    hand = _hand_with_frames_of_its_own("webxr/generic-hand-right.glb", sample_hands, tmp_path / "rig")
+    rig = tmp_path / "rig" / "generic-hand-right.glb"
+    before = load_annotation(rig)
+    motion = retarget(gestures, sample_hands[gestures.hand_name], hand, "tbs_copy")
+    save_motion_file(rig, motion, hand)
+    after = load_annotation(rig)  # the hash of the new file: it was rewritten
+    assert after.set_by == ["manual"] * 15
+    np.testing.assert_allclose(after.frames, before.frames, atol=1e-6)
+    hand.rest_frames[3] = hand.rest_frames[3] @ Rotation.from_euler("x", 10.0, degrees=True).as_matrix()
+    save_motion_file(rig, motion, hand)
+    assert load_annotation(rig).set_by == ["manual"] * 3 + ["solver"] + ["manual"] * 11
+
+
 @pytest.mark.parametrize("suffix", [".bvh", ".glb"])
 def test_a_round_trip_retargets_onto_iris_as_the_direct_path(suffix, sample_hands, gestures, tmp_path):
     """The user's check: the export of TBS Copy onto iris, reopened as a motion (File > Open motion) and

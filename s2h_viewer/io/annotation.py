@@ -89,24 +89,51 @@ def refuse_foreign_sidecar(motion_file: Path) -> None:
                                           f"{owner or 'another file'}; export under another name")
 
 
-def _sidecar_owner(sidecar: Path) -> str | None:
-    """The hand file a sidecar says it was made for, None if it cannot be read as a sidecar."""
+def _sidecar_document(sidecar: Path) -> dict | None:
+    """A sidecar's JSON object read leniently (no hash check), None if it cannot be read as one."""
     try:
         if not sidecar.is_file() or sidecar.stat().st_size > MAX_SIDECAR_BYTES:
             return None
         document = json.loads(sidecar.read_text())
     except (OSError, ValueError, RecursionError):  # JSON and Unicode decode errors are ValueErrors
         return None
-    owner = document.get("hand_file") if isinstance(document, dict) else None
+    return document if isinstance(document, dict) else None
+
+
+def _sidecar_owner(sidecar: Path) -> str | None:
+    """The hand file a sidecar says it was made for, None if it cannot be read as a sidecar."""
+    owner = (_sidecar_document(sidecar) or {}).get("hand_file")
     return owner if isinstance(owner, str) else None
+
+
+def _marks_kept(sidecar: Path, owner: str, frames: np.ndarray) -> tuple[list[str], np.ndarray]:
+    """(set_by, confidence) for ``frames`` written over ``sidecar``: a joint whose frame is the one the
+    sidecar of ``owner`` already holds keeps its marks (a hand annotated by hand, exported over its own
+    file, stays "manual"); the rest are the hand's frames, unscored."""
+    n = topo.N_ARTICULATED
+    set_by, confidence = ["solver"] * n, np.full(n, np.nan)
+    document = _sidecar_document(sidecar)
+    joints = document.get("joints") if document is not None and document.get("hand_file") == owner else None
+    if not isinstance(joints, dict):
+        return set_by, confidence
+    for a, name in enumerate(topo.ARTICULATED_NAMES):
+        try:
+            frame, by, score = _joint_entry(sidecar, name, joints.get(name))
+        except InputFileError:
+            continue
+        if np.allclose(frame, frames[a], atol=1e-6):
+            set_by[a], confidence[a] = by, score
+    return set_by, confidence
 
 
 def save_hand_frames(motion_file: Path, hand: HandModel, to_file: np.ndarray) -> Path:
     """Write the sidecar of the motion file just written at ``motion_file``: ``hand``'s TBS frames turned by
-    ``to_file`` into the hand space the file loads in, unscored (the hand's frames, not a solver run's), so
-    that it reads back with the TBS rotations it was written with; returns ``motion_file``."""
-    n = topo.N_ARTICULATED
-    save_annotation(Annotation(to_file @ hand.rest_frames, ["solver"] * n, np.full(n, np.nan),
+    ``to_file`` into the hand space the file loads in, so that it reads back with the TBS rotations it was
+    written with; unscored unless the sidecar there already holds the same frames (`_marks_kept`). Returns
+    ``motion_file``."""
+    frames = to_file @ hand.rest_frames
+    set_by, confidence = _marks_kept(sidecar_path(motion_file), motion_file.name, frames)
+    save_annotation(Annotation(frames, set_by, confidence,
                                [f"TBS frames of {hand.name}, written with {motion_file.name}"]), motion_file)
     return motion_file
 
