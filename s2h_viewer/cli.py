@@ -188,7 +188,7 @@ def _cmd_annotate(args: argparse.Namespace) -> int:
 
 
 def _cmd_retarget(args: argparse.Namespace) -> int:
-    from s2h_viewer.io.files import load_hand_file, load_motion_file, save_motion_file
+    from s2h_viewer.io.files import export_sidecar, load_hand_file, load_motion_file, save_motion_file
     from s2h_viewer.retarget import retarget
 
     options = _rig_options(args)
@@ -202,7 +202,9 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
                        disable=args.quiet or None):  # None: no bar when not on a terminal
         retargeted = retarget(motion, source, target, args.method)
     path = save_motion_file(args.out, retargeted, target)
-    print(f"{motion.name}: {motion.n_frames} frames, {source.name} -> {target.name} ({args.method}) -> {path}")
+    sidecar = export_sidecar(path)
+    print(f"{motion.name}: {motion.n_frames} frames, {source.name} -> {target.name} ({args.method}) -> {path}"
+          + (f" (TBS frames: {sidecar})" if sidecar else ""))
     return 0
 
 

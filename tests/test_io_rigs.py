@@ -24,7 +24,7 @@ from s2h_viewer.hand.rig_mapping import SCHEMES, map_rig
 from s2h_viewer.io.annotation import Annotation, save_annotation, sidecar_path
 from s2h_viewer.io.bvh import load_bvh, save_bvh
 from s2h_viewer.io.fbx import load_fbx_hand, load_fbx_motion
-from s2h_viewer.io.files import load_hand_file, load_motion_file, save_motion_file
+from s2h_viewer.io.files import EXPORT_SUFFIXES, export_sidecar, load_hand_file, load_motion_file, save_motion_file
 from s2h_viewer.io.gltf import load_gltf_hand, load_gltf_motion, save_gltf_motion
 from s2h_viewer.hand.rotations import quat_to_tbs_euler
 from s2h_viewer.io.npz import load_hand, load_motion
@@ -164,6 +164,18 @@ def test_glb_export_reads_back_as_the_motion_it_was(target, sample_hands, gestur
     assert error.max() < 1e-4 * hand.hand_length
     assert _rotation_angles(again.q_tbs, motion.q_tbs).max() < 1e-4
     assert rig.meta["annotation"] == "sidecar"
+
+
+@pytest.mark.parametrize("suffix", EXPORT_SUFFIXES)
+def test_export_sidecar_names_the_frames_file_each_export_writes(suffix, sample_hands, gestures, tmp_path):
+    """What the window's and the CLI's report names after an export is what the writer wrote."""
+    from s2h_viewer.io.annotation import load_annotation
+    path = save_motion_file(tmp_path / f"clip{suffix}", gestures, sample_hands[gestures.hand_name])
+    written = sorted(p.name for p in tmp_path.iterdir() if p != path)
+    sidecar = export_sidecar(path)
+    assert written == ([] if sidecar is None else [sidecar.name])
+    if sidecar is not None:
+        assert load_annotation(path) is not None  # pinned to the file just written
 
 
 def test_an_export_over_the_rigs_own_file_keeps_its_hand_set_frames_marked(sample_hands, gestures, tmp_path):
@@ -408,6 +420,7 @@ def test_cli_retarget_exports_onto_the_webxr_rig(tmp_path):
                            str(ASSETS_DIR / "motions" / "counting.npz"), "--target", str(tmp_path / "hand.glb"),
                            "--method", "tbs_copy", "--out", str(out)], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
+    assert done.stdout.strip().endswith(f"(TBS frames: {tmp_path / 'counting_on_webxr.tbs.json'})")
     hand = load_gltf_hand(tmp_path / "hand.glb")
     motion = load_gltf_motion(out, hand)
     assert motion.n_frames == load_motion(ASSETS_DIR / "motions" / "counting.npz").n_frames

@@ -18,7 +18,7 @@ from s2h_viewer.app.focus import FocusKeeper
 from s2h_viewer.app.tasks import TaskRunner
 from s2h_viewer.errors import S2HError, TooFewBonesError, UnrecognisedRigError, reading
 from s2h_viewer.hand.model import HandModel
-from s2h_viewer.io.annotation import sidecar_path
+from s2h_viewer.io.files import export_sidecar
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.widgets import annotation_view, compare_view, error_curve, vtk_widget
 
@@ -509,9 +509,8 @@ class MainWindow(QMainWindow):
         except S2HError as exc:
             self.error(str(exc))
             return None
-        sidecar = sidecar_path(written)  # BVH and GLB exports carry the hand's TBS frames beside them
-        carried = written.suffix.lower() in (".bvh", ".glb", ".gltf") and sidecar.is_file()
-        return self._wrote(written, f" and its TBS frames {sidecar.name}" if carried else "")
+        sidecar = export_sidecar(written)
+        return self._wrote(written, f" and its TBS frames {sidecar.name}" if sidecar else "")
 
     # --- annotate mode's entry points ---
     def open_hand_to_annotate(self) -> None:

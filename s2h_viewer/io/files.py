@@ -152,6 +152,14 @@ def save_motion_file(path: str | Path, motion: Motion, hand: HandModel) -> Path:
     return save_gltf_motion(path, motion, hand)
 
 
+def export_sidecar(path: str | Path) -> Path | None:
+    """The TBS frames sidecar that `save_motion_file` writes beside a motion exported to ``path`` (the BVH
+    and GLB writers do: `io.annotation.save_hand_frames`), None for npz; what an export's report names."""
+    from s2h_viewer.io.annotation import sidecar_path
+    path = Path(path)
+    return sidecar_path(path) if path.suffix.lower() in (".bvh", ".glb") else None
+
+
 def read_rig_skeleton(path: str | Path):
     """The `RigSkeleton` (names, rest world matrices, parents) of a glTF, FBX or BVH rig file."""
     path = Path(path)
