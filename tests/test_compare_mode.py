@@ -120,6 +120,19 @@ def test_cancel_a_retarget_goes_back_to_the_grid_and_the_menu_follows(long_windo
     assert window.compare._progress is not None  # computing it again
 
 
+def test_redo_at_once_after_a_cancel_computes_the_cancelled_method(long_window, qtbot):
+    """Cancel, then Redo before the running job has stopped: the job was cancelled all the same and never
+    came back (the grid waited for it for ever); now it is queued again."""
+    window = long_window
+    window.method_actions["asm_opt"].trigger()
+    wait_until_running(window, qtbot, "asm_opt")
+    window.compare.cancel()
+    assert window.compare.queue.pending()[:1] and window.compare.queue.pending()[0].method == "asm_opt"  # stopping
+    with qtbot.waitSignal(window.comparison_ready, timeout=300_000):
+        window.compare.undo_stack.redo()
+    assert ticked(window) == grid_methods(window) == ["tbs_copy", "asrn", "asm_opt"]
+
+
 def test_cancel_the_first_retarget_keeps_the_targets_and_ticking_a_method_computes_it(qtbot, sample_hands,
                                                                                       tmp_path):
     window = open_compare_window(qtbot, sample_hands, tmp_path, methods=("asm_opt",), compute=False,

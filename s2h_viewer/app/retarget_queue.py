@@ -51,12 +51,14 @@ class RetargetQueue(QObject):
 
     def submit(self, jobs: list[Job]) -> None:
         """Make ``jobs`` the work to do: queue the new ones, drop queued ones not in it, cancel the running
-        one if it is not in it."""
+        one if it is not in it. A running job cancelled already (a Cancel, then Redo at once) stops all the
+        same, so it is queued again: it would never finish otherwise."""
         keys = {job[0] for job in jobs}
         with self._lock:
             if self._current is not None and self._current not in keys:
                 self._cancel.set()
-            self._pending = [job for job in jobs if job[0] != self._current]
+            running_on = None if self._cancel.is_set() else self._current
+            self._pending = [job for job in jobs if job[0] != running_on]
             if self._pending and self._thread is None:
                 self._thread = threading.Thread(target=self._work, name="retargets", daemon=True)
                 self._thread.start()
