@@ -86,10 +86,10 @@ def test_render_compare_refuses_frames_the_clip_has_not(sample_hands, tmp_path, 
     clip = save_motion(motion, tmp_path / "one.npz")
     n = motion.n_frames
     common = ["render", "--motion", str(clip), "--target", "laurel", "--methods", "tbs_copy", "--quiet"]
-    for asked, out, said in ((["--start", "5", "--end", str(n)], "a.mp4", f"frames 5 to {n} not in the clip"),
-                             (["--start", "-1"], "b.gif", f"frames -1 to {n - 1} not in the clip"),
+    for asked, out, said in ((["--start", "5", "--end", str(n)], "a.mp4", f"frames 5 to {n} are not all in the clip"),
+                             (["--start", "-1"], "b.gif", f"frames -1 to {n - 1} are not all in the clip"),
                              (["--start", "20", "--end", "10"], "c.mp4", "frames 20 to 10: the first comes after"),
-                             (["--frame", str(n)], "d.png", f"frame {n} not in the clip"),
+                             (["--frame", str(n)], "d.png", f"frame {n} is not in the clip"),
                              (["--start", "2"], "e.png", "--start and --end choose the frames of a video")):
         assert main([*common, *asked, "--out", str(tmp_path / out)]) == 2
         err = capsys.readouterr().err

@@ -42,12 +42,12 @@ def frame_range(n_frames: int, start: int | None = None, end: int | None = None,
     """Frames ``start`` to ``end`` of a clip of ``n_frames``, both included (indices from 0, as the timeline
     counts; missing ends: the clip's); a `FrameRangeError` naming the clip's frame count for any other."""
     first, last = 0 if start is None else start, n_frames - 1 if end is None else end
-    frames = f"frame {first}" if first == last else f"frames {first} to {last}"
     if not (0 <= first < n_frames and 0 <= last < n_frames):
-        raise FrameRangeError(f"{clip}: {frames} not in the clip, which has {n_frames} frames (0 to {n_frames - 1})")
+        asked = f"frame {first} is not" if first == last else f"frames {first} to {last} are not all"
+        raise FrameRangeError(f"{clip}: {asked} in the clip, which has {n_frames} frames (0 to {n_frames - 1})")
     if first > last:
-        raise FrameRangeError(f"{clip}: {frames}: the first comes after the last; the clip has {n_frames} frames "
-                              f"(0 to {n_frames - 1})")
+        raise FrameRangeError(f"{clip}: frames {first} to {last}: the first comes after the last; the clip has "
+                              f"{n_frames} frames (0 to {n_frames - 1})")
     return range(first, last + 1)
 
 

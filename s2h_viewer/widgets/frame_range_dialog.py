@@ -1,5 +1,5 @@
 """The frames of a video export: From and To boxes (indices from 0, as the timeline counts; both frames
-exported), the whole clip at first, with quick choices for the whole clip and for the current frame on; OK
+exported), the whole clip at first, with quick choices for the whole clip and for the current frame on; Export
 only while From is not after To (the dialog says why)."""
 
 from __future__ import annotations
