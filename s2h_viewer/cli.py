@@ -57,22 +57,31 @@ def _progress_bar(desc: str, total: int, unit: str, disable: bool | None) -> Ite
 
 
 def _render_comparison(args: argparse.Namespace) -> int:
-    """`s2h render --motion`: compare mode off screen, one frame (PNG) or the timeline (MP4, GIF)."""
+    """`s2h render --motion`: compare mode off screen, one frame (PNG) or the timeline, or frames
+    ``--start`` to ``--end`` of it (MP4, GIF); the frames are checked against the clip before any retarget."""
     from tqdm import tqdm
 
     from s2h_viewer import samples
     from s2h_viewer.io.files import load_hand_file, load_motion_file
     from s2h_viewer.render.compare_scene import render_comparison
+    from s2h_viewer.render.video import VIDEO_SUFFIXES, frame_range
     from s2h_viewer.retarget.comparison import build_comparison
 
     motion, rig = load_motion_file(args.motion, options=_rig_options(args))
+    if Path(args.out).suffix.lower() in VIDEO_SUFFIXES:
+        frames = frame_range(motion.n_frames, args.start, args.end, clip=args.motion)
+    elif args.start is not None or args.end is not None:
+        raise S2HError(f"{args.out}: --start and --end choose the frames of a video (.mp4, .gif); a .png is "
+                       f"one --frame")
+    else:
+        frames = frame_range(motion.n_frames, args.frame or 0, args.frame or 0, clip=args.motion)  # the one frame
     source = rig or samples.load_sample_hand(motion.hand_name)
     targets = [load_hand_file(t, _rig_options(args)) for t in (args.target or ["iris", "laurel"])]
     methods = (args.methods or "tbs_copy,asrn").split(",")
     with _progress_bar("retarget", len(targets) * len(methods), "retarget", disable=args.quiet):
         comparison = build_comparison(motion, source, targets, methods)
-    with tqdm(total=comparison.n_frames, desc="render", unit="frame", file=sys.stderr, disable=args.quiet) as bar:
-        path = render_comparison(comparison, args.out, frame=args.frame,
+    with tqdm(total=len(frames), desc="render", unit="frame", file=sys.stderr, disable=args.quiet) as bar:
+        path = render_comparison(comparison, args.out, frame=frames.start, frames=frames,
                                  progress=lambda done, total: bar.update(done - bar.n))
     print(f"wrote {path}")
     return 0
@@ -275,11 +284,15 @@ def build_parser() -> argparse.ArgumentParser:
     rd.add_argument("--skeleton", action="store_true", help="draw bones through a see-through skin")
     rd.add_argument("--frames", action="store_true", help="draw each joint's TBS frame (twist red, bend green, "
                                                           "splay blue) through a see-through skin")
-    rd.add_argument("--out", default="hands.png", help=".png, or with --motion also .mp4 / .gif (the whole timeline)")
+    rd.add_argument("--out", default="hands.png", help=".png, or with --motion also .mp4 / .gif (the whole timeline, "
+                                                        "or --start to --end)")
     rd.add_argument("--motion", help="compare mode: retarget this motion file and render the grid of methods")
     rd.add_argument("--target", action="append", help="with --motion: target hand file or sample name (repeatable)")
     rd.add_argument("--methods", help="with --motion: comma-separated methods (default tbs_copy,asrn)")
     rd.add_argument("--frame", type=int, help="with --motion and a .png: the frame to draw (default 0)")
+    rd.add_argument("--start", type=int, help="with --motion and a .mp4 / .gif: the first frame (from 0; default 0)")
+    rd.add_argument("--end", type=int, help="with --motion and a .mp4 / .gif: the last frame, included (default: "
+                                            "the clip's last)")
     rd.add_argument("--quiet", action="store_true", help="no progress bars")
     _add_rig_options(rd)
     rd.set_defaults(func=_cmd_render)

@@ -79,3 +79,7 @@ class UnrecognisedRigError(InputFileError):
 class TooFewBonesError(UnrecognisedRigError):
     """A rig with fewer free bones than the joints its names leave unmapped (a four-finger hand): no joint map
     can make it a hand, so none is asked for."""
+
+
+class FrameRangeError(S2HError):
+    """Frames asked of a clip that it does not have, or a range whose first frame comes after its last."""

@@ -1133,3 +1133,97 @@ def test_ticking_a_method_and_adding_a_target_are_undone_and_redone_from_the_cac
     key(Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier)
     agree(["tbs_copy", "dm", "asrn"], ["iris", "laurel"])
     assert len(window.compare.queue.computed) == computed
+
+
+def answer_video_export(qtbot, choose_frames) -> None:
+    """File > Export video as a user answers it: the file dialog's suggested name saved, then the frames dialog
+    answered by ``choose_frames(dialog)``."""
+    from PySide6.QtWidgets import QFileDialog
+
+    from compare_window import when_shown
+    from s2h_viewer.widgets.frame_range_dialog import FrameRangeDialog
+    when_shown(QFileDialog, lambda dialog: dialog.accept())
+    when_shown(FrameRangeDialog, choose_frames)
+
+
+def test_a_video_export_writes_the_frames_chosen_with_their_own_frame_numbers(window, qtbot, tmp_path):
+    """The frames dialog after the file: the whole clip at first, "From the current frame" and an edited To give
+    frames 40 to 47; the file holds those eight, the first one frame 40 as the window shows it, captioned 40."""
+    from PySide6.QtWidgets import QDialogButtonBox
+
+    from s2h_viewer.app.exports import caption_for
+    from s2h_viewer.render.caption import add_caption
+    n = window.comparison.n_frames
+    window.settings.setValue("files/export_dir", str(tmp_path))
+    shots = {}
+    for frame in (0, 40):
+        window.timeline.set_frame(frame)
+        shots[frame] = window.export_screenshot(str(tmp_path / f"f{frame}.png"))
+    offered = []
+
+    def from_40_to_47(dialog) -> None:
+        offered.append((dialog.start.value(), dialog.end.value()))
+        qtbot.mouseClick(dialog.from_current, Qt.MouseButton.LeftButton)
+        offered.append((dialog.start.value(), dialog.end.value()))
+        dialog.end.setValue(47)
+        offered.append(dialog.summary.text())
+        qtbot.mouseClick(dialog.buttons.button(QDialogButtonBox.StandardButton.Ok), Qt.MouseButton.LeftButton)
+
+    answer_video_export(qtbot, from_40_to_47)
+    job = window.export_video()
+    assert offered == [(0, n - 1), (40, n - 1), f"8 frames, {8 / window.comparison.motion.fps:.2f} s"]
+    assert job.dialog.maximum() == 8 and "(8 frames: 40 to 47)" in job.dialog.toolTip()  # progress counts the range
+    with qtbot.waitSignal(job.written, timeout=300_000):
+        pass
+    path = tmp_path / "short_iris_tbs_copy.mp4"
+    assert window.statusBar().currentMessage() == f"wrote {path} (8 frames: 40 to 47)"
+    reader = imageio.get_reader(path)
+    assert reader.count_frames() == 8
+    first = reader.get_data(0).astype(int)
+    reader.close()
+    height, width = window.view.interactor.height(), window.view.interactor.width()
+    grid = {frame: imageio.imread(shot)[:height, :, :3].astype(int) for frame, shot in shots.items()}
+    off = {frame: np.abs(first[:height, :width] - image).mean() for frame, image in grid.items()}
+    assert off[40] < 0.5 * off[0]  # the hands of frame 40, not of the clip's first frame
+    band = first[height:height + BAND, :width]
+    captions = {frame: add_caption(np.zeros((0, width, 3), np.uint8), caption_for(window.compare, frame)).astype(int)
+                for frame in (0, 40, 41)}
+    error = {frame: ((band - caption) ** 2).sum() for frame, caption in captions.items()}
+    assert error[40] < min(error[0], error[41])  # "frame 40/...": the clip's own frame number
+
+
+def test_a_backwards_range_cannot_be_exported_and_cancel_writes_nothing(window, qtbot, tmp_path):
+    """From after To: Export disabled, Return does nothing, the dialog says why; Cancel writes no file, says so,
+    and the keyboard goes back to the window. Playback pauses while the user chooses (From the current frame is
+    the frame shown) and plays on after."""
+    from PySide6.QtWidgets import QDialogButtonBox
+    window.settings.setValue("files/export_dir", str(tmp_path))
+    window.activateWindow()
+    qtbot.waitActive(window)
+    window.timeline.set_playing(True)
+    qtbot.waitUntil(lambda: window.timeline.frame > 3, timeout=20_000)
+    seen = []
+
+    def backwards_then_cancel(dialog) -> None:
+        export = dialog.buttons.button(QDialogButtonBox.StandardButton.Ok)
+        seen.append((window.timeline.playing, window.timeline.frame, dialog.from_current.text()))
+        dialog.choose_from_current()
+        dialog.end.setValue(dialog.start.value() + 2)
+        qtbot.mouseClick(dialog.whole_clip, Qt.MouseButton.LeftButton)
+        seen.append((dialog.start.value(), dialog.end.value()))
+        dialog.choose_from_current()
+        dialog.end.setValue(dialog.start.value() - 1)
+        seen.append((export.isEnabled(), dialog.summary.text()))
+        qtbot.keyClick(dialog.end, Qt.Key.Key_Return)
+        seen.append(dialog.isVisible())
+        qtbot.mouseClick(dialog.buttons.button(QDialogButtonBox.StandardButton.Cancel), Qt.MouseButton.LeftButton)
+
+    answer_video_export(qtbot, backwards_then_cancel)
+    assert window.export_video() is None
+    (playing, frame, quick), whole, (enabled, summary), still_up = seen
+    assert not playing and quick == f"From the current frame ({frame})" and whole == (0, window.comparison.n_frames - 1)
+    assert not enabled and summary == f"From ({frame}) is after To ({frame - 1}): nothing to export" and still_up
+    assert window.video_export is None and not [p for p in tmp_path.iterdir() if p.suffix != ".ini"]
+    assert window.statusBar().currentMessage() == "video export cancelled: no file written (short_iris_tbs_copy.mp4)"
+    assert window.timeline.playing
+    qtbot.waitUntil(window.isActiveWindow, timeout=5000)

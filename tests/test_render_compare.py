@@ -58,3 +58,41 @@ def test_gif_delays_keep_the_clips_length_and_no_delay_players_stretch():
     assert len(at_30) == 510 and sum(at_30.values()) == 1700 and set(at_30.values()) == {3, 4}
     at_60 = frame_delays(120, 60.0)
     assert sum(at_60.values()) == 200 and min(at_60.values()) >= MIN_DELAY_CS and len(at_60) == 80
+
+
+def test_render_compare_writes_frames_start_to_end(sample_hands, tmp_path):
+    """--start 30 --end 45: sixteen frames (the end included), the first of them frame 30 of the clip."""
+    motion = synthesize(["fist", "v_sign"], sample_hands["birch"], seed=1, name="two")
+    clip = save_motion(motion, tmp_path / "two.npz")
+    common = ["render", "--motion", str(clip), "--target", "laurel", "--methods", "tbs_copy", "--quiet"]
+    for frame in (0, 30):
+        assert main([*common, "--frame", str(frame), "--out", str(tmp_path / f"f{frame}.png")]) == 0
+    assert main([*common, "--start", "30", "--end", "45", "--out", str(tmp_path / "part.mp4")]) == 0
+    reader = imageio.get_reader(tmp_path / "part.mp4")
+    assert reader.count_frames() == 16
+    first = reader.get_data(0).astype(int)
+    reader.close()
+    at = {frame: imageio.imread(tmp_path / f"f{frame}.png")[..., :3].astype(int) for frame in (0, 30)}
+    height, width = at[30].shape[:2]  # the MP4 padded to 16 pixels
+    off = {frame: np.abs(first[:height, :width] - image).mean() for frame, image in at.items()}
+    assert off[30] < 2.0 and off[0] > 2 * off[30]  # frame 30 (H.264 loses a little), not the clip's first
+    assert main([*common, "--start", "30", "--end", "45", "--out", str(tmp_path / "part.gif")]) == 0
+    assert len(imageio.mimread(tmp_path / "part.gif", memtest=False)) == 16  # a GIF the same (30 fps: none skipped)
+
+
+def test_render_compare_refuses_frames_the_clip_has_not(sample_hands, tmp_path, capsys):
+    """Out of the clip, backwards, or a range for a PNG: one line naming the clip's frame count, nothing written."""
+    motion = synthesize(["fist"], sample_hands["birch"], seed=1, name="one")
+    clip = save_motion(motion, tmp_path / "one.npz")
+    n = motion.n_frames
+    common = ["render", "--motion", str(clip), "--target", "laurel", "--methods", "tbs_copy", "--quiet"]
+    for asked, out, said in ((["--start", "5", "--end", str(n)], "a.mp4", f"frames 5 to {n} are not all in the clip"),
+                             (["--start", "-1"], "b.gif", f"frames -1 to {n - 1} are not all in the clip"),
+                             (["--start", "20", "--end", "10"], "c.mp4", "frames 20 to 10: the first comes after"),
+                             (["--frame", str(n)], "d.png", f"frame {n} is not in the clip"),
+                             (["--start", "2"], "e.png", "--start and --end choose the frames of a video")):
+        assert main([*common, *asked, "--out", str(tmp_path / out)]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("s2h: error: ") and said in err and len(err.strip().splitlines()) == 1
+        assert out == "e.png" or f"has {n} frames (0 to {n - 1})" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["one.npz"]

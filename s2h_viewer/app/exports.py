@@ -1,4 +1,5 @@
-"""Exports of compare mode: a PNG of the grid, an MP4/GIF of the clip, the selected retarget's motion.
+"""Exports of compare mode: a PNG of the grid, an MP4/GIF of the clip or of frames of it, the selected
+retarget's motion.
 Every image carries a caption (clip, frame, selected method and target). The video is rendered off
 screen in a worker thread (its own VTK window), so the window stays live; Cancel stops it between
 frames and nothing is written."""
@@ -44,24 +45,31 @@ def export_screenshot(mode: CompareMode, path: str) -> Path:
     return Path(path)
 
 
+def frames_text(frames: range, n_frames: int) -> str:
+    """'138 frames' for a whole clip of 138, else '81 frames: 40 to 120' (the clip's indices)."""
+    return f"{len(frames)} frames" + ("" if len(frames) == n_frames else f": {frames.start} to {frames[-1]}")
+
+
 class VideoExport(QObject):
-    """One video export in a worker thread: ``written(path)``, ``cancelled()`` or ``failed(message)``
-    arrive on the GUI thread; ``progress(done, total)`` after each frame."""
+    """One video export of ``frames`` of the clip (default: all) in a worker thread: ``written(path)``,
+    ``cancelled()`` or ``failed(message)`` arrive on the GUI thread; ``progress(done, total)`` after each
+    frame, counting the frames asked."""
 
     progress = Signal(int, int)
     written = Signal(object)
     cancelled = Signal()
     failed = Signal(str)
 
-    def __init__(self, mode: CompareMode, path: str, parent: QWidget):
+    def __init__(self, mode: CompareMode, path: str, parent: QWidget, frames: range | None = None):
         super().__init__(parent)
-        self.path = path
-        self._cancel = threading.Event()
         comparison, view = mode.comparison, mode.view
-        captions = {f: caption_for(mode, f) for f in range(comparison.n_frames)}  # the selection now, not later
+        self.path, self.frames = path, range(comparison.n_frames) if frames is None else frames
+        self._cancel = threading.Event()
+        captions = {f: caption_for(mode, f) for f in self.frames}  # the selection now, not later
         size = (view.interactor.width(), view.interactor.height()) if view.interactor is not None else (1400, 900)
         self._job = (comparison, captions, size, view.options)
-        self.dialog = JobProgressDialog(f"Rendering {Path(path).name}...", "Cancel", comparison.n_frames, parent,
+        label = f"Rendering {Path(path).name} ({frames_text(self.frames, comparison.n_frames)})..."
+        self.dialog = JobProgressDialog(label, "Cancel", len(self.frames), parent,
                                         "s2h-viewer: video export")  # non-modal: the timeline stays usable
         self.dialog.canceled.connect(self.cancel)
         self.progress.connect(lambda done, _: self.dialog.setValue(done))
@@ -86,7 +94,7 @@ class VideoExport(QObject):
         comparison, captions, size, options = self._job
         try:
             path = render_comparison(comparison, self.path, size=size, progress=self._frame_done,
-                                     caption=captions.__getitem__, options=options)
+                                     caption=captions.__getitem__, options=options, frames=self.frames)
         except Cancelled:
             self.cancelled.emit()
         except (OSError, ValueError) as exc:

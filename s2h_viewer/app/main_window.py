@@ -470,18 +470,19 @@ class MainWindow(QMainWindow):
         finally:
             self.timeline.set_playing(playing)
 
-    def export_video(self, path: str | None = None) -> exports.VideoExport | None:
-        """Start rendering the clip to a video in the background; the job's signals say how it ended."""
+    def export_video(self, path: str | None = None, frames: range | None = None) -> exports.VideoExport | None:
+        """Start rendering the clip, or ``frames`` of it, to a video in the background; without ``path`` the user
+        chooses the file, then the frames. The job's signals say how it ended."""
         if self.video_export is not None:
             self.error("A video export is running; wait for it or cancel it first.")
             return None
-        path = self._ask_to_save("Export video", "Video (*.mp4 *.gif)", path,
-                                 lambda: exports.suggested_name(self.compare, ".mp4"))
+        if not path:
+            path, frames = self._ask_video() or (None, None)
         if not path:
             return None
-        job = exports.VideoExport(self.compare, path, self)
-        n = self.comparison.n_frames
-        job.written.connect(lambda written: self._wrote(written, f" ({n} frames)"))
+        job = exports.VideoExport(self.compare, path, self, frames)
+        what = f" ({exports.frames_text(job.frames, self.comparison.n_frames)})"
+        job.written.connect(lambda written: self._wrote(written, what))
         name = Path(path).name
         job.dialog.canceled.connect(lambda: self.statusBar().showMessage(  # said at once: the job stops after a frame
             f"cancelling the video export: {name} will not be written..."))
@@ -492,6 +493,28 @@ class MainWindow(QMainWindow):
             signal.connect(self._video_export_ended)
         self.video_export = job
         return job.start()
+
+    def _ask_video(self) -> tuple[str, range] | None:
+        """The file, then the frames (`FrameRangeDialog`) the user chooses; None if they cancel either. Playback
+        pauses meanwhile (the current frame is one of the choices, and must stay the one offered), then plays on."""
+        from s2h_viewer.widgets.frame_range_dialog import FrameRangeDialog
+        playing = self.timeline.playing
+        self.timeline.set_playing(False)
+        try:
+            path = self._ask_to_save("Export video", "Video (*.mp4 *.gif)", None,
+                                     lambda: exports.suggested_name(self.compare, ".mp4"))
+            if not path:
+                return None
+            dialog = FrameRangeDialog(Path(path).name, self.comparison.n_frames, self.comparison.motion.fps,
+                                      self.timeline.frame, self)
+            frames = dialog.frames() if dialog.exec() == QDialog.DialogCode.Accepted else None
+            dialog.deleteLater()
+            if frames is None:
+                self.statusBar().showMessage(f"video export cancelled: no file written ({Path(path).name})", 5000)
+                return None
+            return path, frames
+        finally:
+            self.timeline.set_playing(playing)
 
     def _video_export_ended(self, *_) -> None:
         self.video_export = None

@@ -8,7 +8,7 @@ draws triangles slowly). Every camera is linked.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -377,11 +377,13 @@ def render_comparison(comparison: Comparison, path: str | Path, frame: int | Non
                       size: tuple[int, int] = (1400, 900),
                       progress: Callable[[int, int], None] | None = None,
                       caption: Callable[[int], str] | None = None,
-                      options: ViewOptions = ViewOptions()) -> Path:
-    """Off screen: one frame as PNG (``frame``, default 0), or every frame as MP4/GIF (by suffix).
+                      options: ViewOptions = ViewOptions(), frames: range | None = None) -> Path:
+    """Off screen: one frame as PNG (``frame``, default 0), or ``frames`` (default: every frame) as MP4/GIF
+    (by suffix).
 
-    ``caption(frame)`` adds a line under each image; ``progress(done, total)`` is called after every
-    frame and may raise (``retarget.progress.Cancelled``) to stop: nothing is written then."""
+    ``caption(frame)`` adds a line under each image (``frame`` the clip's index); ``progress(done, total)``
+    counts the images rendered of those asked, is called after every one and may raise
+    (``retarget.progress.Cancelled``) to stop: nothing is written then."""
     from s2h_viewer.io.atomic import atomic_path
     from s2h_viewer.render.caption import add_caption
     from s2h_viewer.render.video import VIDEO_SUFFIXES, write_video
@@ -393,22 +395,25 @@ def render_comparison(comparison: Comparison, path: str | Path, frame: int | Non
     apply_options(plotter, hands, options)
     plotter.show(auto_close=False)
 
-    def image(f: int) -> np.ndarray:
-        for hand in hands:
-            hand.show(f)
-        plotter.render()
-        rgb = np.asarray(plotter.screenshot(return_img=True))[..., :3]
-        if progress:
-            progress(f + 1, comparison.n_frames)
-        return add_caption(rgb, caption(f)) if caption else rgb
+    video = path.suffix.lower() in VIDEO_SUFFIXES
+    shown = (range(comparison.n_frames) if frames is None else frames) if video else range(frame or 0, (frame or 0) + 1)
+
+    def images() -> Iterator[np.ndarray]:
+        for done, f in enumerate(shown, 1):
+            for hand in hands:
+                hand.show(f)
+            plotter.render()
+            rgb = np.asarray(plotter.screenshot(return_img=True))[..., :3]
+            if progress:
+                progress(done, len(shown))
+            yield add_caption(rgb, caption(f)) if caption else rgb
 
     try:
-        if path.suffix.lower() in VIDEO_SUFFIXES:
-            return write_video(path, (image(f) for f in range(comparison.n_frames)), comparison.motion.fps,
-                               comparison.n_frames)
+        if video:
+            return write_video(path, images(), comparison.motion.fps, len(shown))
         from PIL import Image
         with atomic_path(path) as tmp:
-            Image.fromarray(image(frame or 0)).save(tmp, format="PNG")
+            Image.fromarray(next(images())).save(tmp, format="PNG")
         return path
     finally:
         plotter.close()

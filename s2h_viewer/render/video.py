@@ -10,6 +10,7 @@ from pathlib import Path
 import imageio.v2 as imageio
 import numpy as np
 
+from s2h_viewer.errors import FrameRangeError
 from s2h_viewer.io.atomic import atomic_path
 from s2h_viewer.render.gif import GifWriter
 
@@ -35,6 +36,19 @@ def write_video(path: str | Path, frames: Iterable[np.ndarray], fps: float, n_fr
                     gif.append(frame)
                 gif.close()
     return path
+
+
+def frame_range(n_frames: int, start: int | None = None, end: int | None = None, clip: str = "the clip") -> range:
+    """Frames ``start`` to ``end`` of a clip of ``n_frames``, both included (indices from 0, as the timeline
+    counts; missing ends: the clip's); a `FrameRangeError` naming the clip's frame count for any other."""
+    first, last = 0 if start is None else start, n_frames - 1 if end is None else end
+    if not (0 <= first < n_frames and 0 <= last < n_frames):
+        asked = f"frame {first} is not" if first == last else f"frames {first} to {last} are not all"
+        raise FrameRangeError(f"{clip}: {asked} in the clip, which has {n_frames} frames (0 to {n_frames - 1})")
+    if first > last:
+        raise FrameRangeError(f"{clip}: frames {first} to {last}: the first comes after the last; the clip has "
+                              f"{n_frames} frames (0 to {n_frames - 1})")
+    return range(first, last + 1)
 
 
 def _even(frame: np.ndarray) -> np.ndarray:
