@@ -23,9 +23,10 @@ from PySide6.QtTest import QTest  # noqa: E402
 from PySide6.QtWidgets import QPushButton  # noqa: E402
 
 from compare_window import open_compare_window  # noqa: E402
+from grid_text import cell_pixels, inside, text_actors, text_box  # noqa: E402
 from s2h_viewer.hand import topology as topo  # noqa: E402
 from s2h_viewer.render.caption import BAND  # noqa: E402
-from s2h_viewer.render.compare_scene import COLOUR_BAR_SHARE  # noqa: E402
+from s2h_viewer.render.compare_scene import COLOUR_BAR_SHARE, MIN_LABEL_PX  # noqa: E402
 from s2h_viewer.retarget.methods import METHODS  # noqa: E402
 from s2h_viewer.samples import ASSETS_DIR  # noqa: E402
 from s2h_viewer.widgets.asm_heatmap import CELL, LEFT, TOP  # noqa: E402
@@ -1055,16 +1056,20 @@ def test_a_retarget_shown_alone_keeps_the_colour_bar(window, qtbot):
 
 def test_labels_stay_legible_with_five_methods(qtbot, sample_hands, tmp_path):
     """Five methods on a 1000 x 700 window: the labels (method -> target, the scores) were drawn by corner
-    annotations that shrink with their cell, to glyphs 5 pixels high; now each line is as high as ever."""
+    annotations that shrink with their cell, to glyphs 5 pixels high. Their font shrinks with a cell narrower
+    than a score line at LABEL_PX (some 70 pixels here), to MIN_LABEL_PX at least: glyphs 6 pixels high and
+    more, each line whole in its cell."""
     window = open_compare_window(qtbot, sample_hands, tmp_path, methods=tuple(METHODS))
     try:
         image = window.view.grab_rgb()
-        h, w = image.shape[:2]
-        for x0, y0, x1, y1 in window.view.hand_viewports()[:2]:  # the source, the first retarget
-            cell = image[int(round((1 - y1) * h)):int(round((1 - y0) * h)), int(round(x0 * w)):int(round(x1 * w))]
+        for hand in window.view._hands[:2]:  # the source, the first retarget
+            cell = cell_pixels(image, hand.renderer)
             dark = np.flatnonzero((cell[: cell.shape[0] // 3].max(-1) < 110).any(1))  # rows with black text
             lines = np.split(dark, np.flatnonzero(np.diff(dark) > 1) + 1)
-            assert len(lines) >= 1 and len(lines[0]) >= 9, [len(line) for line in lines]  # a line of 13 px text
+            assert len(lines) >= 1 and len(lines[0]) >= 6, [len(line) for line in lines]
+            (actor,) = text_actors(hand.renderer)
+            assert actor.GetTextProperty().GetFontSize() >= MIN_LABEL_PX
+            assert inside(text_box(actor, hand.renderer), cell)
     finally:
         window.close()
 

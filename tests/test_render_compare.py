@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import imageio.v2 as imageio
 import numpy as np
-
 from s2h_viewer.cli import main
 from s2h_viewer.io.npz import save_motion
 from s2h_viewer.motions.synthesis import synthesize
@@ -22,6 +21,23 @@ def test_render_compare_writes_a_frame_and_a_whole_clip(sample_hands, tmp_path):
     frames = imageio.mimread(gif, memtest=False)
     assert len(frames) == motion.n_frames
     assert not np.array_equal(frames[0], frames[len(frames) // 2])  # the hands move
+
+
+def test_a_line_too_wide_is_elided_to_its_longest_start_that_fits():
+    from s2h_viewer.render.compare_scene import ELLIPSIS, elide, text_extent
+    line = "TBS Copy -> generic-hand-left"
+    assert elide(line, 11, 500) == line
+    for width in (60, 100, 140):
+        short = elide(line, 11, width)
+        assert short.endswith(ELLIPSIS) and line.startswith(short[:-1]) and text_extent(short, 11)[0] <= width
+        assert text_extent(line[:len(short)] + ELLIPSIS, 11)[0] > width  # a letter more would not fit
+
+
+def test_the_labels_font_shrinks_with_the_cell_down_to_a_minimum():
+    from s2h_viewer.render.compare_scene import LABEL_PX, MIN_LABEL_PX, label_font
+    sizes = [label_font(side, side)[0] for side in (400, 200, 150, 120, 100, 80, 50)]
+    assert sizes[0] == LABEL_PX and sizes[-1] == MIN_LABEL_PX and sizes == sorted(sizes, reverse=True)
+    assert label_font(400, 400)[1] == 3 and label_font(400, 40)[1] == 1  # a cell too short keeps the title only
 
 
 def test_back_faces_are_skipped_only_where_they_cannot_be_seen(sample_hands):
