@@ -266,6 +266,12 @@ def label_font(width: int, height: int) -> tuple[int, int]:
     return MIN_LABEL_PX, lines
 
 
+def text_band(width: int, height: int) -> int:
+    """Pixels at the top of a ``width`` x ``height`` cell kept for its label: the hand is drawn below them."""
+    px, lines = label_font(width, height)
+    return band_height(lines, px)
+
+
 def elide(line: str, px: int, width: int) -> str:
     """``line`` whole if it fits ``width`` pixels at ``px``, else its longest start that fits with an ellipsis."""
     if text_extent(line, px)[0] <= width:
@@ -370,18 +376,20 @@ CAMERA_PRESETS = {
 
 
 VIEW_ANGLE = 30.0  # degrees, vertical
-FIT_ASPECT = 0.65  # viewport width / height under which a hand's width would not fit at VIEW_ANGLE
+FIT_ASPECT = 0.65  # width / height of a cell's hand part under which a hand's width would not fit at VIEW_ANGLE
 
 
 def fit_view_angle(plotter: pv.Plotter, renderer) -> None:
-    """Widen the shared camera's view angle when ``renderer``'s viewport is narrower than FIT_ASPECT (one
-    target: tall cells), so a hand's width stays in view; VIEW_ANGLE otherwise. Zooming moves the camera,
-    not the angle, so calling this before every render keeps the user's zoom."""
-    width, height = plotter.render_window.GetSize()
-    x0, y0, x1, y1 = renderer.GetViewport()
-    aspect = (x1 - x0) * width / max(1e-9, (y1 - y0) * height)
-    widen = max(1.0, FIT_ASPECT / max(aspect, 1e-6))
+    """Fit the shared camera to ``renderer``'s cell (every hand's cell has its size): the hand drawn below the
+    cell's text band (`text_band`), the picture moved down by the band (the camera's window centre up) and the
+    view angle widened so the part below it shows what the whole cell showed at VIEW_ANGLE; more where that
+    part is narrower than FIT_ASPECT (one target: tall cells), so a hand's width stays in view. Zooming moves
+    the camera, not the angle, so calling this before every render keeps the user's zoom."""
+    width, height = cell_pixels(plotter, renderer)
+    band = min(text_band(width, height), height - 1) / height  # of the cell's height
+    widen = max(1.0, FIT_ASPECT * (1.0 - band) * height / width) / (1.0 - band)
     plotter.camera.view_angle = 2.0 * np.degrees(np.arctan(np.tan(np.radians(VIEW_ANGLE / 2)) * widen))
+    plotter.camera.SetWindowCenter(0.0, band)  # in [-1, 1] over the cell: the hand's part's middle at its centre
 
 
 def set_camera(plotter: pv.Plotter, preset: str, hands: list[HandModel]) -> None:
