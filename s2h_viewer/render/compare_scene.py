@@ -248,6 +248,7 @@ def text_extent(text: str, px: int) -> tuple[int, int]:
     return box[1] - box[0] + 1, box[3] - box[2] + 1
 
 
+@lru_cache(maxsize=64)
 def band_height(lines: int, px: int) -> int:
     """Pixels from a cell's top to below ``lines`` lines of its label at ``px``, with a LABEL_PAD above and below."""
     return text_extent("\n".join([WIDEST_LINE] * lines), px)[1] + 2 * LABEL_PAD
