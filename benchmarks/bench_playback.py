@@ -36,7 +36,7 @@ def playback_once(comparison, display_faces: int | None, size, plain: bool) -> t
     ``plain``: pyvista's defaults instead of the viewer's choices (five-light kit, back faces drawn)."""
     plotter = pv.Plotter(off_screen=True, window_size=size, **grid_layout(comparison))
     plotter.render_window.SetMultiSamples(0)
-    hands = populate(plotter, comparison, display_faces=display_faces)
+    hands, _ = populate(plotter, comparison, display_faces=display_faces)
     if plain:
         plotter.enable_lightkit()  # replaces each subplot's lights
         for hand in hands:

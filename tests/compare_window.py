@@ -1,5 +1,5 @@
-"""The compare window both GUI test modules open: a short clip on birch, iris as the target, TBS Copy
-and ASRN (or ``methods``), its settings in a temporary file, shown and with its first comparison computed
+"""The compare window both GUI test modules open: a short clip on birch, iris as the target (or ``targets``),
+TBS Copy and ASRN (or ``methods``), its settings in a temporary file, shown and with its first comparison computed
 (or, with ``compute=False``, not yet started). ``repeats`` plays the clip that many times over: a test
 that must catch ASM-Opt while it runs (to cancel it, or act beside it) needs seconds of work to catch,
 however fast ASM-Opt gets."""
@@ -19,12 +19,12 @@ from s2h_viewer.motions.synthesis import synthesize
 
 
 def open_compare_window(qtbot, sample_hands, tmp_path, methods: tuple[str, ...] = ("tbs_copy", "asrn"),
-                        compute: bool = True, repeats: int = 1) -> MainWindow:
+                        compute: bool = True, repeats: int = 1, targets: tuple[str, ...] = ("iris",)) -> MainWindow:
     motion = synthesize(["fist", "ok", "v_sign"], sample_hands["birch"], seed=4, name="short")
     if repeats > 1:
         motion = dataclasses.replace(motion, q_tbs=np.tile(motion.q_tbs, (repeats, 1, 1)),
                                      labels=np.tile(motion.labels, repeats))
-    setup = CompareSetup(motion, sample_hands["birch"], [sample_hands["iris"]], list(methods))
+    setup = CompareSetup(motion, sample_hands["birch"], [sample_hands[name] for name in targets], list(methods))
     settings = QSettings(str(tmp_path / "settings.ini"), QSettings.Format.IniFormat)
     settings.setValue("compare/methods", list(methods))
     win = MainWindow(setup, settings)

@@ -23,9 +23,10 @@ from PySide6.QtTest import QTest  # noqa: E402
 from PySide6.QtWidgets import QPushButton  # noqa: E402
 
 from compare_window import open_compare_window  # noqa: E402
+from grid_text import cell_pixels, hand_drawn, inside, intruders, text_actors, text_box  # noqa: E402
 from s2h_viewer.hand import topology as topo  # noqa: E402
 from s2h_viewer.render.caption import BAND  # noqa: E402
-from s2h_viewer.render.compare_scene import COLOUR_BAR_SHARE  # noqa: E402
+from s2h_viewer.render.compare_scene import COLOUR_BAR_SHARE, ELLIPSIS, MIN_LABEL_PX  # noqa: E402
 from s2h_viewer.retarget.methods import METHODS  # noqa: E402
 from s2h_viewer.samples import ASSETS_DIR  # noqa: E402
 from s2h_viewer.widgets.asm_heatmap import CELL, LEFT, TOP  # noqa: E402
@@ -1084,16 +1085,60 @@ def test_a_retarget_shown_alone_keeps_the_colour_bar(window, qtbot):
 
 def test_labels_stay_legible_with_five_methods(qtbot, sample_hands, tmp_path):
     """Five methods on a 1000 x 700 window: the labels (method -> target, the scores) were drawn by corner
-    annotations that shrink with their cell, to glyphs 5 pixels high; now each line is as high as ever."""
+    annotations that shrink with their cell, to glyphs 5 pixels high. Their font shrinks with a cell narrower
+    than a score line at LABEL_PX (some 70 pixels here), to MIN_LABEL_PX at least: glyphs 6 pixels high and
+    more, each line whole in its cell."""
     window = open_compare_window(qtbot, sample_hands, tmp_path, methods=tuple(METHODS))
     try:
         image = window.view.grab_rgb()
-        h, w = image.shape[:2]
-        for x0, y0, x1, y1 in window.view.hand_viewports()[:2]:  # the source, the first retarget
-            cell = image[int(round((1 - y1) * h)):int(round((1 - y0) * h)), int(round(x0 * w)):int(round(x1 * w))]
+        for hand in window.view._hands[:2]:  # the source, the first retarget
+            cell = cell_pixels(image, hand.renderer)
             dark = np.flatnonzero((cell[: cell.shape[0] // 3].max(-1) < 110).any(1))  # rows with black text
             lines = np.split(dark, np.flatnonzero(np.diff(dark) > 1) + 1)
-            assert len(lines) >= 1 and len(lines[0]) >= 9, [len(line) for line in lines]  # a line of 13 px text
+            assert len(lines) >= 1 and len(lines[0]) >= 6, [len(line) for line in lines]
+            (actor,) = text_actors(hand.renderer)
+            assert actor.GetTextProperty().GetFontSize() >= MIN_LABEL_PX
+            assert inside(text_box(actor, hand.renderer), cell)
+    finally:
+        window.close()
+
+
+def test_a_crowded_grid_keeps_each_label_whole_or_elided_in_a_band_clear_of_the_hands(qtbot, sample_hands, tmp_path):
+    """Six targets x five methods on a 1000 x 700 window (cells some 70 x 80 pixels): the titles and scores
+    were cut mid-letter at the cells' edges and drawn over the hands, their skeletons and contact dots. Now
+    each line is whole or a start of it with an ellipsis, inside its cell, in a font no smaller than
+    MIN_LABEL_PX, and nothing but the text is drawn from a cell's top down to the text's bottom."""
+    import dataclasses
+    long_name = "elm_exported_from_a_vendor_rig"
+    hands = {**sample_hands, long_name: dataclasses.replace(sample_hands["elm"], name=long_name)}
+    six = ("iris", "laurel", "kale", "juniper", "hazel", long_name)
+    window = open_compare_window(qtbot, hands, tmp_path, methods=tuple(METHODS), targets=six)
+    try:
+        view = window.view
+        results = window.comparison.results
+        titles = [f"source: {window.comparison.source.name}"] + [
+            f"{METHODS[r.method].label} -> {r.target.name}" for t in six for r in results if r.target.name == t]
+        assert len(view._hands) == 31
+        elided = []
+        for hand, title in zip(view._hands, titles):
+            (actor,) = text_actors(hand.renderer)
+            line = actor.GetInput().split("\n")[0]
+            assert line == title or (line.endswith(ELLIPSIS) and title.startswith(line[:-1])), (line, title)
+            assert actor.GetTextProperty().GetFontSize() >= MIN_LABEL_PX
+            elided += [title] if line != title else []
+        assert {t for t in titles if long_name in t} <= set(elided), elided  # a long name ends in an ellipsis
+        for frame, overlays in ((0, False), (window.timeline.n_frames // 2, False), (40, True)):
+            window.timeline.set_frame(frame)
+            view.set_options(skeleton=overlays, contacts=overlays)
+            image = view.grab_rgb()
+            for renderer in view.plotter.renderers:
+                for actor in text_actors(renderer):
+                    cell, box = cell_pixels(image, renderer), text_box(actor, renderer)
+                    assert inside(box, cell), (actor.GetInput(), box, cell.shape)
+            for hand in view._hands:
+                cell, box = cell_pixels(image, hand.renderer), text_box(text_actors(hand.renderer)[0], hand.renderer)
+                assert intruders(cell, box) == 0, (frame, overlays, text_actors(hand.renderer)[0].GetInput())
+                assert hand_drawn(cell) > 0.05 * cell.shape[0] * cell.shape[1]  # the hand still drawn below
     finally:
         window.close()
 

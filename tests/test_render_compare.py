@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import imageio.v2 as imageio
 import numpy as np
+import pytest
 
+from grid_text import cell_pixels, inside, intruders, text_actors, text_box
 from s2h_viewer.cli import main
 from s2h_viewer.io.npz import save_motion
 from s2h_viewer.motions.synthesis import synthesize
@@ -22,6 +26,67 @@ def test_render_compare_writes_a_frame_and_a_whole_clip(sample_hands, tmp_path):
     frames = imageio.mimread(gif, memtest=False)
     assert len(frames) == motion.n_frames
     assert not np.array_equal(frames[0], frames[len(frames) // 2])  # the hands move
+
+
+LONG_NAME = "laurel_exported_from_a_vendor_rig_with_a_very_long_file_name_v2"
+
+
+@pytest.mark.parametrize("targets, methods", [
+    (("iris", "kale", "juniper", "hazel", "elm", LONG_NAME), ("tbs_copy", "asrn")),  # six short, wide rows
+    (("iris",), ("copy", "tbs_copy", "dm", "asrn")),  # one row of tall, narrow cells
+])
+def test_off_screen_labels_stay_in_their_cells_above_the_hands(sample_hands, targets, methods):
+    """`s2h render --motion`'s grid at 1000 x 700: each label inside its cell (a long target name elided with
+    an ellipsis, not cut at the cell's edge), the font shrunk with a short cell but no smaller than
+    MIN_LABEL_PX, nothing but the text from a cell's top down to the text's bottom, the hand whole below."""
+    import pyvista as pv
+
+    from s2h_viewer.render.compare_scene import ELLIPSIS, LABEL_PX, MIN_LABEL_PX, grid_layout, populate
+    from s2h_viewer.retarget.comparison import build_comparison
+    hands = {**sample_hands, LONG_NAME: dataclasses.replace(sample_hands["laurel"], name=LONG_NAME)}
+    motion = synthesize(["fist", "ok", "v_sign"], sample_hands["birch"], seed=4, name="short")
+    comparison = build_comparison(motion, sample_hands["birch"], [hands[t] for t in targets], list(methods))
+    plotter = pv.Plotter(off_screen=True, window_size=(1000, 700), **grid_layout(comparison))
+    try:
+        posed, _ = populate(plotter, comparison)
+        for hand in posed:
+            hand.show(40)
+        image = plotter.screenshot(return_img=True)
+        fonts = set()
+        for renderer in plotter.renderers:
+            for actor in text_actors(renderer):
+                assert inside(text_box(actor, renderer), cell_pixels(image, renderer)), actor.GetInput()
+                fonts.add(actor.GetTextProperty().GetFontSize())
+        assert min(fonts) >= MIN_LABEL_PX and (min(fonts) < LABEL_PX) == (len(targets) == 6)
+        for hand in posed:
+            (actor,) = text_actors(hand.renderer)
+            cell, box = cell_pixels(image, hand.renderer), text_box(actor, hand.renderer)
+            assert intruders(cell, box) == 0, actor.GetInput()
+            below = (cell[int(np.ceil(cell.shape[0] - box[2])):] < 235).any(-1)
+            assert below.mean() > 0.01 and not below[-1].any()  # the hand drawn below the text, not cut at the bottom
+        titles = [text_actors(h.renderer)[0].GetInput().split("\n")[0] for h in posed]
+        assert [t.endswith(ELLIPSIS) for t in titles] == [LONG_NAME in t or t.endswith(ELLIPSIS) for t in titles]
+        assert all(t.startswith(("TBS Copy -> laurel_", "ASRN -> laurel_")) for t in titles if t.endswith(ELLIPSIS))
+        assert sum(t.endswith(ELLIPSIS) for t in titles) == (2 if len(targets) == 6 else 0)
+    finally:
+        plotter.close()
+
+
+def test_a_line_too_wide_is_elided_to_its_longest_start_that_fits():
+    from s2h_viewer.render.compare_scene import ELLIPSIS, elide, text_extent
+    line = "TBS Copy -> generic-hand-left"
+    assert elide(line, 11, 500) == line
+    for width in (60, 100, 140):
+        short = elide(line, 11, width)
+        assert short.endswith(ELLIPSIS) and line.startswith(short[:-1]) and text_extent(short, 11)[0] <= width
+        assert text_extent(line[:len(short)] + ELLIPSIS, 11)[0] > width  # a letter more would not fit
+
+
+def test_the_labels_font_shrinks_with_the_cell_down_to_a_minimum():
+    from s2h_viewer.render.compare_scene import LABEL_PX, MIN_LABEL_PX, label_font
+    sizes = [label_font(side, side)[0] for side in (400, 200, 150, 120, 100, 80, 50)]
+    assert sizes[0] == LABEL_PX and sizes[-1] == MIN_LABEL_PX and sizes == sorted(sizes, reverse=True)
+    assert label_font(400, 400)[1] == 3 and label_font(400, 40)[1] == 1  # a cell too short keeps the title only
 
 
 def test_back_faces_are_skipped_only_where_they_cannot_be_seen(sample_hands):

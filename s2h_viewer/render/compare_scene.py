@@ -10,11 +10,13 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 import pyvista as pv
 import trimesh
+from vtkmodules.vtkRenderingCore import vtkTextProperty, vtkTextRenderer
 
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.kinematics import HandPose
@@ -30,7 +32,15 @@ ERROR_COLOURMAP = "plasma"
 DISPLAY_FACES = 10_000
 PLAYING_FACES = 3_000  # while the window plays: a third of the triangles, a quarter less time per frame
 COLOUR_BAR_SHARE = 0.065  # of the grid's width: the colour bar's column, however many hand columns
-LABEL_PX = 13  # the grid's labels' font size, in pixels
+LABEL_PX = 13  # the grid's labels' font size, in pixels, where their cell has room for it
+MIN_LABEL_PX = 9  # and at least, in small cells: smaller glyphs are no longer read at a glance
+LABEL_PAD = 4  # pixels between a label and its cell's top and left edges (and the band's bottom)
+BAND_SHARE = 0.35  # of a cell's height: the font shrinks until the labels' band fits in it
+MAX_BAND_SHARE = 0.45  # at most: a cell too short for every line even at MIN_LABEL_PX leaves out the last ones
+LABEL_LINES = 3  # a retarget's label: method -> target, S_palm, S_finger
+WIDEST_LINE = "S_finger 0.000"  # the widest line the font shrinks to keep whole (longer ones are elided)
+ELLIPSIS = "\u2026"
+TEXT_DPI = 72  # VTK's render windows' default: a font size in points is then in pixels
 CONTACT_COLOUR = "#1a9850"
 LOST_COLOUR = "#ff1f1f"
 #: each contact pair (``semantics.contacts.CONTACT_PAIRS``) as two indices into ``contact_sites``.
@@ -186,21 +196,116 @@ def plain_text() -> None:
     """Draw every VTK text as it is written: by default VTK hands a string holding '|' or '$' to its MathText
     backend, which makes '|' a column break (an FBX take "Armature|counting" read "Armature   counting")."""
     import vtkmodules.vtkRenderingFreeType  # noqa: F401  (registers the text renderer GetInstance returns)
-    from vtkmodules.vtkRenderingCore import vtkTextRenderer
     vtkTextRenderer.GetInstance().SetDefaultBackend(vtkTextRenderer.FreeType)
 
 
-def add_label(plotter: pv.Plotter, text: str) -> None:
-    """Text at the top left of the current subplot, LABEL_PX pixels high whatever the cell's size (pyvista's
-    corner annotation scales its font with the viewport: five methods made it unreadably small)."""
-    label = plotter.add_text(text, position=(0.02, 0.98), viewport=True, color="black")
-    label.prop.font_size = LABEL_PX
-    label.prop.SetVerticalJustificationToTop()
+@dataclass
+class CellLabel:
+    """A cell's text at its top left: the full text kept, drawn in the cell's font size (`label_font`) with each
+    line elided to the cell's width, so a long name ends in an ellipsis instead of being cut at the cell's edge."""
+
+    renderer: pv.Renderer
+    actor: pv.Text
+    text: str
+    fitted: tuple = ()  # the cell's size and the font it was last fitted to
+
+    def fit(self, width: int, height: int, font: tuple[int, int]) -> None:
+        """Draw it in a ``width`` x ``height`` pixel cell with ``font`` (`label_font`'s size and lines kept)."""
+        if (width, height, font) == self.fitted:
+            return
+        self.fitted = (width, height, font)
+        px, lines = font
+        self.actor.prop.font_size = px
+        kept = self.text.split("\n")[:lines]
+        self.actor.SetInput("\n".join(elide(line, px, width - 2 * LABEL_PAD) for line in kept))
+        self.actor.SetPosition(LABEL_PAD / width, 1.0 - LABEL_PAD / height)
+
+
+def add_label(plotter: pv.Plotter, text: str) -> CellLabel:
+    """Text at the top left of the current subplot, in pixels whatever the cell's size (pyvista's corner
+    annotation scales its font with the viewport: five methods made it unreadably small); `CellLabel.fit` sizes it."""
+    actor = plotter.add_text(text, position=(0.02, 0.98), viewport=True, color="black")
+    actor.prop.font_size = LABEL_PX
+    actor.prop.SetFontFamilyToArial()  # the family `text_extent` measures
+    actor.prop.SetVerticalJustificationToTop()
+    return CellLabel(plotter.renderer, actor, text)
+
+
+@lru_cache(maxsize=16)
+def _text_property(px: int) -> vtkTextProperty:
+    """A text property as the labels': Arial at ``px`` pixels (VTK's default line spacing)."""
+    prop = vtkTextProperty()
+    prop.SetFontFamilyToArial()
+    prop.SetFontSize(px)
+    return prop
+
+
+def text_extent(text: str, px: int) -> tuple[int, int]:
+    """Width and height in pixels of ``text`` at ``px`` pixels, as VTK will draw it (its own glyph measure)."""
+    plain_text()
+    box = [0, 0, 0, 0]
+    vtkTextRenderer.GetInstance().GetBoundingBox(_text_property(px), text, box, TEXT_DPI)
+    return box[1] - box[0] + 1, box[3] - box[2] + 1
+
+
+@lru_cache(maxsize=64)
+def band_height(lines: int, px: int) -> int:
+    """Pixels from a cell's top to below ``lines`` lines of its label at ``px``, with a LABEL_PAD above and below."""
+    return text_extent("\n".join([WIDEST_LINE] * lines), px)[1] + 2 * LABEL_PAD
+
+
+@lru_cache(maxsize=256)
+def label_font(width: int, height: int) -> tuple[int, int]:
+    """The labels' font size and lines kept in a ``width`` x ``height`` pixel cell: the largest size up to
+    LABEL_PX whose widest line fits the width and whose band BAND_SHARE of the height; else MIN_LABEL_PX with
+    the lines whose band fits MAX_BAND_SHARE (the title at least), so the hand keeps most of a small cell."""
+    for px in range(LABEL_PX, MIN_LABEL_PX - 1, -1):
+        if (text_extent(WIDEST_LINE, px)[0] <= width - 2 * LABEL_PAD
+                and band_height(LABEL_LINES, px) <= BAND_SHARE * height):
+            return px, LABEL_LINES
+    lines = next((n for n in range(LABEL_LINES, 1, -1) if band_height(n, MIN_LABEL_PX) <= MAX_BAND_SHARE * height), 1)
+    return MIN_LABEL_PX, lines
+
+
+def text_band(width: int, height: int) -> int:
+    """Pixels at the top of a ``width`` x ``height`` cell kept for its label: the hand is drawn below them."""
+    px, lines = label_font(width, height)
+    return band_height(lines, px)
+
+
+def elide(line: str, px: int, width: int) -> str:
+    """``line`` whole if it fits ``width`` pixels at ``px``, else its longest start that fits with an ellipsis."""
+    if text_extent(line, px)[0] <= width:
+        return line
+    low, high = 0, len(line)  # the longest start that fits with the ellipsis: binary search on its length
+    while low < high:
+        mid = (low + high + 1) // 2
+        low, high = (mid, high) if text_extent(line[:mid].rstrip() + ELLIPSIS, px)[0] <= width else (low, mid - 1)
+    return line[:low].rstrip() + ELLIPSIS
+
+
+def cell_pixels(plotter: pv.Plotter, renderer: pv.Renderer) -> tuple[int, int]:
+    """The width and height in pixels of ``renderer``'s viewport in the plotter's window now."""
+    width, height = plotter.render_window.GetSize()
+    x0, y0, x1, y1 = renderer.GetViewport()
+    return max(1, round((x1 - x0) * width)), max(1, round((y1 - y0) * height))
+
+
+def fit_labels(plotter: pv.Plotter, labels: list[CellLabel]) -> None:
+    """The drawn labels to their cells' size now (the window's size and solo change it), in one font: the
+    smallest cell's (the grid's cells differ by a pixel of rounding, the legend's may span rows)."""
+    drawn = [(label, cell_pixels(plotter, label.renderer)) for label in labels if label.renderer.GetDraw()]
+    if drawn:
+        font = label_font(min(w for _, (w, _) in drawn), min(h for _, (_, h) in drawn))
+        for label, (width, height) in drawn:
+            label.fit(width, height, font)
 
 
 def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
-             display_faces: int | None = DISPLAY_FACES, playing_faces: int | None = None) -> list[PosedHand]:
-    """Fill a plotter made with ``**grid_layout(comparison)``; returns the hands to update per frame.
+             display_faces: int | None = DISPLAY_FACES,
+             playing_faces: int | None = None) -> tuple[list[PosedHand], list[CellLabel]]:
+    """Fill a plotter made with ``**grid_layout(comparison)``; returns the hands to update per frame and the
+    cells' labels, fitted to the window's size now (`fit_labels` again when it changes).
     ``playing_faces``: each skin also at that many faces, drawn while playing (`PosedHand.set_playing`)."""
     plain_text()
     lighter: dict[tuple[int, int | None], HandModel] = {}
@@ -220,7 +325,7 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
         panels += [((row, 1 + k), r.target, r.pose, r.joint_error, source_contacts,
                     f"{METHODS[r.method].label} -> {r.target.name}\nS_palm {r.scores.s_palm:.3f}\n"
                     f"S_finger {r.scores.s_finger:.3f}") for k, r in enumerate(results)]
-    hands = []
+    hands, labels = [], []
     for cell, hand, pose, error, expected, label in panels:
         plotter.subplot(*cell)
         plotter.set_background("white")
@@ -231,13 +336,13 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
         posed.overlay = Overlays(plotter, hand, pose, expected)
         posed.renderer = plotter.renderer
         hands.append(posed)
-        add_label(plotter, label)
+        labels.append(add_label(plotter, label))
     below = source_cell_below(comparison)
     if below is not None:
         plotter.subplot(*below)
         plotter.set_background("white")
-        add_label(plotter, f"clip: {comparison.motion.name}\n{comparison.n_frames} frames at "
-                           f"{comparison.motion.fps:g} fps")
+        labels.append(add_label(plotter, f"clip: {comparison.motion.name}\n{comparison.n_frames} frames at "
+                                         f"{comparison.motion.fps:g} fps"))
     coloured = next((h.error_actor for h in hands if h.error_actor is not None), None)
     plotter.subplot(0, plotter.shape[1] - 1)
     plotter.set_background("white")
@@ -247,8 +352,9 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
                                      color="black", n_labels=4, fmt="%.2f")
         bar.SetVerticalTitleSeparation(12)  # pixels: the title clear of the top label, not over it
     plotter.link_views()
+    fit_labels(plotter, labels)
     set_camera(plotter, "default", [h.hand for h in hands])
-    return hands
+    return hands, labels
 
 
 def colour_bar_beside_solo(plotter: pv.Plotter) -> None:
@@ -271,18 +377,20 @@ CAMERA_PRESETS = {
 
 
 VIEW_ANGLE = 30.0  # degrees, vertical
-FIT_ASPECT = 0.65  # viewport width / height under which a hand's width would not fit at VIEW_ANGLE
+FIT_ASPECT = 0.65  # width / height of a cell's hand part under which a hand's width would not fit at VIEW_ANGLE
 
 
 def fit_view_angle(plotter: pv.Plotter, renderer) -> None:
-    """Widen the shared camera's view angle when ``renderer``'s viewport is narrower than FIT_ASPECT (one
-    target: tall cells), so a hand's width stays in view; VIEW_ANGLE otherwise. Zooming moves the camera,
-    not the angle, so calling this before every render keeps the user's zoom."""
-    width, height = plotter.render_window.GetSize()
-    x0, y0, x1, y1 = renderer.GetViewport()
-    aspect = (x1 - x0) * width / max(1e-9, (y1 - y0) * height)
-    widen = max(1.0, FIT_ASPECT / max(aspect, 1e-6))
+    """Fit the shared camera to ``renderer``'s cell (every hand's cell has its size): the hand drawn below the
+    cell's text band (`text_band`), the picture moved down by the band (the camera's window centre up) and the
+    view angle widened so the part below it shows what the whole cell showed at VIEW_ANGLE; more where that
+    part is narrower than FIT_ASPECT (one target: tall cells), so a hand's width stays in view. Zooming moves
+    the camera, not the angle, so calling this before every render keeps the user's zoom."""
+    width, height = cell_pixels(plotter, renderer)
+    band = min(text_band(width, height), height - 1) / height  # of the cell's height
+    widen = max(1.0, FIT_ASPECT * (1.0 - band) * height / width) / (1.0 - band)
     plotter.camera.view_angle = 2.0 * np.degrees(np.arctan(np.tan(np.radians(VIEW_ANGLE / 2)) * widen))
+    plotter.camera.SetWindowCenter(0.0, band)  # in [-1, 1] over the cell: the hand's part's middle at its centre
 
 
 def set_camera(plotter: pv.Plotter, preset: str, hands: list[HandModel]) -> None:
@@ -391,7 +499,7 @@ def render_comparison(comparison: Comparison, path: str | Path, frame: int | Non
     path = Path(path)
     plotter = pv.Plotter(off_screen=True, window_size=size, **grid_layout(comparison))
     plotter.render_window.SetMultiSamples(0)
-    hands = populate(plotter, comparison)
+    hands, _ = populate(plotter, comparison)
     apply_options(plotter, hands, options)
     plotter.show(auto_close=False)
 

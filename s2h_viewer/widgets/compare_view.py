@@ -21,8 +21,8 @@ from PySide6.QtCore import QEvent, QObject, Signal
 from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
-from s2h_viewer.render.compare_scene import (PLAYING_FACES, PosedHand, PosedSkin, ViewOptions, apply_options,
-                                             colour_bar_beside_solo, fit_view_angle,
+from s2h_viewer.render.compare_scene import (PLAYING_FACES, CellLabel, PosedHand, PosedSkin, ViewOptions,
+                                             apply_options, colour_bar_beside_solo, fit_labels, fit_view_angle,
                                              grid_layout, populate)
 from s2h_viewer.retarget.comparison import Comparison
 from s2h_viewer.widgets.vtk_widget import PlotterWidget, window_plotter
@@ -45,6 +45,7 @@ class CompareView(QWidget):
         self.plotter: pv.Plotter | None = None
         self.comparison: Comparison | None = None
         self._hands: list[PosedHand] = []
+        self._labels: list[CellLabel] = []
         self.options = ViewOptions()
         self.solo = -1
         self._viewports: list[tuple[float, ...]] = []
@@ -77,7 +78,8 @@ class CompareView(QWidget):
             self.interactor.show()
             self._layout.activate()
         self.interactor.Initialize()
-        self._hands = populate(self.plotter, comparison, self.options.opacity, playing_faces=PLAYING_FACES)
+        self._hands, self._labels = populate(self.plotter, comparison, self.options.opacity,
+                                             playing_faces=PLAYING_FACES)
         self._viewports = [tuple(r.GetViewport()) for r in self.plotter.renderers]
         self.solo = -1
         self._choose_skins()
@@ -105,7 +107,7 @@ class CompareView(QWidget):
 
     def _render_starts(self) -> None:
         """The render window starts drawing: the worker poses the frame wanted next meanwhile."""
-        self._fit_camera()
+        self._fit_cells()
         frame, self._wanted = self._wanted, None
         if frame is None or not self._hands or (self._ahead is not None and self._ahead[0] == frame):
             return
@@ -121,9 +123,10 @@ class CompareView(QWidget):
         self.prefetched += 1
         return ahead[1].result()
 
-    def _fit_camera(self) -> None:
-        """Before each render: the camera's view angle for the hand viewports' shape now (the widget's size and
-        solo change it), so a hand's width stays in view in tall cells."""
+    def _fit_cells(self) -> None:
+        """Before each render: the labels and the camera for the cells' size now (the widget's size and solo
+        change it): each label's font and elision, the hand below the text band and in view in tall cells."""
+        fit_labels(self.plotter, self._labels)
         shown = next((h.renderer for h in self._hands if h.renderer.GetDraw()), None)
         if shown is not None:
             fit_view_angle(self.plotter, shown)
@@ -205,7 +208,7 @@ class CompareView(QWidget):
             self.interactor.close_plotter()
             self.interactor.deleteLater()
             self.interactor = self.plotter = None
-            self._hands = []
+            self._hands, self._labels = [], []
             self._ahead = self._wanted = None
 
     def closeEvent(self, event) -> None:
