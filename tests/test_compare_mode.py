@@ -26,7 +26,7 @@ from compare_window import open_compare_window  # noqa: E402
 from grid_text import cell_pixels, hand_drawn, inside, intruders, text_actors, text_box  # noqa: E402
 from s2h_viewer.hand import topology as topo  # noqa: E402
 from s2h_viewer.render.caption import BAND  # noqa: E402
-from s2h_viewer.render.compare_scene import COLOUR_BAR_SHARE, ELLIPSIS, MIN_LABEL_PX  # noqa: E402
+from s2h_viewer.render.compare_scene import COLOUR_BAR_SHARE, ELLIPSIS, MIN_LABEL_PX, OVERLAY_PX  # noqa: E402
 from s2h_viewer.retarget.methods import METHODS  # noqa: E402
 from s2h_viewer.samples import ASSETS_DIR  # noqa: E402
 from s2h_viewer.widgets.asm_heatmap import CELL, LEFT, TOP  # noqa: E402
@@ -1139,6 +1139,8 @@ def test_a_crowded_grid_keeps_each_label_whole_or_elided_in_a_band_clear_of_the_
                 cell, box = cell_pixels(image, hand.renderer), text_box(text_actors(hand.renderer)[0], hand.renderer)
                 assert intruders(cell, box) == 0, (frame, overlays, text_actors(hand.renderer)[0].GetInput())
                 assert hand_drawn(cell) > 0.05 * cell.shape[0] * cell.shape[1]  # the hand still drawn below
+                if overlays:  # dots sized for the cell: the default scene's 16 pixels hid a small cell's hand
+                    assert 5 <= hand.overlay.actors[1].prop.point_size <= OVERLAY_PX[2] * min(cell.shape[:2]) / 250
     finally:
         window.close()
 

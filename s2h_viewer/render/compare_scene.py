@@ -42,6 +42,10 @@ WIDEST_LINE = "S_finger 0.000"  # the widest line the font shrinks to keep whole
 ELLIPSIS = "\u2026"
 TEXT_DPI = 72  # VTK's render windows' default: a font size in points is then in pixels
 CONTACT_COLOUR = "#1a9850"
+#: the overlays' pixel sizes (bones, contact links, pad dots) in a cell OVERLAY_CELL pixels on its short side or
+#: more; smaller cells scale them down (at least 1, 2, 5): fixed dots would hide a small cell's fingers
+OVERLAY_PX = (3, 8, 16)
+OVERLAY_CELL = 300
 LOST_COLOUR = "#ff1f1f"
 #: each contact pair (``semantics.contacts.CONTACT_PAIRS``) as two indices into ``contact_sites``.
 PAIR_SITES = np.array([[SITES.index(a), SITES.index(b)] for a, b in CONTACT_PAIRS], dtype=np.int64)
@@ -291,6 +295,13 @@ def cell_pixels(plotter: pv.Plotter, renderer: pv.Renderer) -> tuple[int, int]:
     return max(1, round((x1 - x0) * width)), max(1, round((y1 - y0) * height))
 
 
+def fit_overlays(plotter: pv.Plotter, hands: list["PosedHand"]) -> None:
+    """Each drawn hand's overlays to its cell's size now (`Overlays.fit`)."""
+    for hand in hands:
+        if hand.overlay is not None and hand.renderer.GetDraw():
+            hand.overlay.fit(min(cell_pixels(plotter, hand.renderer)))
+
+
 def fit_labels(plotter: pv.Plotter, labels: list[CellLabel]) -> None:
     """The drawn labels to their cells' size now (the window's size and solo change it), in one font: the
     smallest cell's (the grid's cells differ by a pixel of rounding, the legend's may span rows)."""
@@ -353,6 +364,7 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
         bar.SetVerticalTitleSeparation(12)  # pixels: the title clear of the top label, not over it
     plotter.link_views()
     fit_labels(plotter, labels)
+    fit_overlays(plotter, hands)
     set_camera(plotter, "default", [h.hand for h in hands])
     return hands, labels
 
@@ -420,13 +432,24 @@ class Overlays:
         self.sites = to_view(hand, contact_sites(hand, pose))  # (T, 6, 3)
         self.bones = skeleton(hand, pose, 0)
         self.links, self.lost_links = pv.PolyData(self.sites[0]), pv.PolyData(self.sites[0])
-        self.actors = [plotter.add_mesh(self.bones, color=BONE_COLOUR, line_width=3, reset_camera=False),
-                       plotter.add_mesh(self.links, color=CONTACT_COLOUR, line_width=8, point_size=16,
+        bone, link, dot = OVERLAY_PX
+        self.actors = [plotter.add_mesh(self.bones, color=BONE_COLOUR, line_width=bone, reset_camera=False),
+                       plotter.add_mesh(self.links, color=CONTACT_COLOUR, line_width=link, point_size=dot,
                                         render_points_as_spheres=True, reset_camera=False),
-                       plotter.add_mesh(self.lost_links, color=LOST_COLOUR, line_width=8, point_size=16,
+                       plotter.add_mesh(self.lost_links, color=LOST_COLOUR, line_width=link, point_size=dot,
                                         render_points_as_spheres=True, reset_camera=False)]
         self.show_skeleton = self.show_contacts = False
         self._update_visibility()
+
+    def fit(self, short_side: int) -> None:
+        """Bones, links and dots sized for a cell ``short_side`` pixels on its short side (`OVERLAY_PX`)."""
+        scale = min(1.0, short_side / OVERLAY_CELL)
+        bone, link, dot = (max(least, round(px * scale)) for px, least in zip(OVERLAY_PX, (1, 2, 5)))
+        for actor, width, size in zip(self.actors, (bone, link, link), (None, dot, dot)):
+            if actor.prop.line_width != width:  # set only when it changes: this runs before every render
+                actor.prop.line_width = width
+            if size is not None and actor.prop.point_size != size:
+                actor.prop.point_size = size
 
     def set_visible(self, skeleton_on: bool, contacts_on: bool) -> None:
         self.show_skeleton, self.show_contacts = skeleton_on, contacts_on

@@ -22,8 +22,8 @@ from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
 from s2h_viewer.render.compare_scene import (PLAYING_FACES, CellLabel, PosedHand, PosedSkin, ViewOptions,
-                                             apply_options, colour_bar_beside_solo, fit_labels, fit_view_angle,
-                                             grid_layout, populate)
+                                             apply_options, colour_bar_beside_solo, fit_labels, fit_overlays,
+                                             fit_view_angle, grid_layout, populate)
 from s2h_viewer.retarget.comparison import Comparison
 from s2h_viewer.widgets.vtk_widget import PlotterWidget, window_plotter
 
@@ -127,6 +127,7 @@ class CompareView(QWidget):
         """Before each render: the labels and the camera for the cells' size now (the widget's size and solo
         change it): each label's font and elision, the hand below the text band and in view in tall cells."""
         fit_labels(self.plotter, self._labels)
+        fit_overlays(self.plotter, self._hands)
         shown = next((h.renderer for h in self._hands if h.renderer.GetDraw()), None)
         if shown is not None:
             fit_view_angle(self.plotter, shown)
