@@ -524,6 +524,25 @@ def test_contact_overlay_links_touching_pads_and_marks_lost_contacts(window):
     assert not source.actors[1].visibility
 
 
+@pytest.mark.parametrize("driver_flips", [True, False])
+def test_the_view_shows_the_frame_upright_whoever_flips_it(window, driver_flips, monkeypatch):
+    """The widget shows exactly what VTK drew (its screenshot path), top row first: read so by the driver
+    (Mesa's pack invert, here under Xvfb) or flipped in numpy where a driver cannot."""
+    from s2h_viewer.widgets import vtk_widget
+    if driver_flips:
+        assert vtk_widget.TOP_ROW_FIRST.begin(), "llvmpipe reads top row first"
+        vtk_widget.TOP_ROW_FIRST.end()
+    else:
+        monkeypatch.setattr(vtk_widget.TOP_ROW_FIRST, "supported", False)
+    view = window.view
+    view.set_solo(1)  # one hand at the top of a white view: upside down it would be at the bottom
+    view.interactor.render()
+    shown = view.interactor.grab().toImage().convertToFormat(QImage.Format.Format_RGB888)
+    pixels = np.frombuffer(shown.constBits(), np.uint8).reshape(shown.height(), shown.bytesPerLine())
+    pixels = pixels[:, :3 * shown.width()].reshape(shown.height(), shown.width(), 3)
+    np.testing.assert_array_equal(pixels, view.grab_rgb())
+
+
 def test_heatmap_tooltip_names_the_joint_pair(window):
     heatmap = window.heatmap
     row, column = topo.FINGER_JOINT_NAMES.index("index_tip"), topo.N_FINGER_JOINTS + 2
