@@ -510,6 +510,34 @@ def test_error_curve_marks_the_worst_frames_and_a_click_jumps(window, qtbot):
     assert window.timeline.frame == target and curve.frame == target
 
 
+def test_a_jump_while_playing_plays_on_from_the_frame_jumped_to(window, qtbot):
+    """Home, a click on the error curve, the frame box: while playing the clock went on from the frame shown
+    before the jump, so playback sprang back there at the next tick (a user test found every jump ignored)."""
+    timeline, curve = window.timeline, window.compare.curve
+    window.activateWindow()
+    qtbot.waitUntil(lambda: window.isActiveWindow(), timeout=5000)
+
+    n = timeline.n_frames
+
+    def jumps_to(jump, frame: int) -> None:
+        qtbot.waitUntil(lambda: abs(timeline.frame - frame) > n // 5, timeout=20_000)  # played far from it
+        jump()
+        started = time.perf_counter()
+        qtbot.wait(400)
+        elapsed = time.perf_counter() - started
+        assert frame <= timeline.frame <= frame + elapsed * timeline.clip_fps + 2, (frame, timeline.frame)
+
+    timeline.set_frame(n // 2)
+    timeline.set_playing(True)
+    jumps_to(lambda: qtbot.keyClick(window, Qt.Key.Key_Home), 0)
+    x = int(round(curve._x(n // 2)))
+    jumps_to(lambda: qtbot.mouseClick(curve, Qt.MouseButton.LeftButton, pos=QPoint(x, curve.height() // 2)),
+             curve.frame_at(x))
+    jumps_to(lambda: timeline.spin.setValue(n // 5), n // 5)
+    assert timeline.playing
+    timeline.set_playing(False)
+
+
 def test_contact_overlay_links_touching_pads_and_marks_lost_contacts(window):
     window.contact_overlay.trigger()
     source, target = window.view._hands[0].overlay, window.view._hands[1].overlay

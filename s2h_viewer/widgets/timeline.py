@@ -170,8 +170,9 @@ class Timeline(QWidget):
         if self.playing:
             self._timer.start(self._tick_interval())
 
-    def _restart_clock(self) -> None:
-        self._anchor = (time.perf_counter(), self.frame)
+    def _restart_clock(self, frame: int | None = None) -> None:
+        """Play on from ``frame`` (default: the frame shown) as of now."""
+        self._anchor = (time.perf_counter(), self.frame if frame is None else frame)
 
     def _readout_text(self, frame: int) -> str:
         return frame_readout(frame, self.n_frames, self.clip_fps)
@@ -179,7 +180,7 @@ class Timeline(QWidget):
     def _set_from_widget(self, frame: int) -> None:
         """The slider or the spin box moved (a person, or `set_frame`): while playing, play on from there."""
         if self.playing:
-            self._restart_clock()
+            self._restart_clock(frame)  # from the frame asked: the one shown is still the old one
         self._show(frame)
 
     def _show(self, frame: int) -> None:
