@@ -571,6 +571,15 @@ def test_the_view_shows_the_frame_upright_whoever_flips_it(window, driver_flips,
     np.testing.assert_array_equal(pixels, view.grab_rgb())
 
 
+def test_the_heatmap_legend_stays_under_the_matrix_in_a_small_window(window, qtbot):
+    """At 1000 x 700 the wrapped legend got less height than its lines and was drawn over the bottom rows."""
+    window.resize(1000, 700)
+    heatmap = window.heatmap
+    qtbot.waitUntil(lambda: window.width() == 1000, timeout=5000)
+    qtbot.waitUntil(lambda: heatmap.legend.geometry().top() > heatmap.matrix.geometry().bottom(), timeout=5000)
+    assert heatmap.legend.height() >= heatmap.legend.heightForWidth(heatmap.legend.width())
+
+
 def test_heatmap_tooltip_names_the_joint_pair(window):
     heatmap = window.heatmap
     row, column = topo.FINGER_JOINT_NAMES.index("index_tip"), topo.N_FINGER_JOINTS + 2

@@ -113,7 +113,9 @@ class AsmHeatmap(QWidget):
         self.legend = QLabel(f"rows: the {topo.N_FINGER_JOINTS} finger joints; columns: the same 20, then "
                              f"{topo.N_ANCHORS} palm anchors. Colour: 1 - cos, {ERROR_RANGE[0]:g} (dark) to "
                              f"{ERROR_RANGE[1]:g}+ (bright); grey: masked. Hover a cell for its joint pair.")
-        self.legend.setWordWrap(True)
+        self.legend.setWordWrap(True)  # as wide as the matrix, and as tall as its lines then need: a layout
+        self.legend.setFixedWidth(self.matrix.width())  # gives a wrapped label too little height, drawing it
+        self.legend.setMinimumHeight(self.legend.heightForWidth(self.matrix.width()))  # over the matrix
         layout = QVBoxLayout(self)
         for widget in (self.title, self.matrix, self.legend):
             layout.addWidget(widget)
