@@ -22,7 +22,7 @@ from PySide6.QtGui import QImage  # noqa: E402
 from PySide6.QtTest import QTest  # noqa: E402
 from PySide6.QtWidgets import QPushButton  # noqa: E402
 
-from compare_window import open_compare_window  # noqa: E402
+from compare_window import open_compare_window, when_shown  # noqa: E402
 from grid_text import cell_pixels, hand_drawn, inside, intruders, text_actors, text_box  # noqa: E402
 from s2h_viewer.hand import topology as topo  # noqa: E402
 from s2h_viewer.render.caption import BAND  # noqa: E402
@@ -180,6 +180,20 @@ def test_add_and_remove_a_target(window, qtbot):
     assert [a.text() for a in window.targets_menu.actions()] == ["Remove laurel"]
     assert not window.targets_menu.actions()[0].isEnabled()  # the last target stays: nothing to compare without
     assert window.scores.rowCount() == 2 and len(window.view._hands) == 3
+
+
+def test_a_hand_that_is_a_target_already_is_not_added_twice(window, qtbot):
+    from PySide6.QtWidgets import QMessageBox
+    said = []
+    when_shown(QMessageBox, lambda box: (said.append(box.text()), box.accept()))
+    window.add_target_file(str(ASSETS_DIR / "hands" / "iris.npz"))  # iris, the window's target, loaded again
+    qtbot.waitUntil(lambda: bool(said), timeout=10_000)
+    assert said[0].startswith("iris is a target already")
+    assert [t.name for t in window.setup.targets] == ["iris"] and not window.compare.queue.pending()
+    assert [a.text() for a in window.targets_menu.actions()] == ["Remove iris"]
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.add_target_file(str(ASSETS_DIR / "hands" / "laurel.npz"))  # another hand is added as before
+    assert [t.name for t in window.setup.targets] == ["iris", "laurel"]
 
 
 def test_undoing_a_removal_brings_the_target_back_selected(window, qtbot):
@@ -684,7 +698,6 @@ def test_a_recent_file_that_is_gone_leaves_the_menu_with_a_dialog(window, qtbot,
     import shutil
     from PySide6.QtWidgets import QMessageBox
 
-    from compare_window import when_shown
     laurel = shutil.copy(ASSETS_DIR / "hands" / "laurel.npz", tmp_path / "laurel.npz")
     with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
         window.add_target_file(str(laurel))
@@ -715,7 +728,6 @@ def test_double_click_solo_selects_that_retarget(window, qtbot):
 def test_export_dialogs_start_in_the_export_folder_with_a_suggested_name(window, qtbot, tmp_path, monkeypatch):
     from PySide6.QtWidgets import QFileDialog
 
-    from compare_window import when_shown
     work = tmp_path / "work"
     work.mkdir()
     monkeypatch.chdir(work)  # no export yet: the working directory
@@ -762,7 +774,6 @@ def test_a_second_job_dialog_stacks_above_the_first_at_the_bottom_of_the_window(
 def test_quitting_during_a_video_export_asks_and_never_leaves_a_partial_file(window, qtbot, tmp_path):
     from PySide6.QtWidgets import QMessageBox
 
-    from compare_window import when_shown
     asked = []
 
     def answer(button: str):
@@ -799,7 +810,6 @@ def test_quitting_during_a_video_export_asks_and_never_leaves_a_partial_file(win
 def test_quitting_while_a_video_export_ends_quits_once_it_is_written(window, qtbot, tmp_path):
     from PySide6.QtWidgets import QMessageBox
 
-    from compare_window import when_shown
     job = window.export_video(str(tmp_path / "short.gif"))
     with qtbot.waitSignal(job.progress, timeout=60_000):
         pass
@@ -878,7 +888,6 @@ def test_a_long_target_name_is_elided_and_every_score_column_stays_in_view(windo
 def test_a_png_asked_for_while_playing_is_the_frame_named(window, qtbot, tmp_path):
     from PySide6.QtWidgets import QFileDialog
 
-    from compare_window import when_shown
     window.settings.setValue("files/export_dir", str(tmp_path))
     window.timeline.set_playing(True)
     qtbot.waitUntil(lambda: window.timeline.frame > 3, timeout=20_000)
@@ -1017,7 +1026,6 @@ def folder_offered(open_dialog) -> Path:
     """The folder the file dialog that ``open_dialog()`` shows starts in (the dialog then cancelled)."""
     from PySide6.QtWidgets import QFileDialog
 
-    from compare_window import when_shown
     offered = []
     when_shown(QFileDialog, lambda dialog: (offered.append(dialog.directory().absolutePath()), dialog.reject()))
     open_dialog()
@@ -1243,7 +1251,6 @@ def answer_video_export(qtbot, choose_frames) -> None:
     answered by ``choose_frames(dialog)``."""
     from PySide6.QtWidgets import QFileDialog
 
-    from compare_window import when_shown
     from s2h_viewer.widgets.frame_range_dialog import FrameRangeDialog
     when_shown(QFileDialog, lambda dialog: dialog.accept())
     when_shown(FrameRangeDialog, choose_frames)

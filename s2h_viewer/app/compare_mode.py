@@ -195,7 +195,12 @@ class CompareMode(QWidget):
         self._sync()
 
     def add_target(self, hand: HandModel) -> None:
-        """One more target, the last row (undoable)."""
+        """One more target, the last row (undoable); a hand that is a target already is refused, saying so
+        (two identical rows compare nothing)."""
+        if any(target.same_as(hand) for target in self.state.targets):
+            self.error(f"{hand.name} is a target already (the same hand: skeleton, frames and mesh); "
+                       f"nothing was added")
+            return
         self.undo_stack.push(AddTargetCommand(self, hand))
 
     def remove_target(self, index: int) -> None:

@@ -69,6 +69,14 @@ class HandModel:
         self.radii = np.asarray(self.radii, dtype=np.float64)
         self.validate()
 
+    def same_as(self, other: "HandModel") -> bool:
+        """The same hand as ``other``: name, skeleton, TBS frames and mesh all equal (one file loaded twice)."""
+        meshes = (self.mesh, other.mesh)
+        same_mesh = meshes[0] is meshes[1] or (None not in meshes and all(
+            np.array_equal(getattr(meshes[0], a), getattr(meshes[1], a)) for a in ("vertices", "faces", "weights")))
+        return (self.name == other.name and same_mesh and np.array_equal(self.offsets, other.offsets)
+                and np.array_equal(self.rest_frames, other.rest_frames))
+
     def validate(self) -> None:
         """Raise `InvalidHandError` naming the hand and the problem if any convention is broken."""
         expected = {"offsets": (21, 3), "rest_frames": (15, 3, 3), "rig_frames": (16, 3, 3), "radii": (21,)}
