@@ -147,7 +147,8 @@ def test_timeline_readout_counts_frames_as_the_clip_does(window):
 
 
 def test_shortcut_help_lists_every_shortcut_the_menus_define(window, qtbot):
-    from PySide6.QtGui import QKeySequence
+    from PySide6.QtGui import QKeySequence, QUndoCommand
+    window.compare.undo_stack.push(QUndoCommand("remove iris"))  # Edit > Undo now reads "Undo remove iris"
     shown = []
     when_shown(QMessageBox, lambda box: (shown.append(box.text()), box.accept()))
     help_action = next(a for m in window.menuBar().actions() for a in m.menu().actions() if a.text() ==
@@ -163,7 +164,10 @@ def test_shortcut_help_lists_every_shortcut_the_menus_define(window, qtbot):
     assert len(keyed) >= 20
     for action in keyed:
         key = action.shortcut().toString(QKeySequence.SequenceFormat.NativeText)
-        assert any(line.startswith(key) and action.text() in line for line in lines), (key, action.text())
+        name = action.property("help_name") or action.text()
+        assert any(line.startswith(key) and name in line for line in lines), (key, name)
+    edit = [line for line in lines if "Edit > " in line]
+    assert edit == ["Ctrl+Z: Edit > Undo", "Ctrl+Shift+Z: Edit > Redo"]  # not "Undo remove iris"
     assert any(line.startswith("Ctrl+H: View > Semi-transparent skin") for line in lines)
     mouse = lines[lines.index("Mouse, in the 3D views of both tabs"):]  # the mouse after the keys
     for entry in ("left drag: rotate the camera", "Shift+left drag or middle drag: pan", "right drag or wheel: zoom",

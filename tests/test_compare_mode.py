@@ -599,7 +599,7 @@ def test_heatmap_tooltip_names_the_joint_pair(window):
     row, column = topo.FINGER_JOINT_NAMES.index("index_tip"), topo.N_FINGER_JOINTS + 2
     text = heatmap.cell_text(LEFT + column * CELL + CELL // 2, TOP + row * CELL + CELL // 2)
     value = heatmap.current[row, column]
-    assert text.startswith("index_tip to palm anchor 3") and (f"{value:.3f}" in text or "masked" in text)
+    assert text.startswith("index tip to palm anchor 3") and (f"{value:.3f}" in text or "masked" in text)
     assert heatmap.cell_text(2, 2) == ""
 
 

@@ -160,6 +160,8 @@ class MainWindow(QMainWindow):
         undo.setShortcut(QKeySequence.StandardKey.Undo)
         redo = self.undo_group.createRedoAction(edit_menu, "Redo")
         redo.setShortcut(QKeySequence.StandardKey.Redo)
+        for action, name in ((undo, "Undo"), (redo, "Redo")):
+            action.setProperty("help_name", name)  # for Help: their text names the change ("Undo remove iris")
         edit_menu.addActions([undo, redo])
         methods_menu = bar.addMenu("&Methods")
         chosen = self.settings.value("compare/methods", self.setup.methods)
@@ -234,7 +236,8 @@ class MainWindow(QMainWindow):
                     walk(action.menu(), f"{path} > {action.text()}")
                 elif action.shortcuts():
                     keys = " or ".join(k.toString(QKeySequence.SequenceFormat.NativeText) for k in action.shortcuts())
-                    lines.append(f"{keys}: {path} > {action.text().replace('&', '')}")
+                    name = action.property("help_name") or action.text().replace("&", "")
+                    lines.append(f"{keys}: {path} > {name}")
 
         for top in self.menuBar().actions():
             walk(top.menu(), top.text().replace("&", ""))

@@ -44,9 +44,14 @@ def colour_indices(cell_error: np.ndarray) -> np.ndarray:
     return np.where(np.isnan(cell_error), COLOURS, scaled).astype(np.intp)  # few numpy calls: it runs every frame
 
 
+def spaced(name: str) -> str:
+    """'index_pip' -> 'index pip'."""
+    return name.replace("_", " ")
+
+
 def short(name: str) -> str:
-    """'index_pip' -> 'index pip'; 'palm anchor 3' -> 'anchor 3'."""
-    return name.replace("palm anchor", "anchor").replace("_", " ")
+    """'index_pip' -> 'index pip'; 'palm anchor 3' -> 'anchor 3' (the axis labels)."""
+    return spaced(name).replace("palm anchor", "anchor")
 
 
 def axis_labels() -> QPixmap:
@@ -133,7 +138,7 @@ class AsmHeatmap(QWidget):
             return ""
         value = self.current[cell]
         error = "masked" if np.isnan(value) else f"1 - cos = {value:.3f}"
-        return f"{ROW_NAMES[cell[0]]} to {COLUMN_NAMES[cell[1]]}: {error}"
+        return f"{spaced(ROW_NAMES[cell[0]])} to {spaced(COLUMN_NAMES[cell[1]])}: {error}"  # as the axes spell them
 
     def set_title(self, title: str) -> None:
         """What the matrix belongs to (the selected retarget); the full text also as the tooltip."""
