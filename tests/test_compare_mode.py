@@ -182,6 +182,19 @@ def test_add_and_remove_a_target(window, qtbot):
     assert window.scores.rowCount() == 2 and len(window.view._hands) == 3
 
 
+def test_the_last_ticked_method_cannot_be_unticked(window, qtbot):
+    """Unticking the last method opened an error dialog; now its menu entry is greyed, as the last target's."""
+    actions = window.method_actions
+    assert actions["tbs_copy"].isEnabled() and actions["asrn"].isEnabled()
+    with qtbot.waitSignal(window.comparison_ready, timeout=60_000):
+        actions["asrn"].trigger()
+    assert window.setup.methods == ["tbs_copy"] and not actions["tbs_copy"].isEnabled()
+    assert all(actions[m].isEnabled() for m in METHODS if m != "tbs_copy")
+    with qtbot.waitSignal(window.comparison_ready, timeout=60_000):
+        window.compare.undo_stack.undo()
+    assert window.setup.methods == ["tbs_copy", "asrn"] and actions["tbs_copy"].isEnabled()
+
+
 def test_a_hand_that_is_a_target_already_is_not_added_twice(window, qtbot):
     from PySide6.QtWidgets import QMessageBox
     said = []

@@ -268,10 +268,13 @@ class MainWindow(QMainWindow):
     def _state_changed(self) -> None:
         """The menus (and the remembered methods) say what the compare state holds, after a cancel too."""
         self.settings.setValue("compare/methods", list(self.setup.methods))
+        last = self.setup.methods[0] if len(self.setup.methods) == 1 else None
         for name, action in self.method_actions.items():
             action.blockSignals(True)
             action.setChecked(name in self.setup.methods)
             action.blockSignals(False)
+            action.setEnabled(name != last)  # the last method stays (as the last target does): nothing to compare
+            action.setStatusTip("the last method ticked: tick another before unticking it" if name == last else "")
         self.compare.fill_targets_menu(self.targets_menu)
         self._follow_mode()
 
