@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import pyvista as pv
 
 pytest.importorskip("pytestqt")
 if not os.environ.get("DISPLAY"):
@@ -26,7 +27,8 @@ from compare_window import open_compare_window, when_shown  # noqa: E402
 from grid_text import cell_pixels, hand_drawn, inside, intruders, text_actors, text_box  # noqa: E402
 from s2h_viewer.hand import topology as topo  # noqa: E402
 from s2h_viewer.render.caption import BAND  # noqa: E402
-from s2h_viewer.render.compare_scene import COLOUR_BAR_SHARE, ELLIPSIS, MIN_LABEL_PX, OVERLAY_PX  # noqa: E402
+from s2h_viewer.render.compare_scene import (COLOUR_BAR_SHARE, CONTACT_COLOUR, ELLIPSIS, MIN_LABEL_PX,  # noqa: E402
+                                             OVERLAY_PX)
 from s2h_viewer.retarget.methods import METHODS  # noqa: E402
 from s2h_viewer.samples import ASSETS_DIR  # noqa: E402
 from s2h_viewer.widgets.asm_heatmap import CELL, LEFT, TOP  # noqa: E402
@@ -575,6 +577,11 @@ def test_contact_overlay_links_touching_pads_and_marks_lost_contacts(window):
     window.timeline.set_frame(frame)
     assert source.links.n_lines == source.contacts[frame].sum() > 0
     assert target.lost_links.n_lines == target.lost[frame].sum()
+    window.view.set_solo(0)  # the source alone, opaque: its pads' centres lie inside the fingers
+    image = window.view.grab_rgb().astype(int)
+    green = np.array(pv.Color(CONTACT_COLOUR).int_rgb)
+    assert (np.abs(image - green).max(-1) < 10).sum() > 50, "the contact drawn over the skin"
+    window.view.set_solo(-1)
     window.contact_overlay.trigger()
     assert not source.actors[1].visibility
 

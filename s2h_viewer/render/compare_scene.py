@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pyvista as pv
 import trimesh
-from vtkmodules.vtkRenderingCore import vtkTextProperty, vtkTextRenderer
+from vtkmodules.vtkRenderingCore import vtkMapper, vtkTextProperty, vtkTextRenderer
 
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.kinematics import HandPose
@@ -46,6 +46,7 @@ CONTACT_COLOUR = "#1a9850"
 #: more; smaller cells scale them down (at least 1, 2, 5): fixed dots would hide a small cell's fingers
 OVERLAY_PX = (3, 8, 16)
 OVERLAY_CELL = 300
+ON_TOP_OFFSET = -1e6  # depth offset (OpenGL polygon-offset units) of the contact overlay: in front of any skin
 LOST_COLOUR = "#ff1f1f"
 #: each contact pair (``semantics.contacts.CONTACT_PAIRS``) as two indices into ``contact_sites``.
 PAIR_SITES = np.array([[SITES.index(a), SITES.index(b)] for a, b in CONTACT_PAIRS], dtype=np.int64)
@@ -435,9 +436,15 @@ class Overlays:
         bone, link, dot = OVERLAY_PX
         self.actors = [plotter.add_mesh(self.bones, color=BONE_COLOUR, line_width=bone, reset_camera=False),
                        plotter.add_mesh(self.links, color=CONTACT_COLOUR, line_width=link, point_size=dot,
-                                        render_points_as_spheres=True, reset_camera=False),
+                                        render_points_as_spheres=False, reset_camera=False),
                        plotter.add_mesh(self.lost_links, color=LOST_COLOUR, line_width=link, point_size=dot,
-                                        render_points_as_spheres=True, reset_camera=False)]
+                                        render_points_as_spheres=False, reset_camera=False)]
+        # contacts drawn over the skin: the pads' centres lie inside the fingers (an opaque hand shown alone hid
+        # every one). The offsets act only in VTK's polygon-offset mode, which is process-wide (a static).
+        vtkMapper.SetResolveCoincidentTopologyToPolygonOffset()
+        for actor in self.actors[1:]:
+            actor.mapper.SetRelativeCoincidentTopologyPointOffsetParameter(ON_TOP_OFFSET)
+            actor.mapper.SetRelativeCoincidentTopologyLineOffsetParameters(0.0, ON_TOP_OFFSET)
         self.show_skeleton = self.show_contacts = False
         self._update_visibility()
 
