@@ -1303,6 +1303,7 @@ def test_a_video_export_writes_the_frames_chosen_with_their_own_frame_numbers(wi
     job = window.export_video()
     assert offered == [(0, n - 1), (40, n - 1), f"8 frames, {8 / window.comparison.motion.fps:.2f} s"]
     assert job.dialog.maximum() == 8 and "(8 frames: 40 to 47)" in job.dialog.toolTip()  # progress counts the range
+    assert job.dialog.labelText().splitlines()[-1] == "(8 frames: 40 to 47)..."  # whole, however long the name
     with qtbot.waitSignal(job.written, timeout=300_000):
         pass
     path = tmp_path / "short_iris_tbs_copy.mp4"

@@ -68,7 +68,7 @@ class VideoExport(QObject):
         captions = {f: caption_for(mode, f) for f in self.frames}  # the selection now, not later
         size = (view.interactor.width(), view.interactor.height()) if view.interactor is not None else (1400, 900)
         self._job = (comparison, captions, size, view.options)
-        label = f"Rendering {Path(path).name} ({frames_text(self.frames, comparison.n_frames)})..."
+        label = f"Rendering {Path(path).name}\n({frames_text(self.frames, comparison.n_frames)})..."  # the range whole
         self.dialog = JobProgressDialog(label, "Cancel", len(self.frames), parent,
                                         "s2h-viewer: video export")  # non-modal: the timeline stays usable
         self.dialog.canceled.connect(self.cancel)

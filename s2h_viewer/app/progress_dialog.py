@@ -28,10 +28,11 @@ class JobProgressDialog(QProgressDialog):
         self.setAutoReset(False)
 
     def setLabelText(self, text: str) -> None:
-        """The label, elided in the middle to the dialog's width (the dialog never grows with it)."""
+        """The label, each line elided in the middle to the dialog's width (the dialog never grows with it)."""
         self.setToolTip(text)
         room = WIDTH - 4 * GAP
-        super().setLabelText(self.fontMetrics().elidedText(text, Qt.TextElideMode.ElideMiddle, room))
+        super().setLabelText("\n".join(self.fontMetrics().elidedText(line, Qt.TextElideMode.ElideMiddle, room)
+                                       for line in text.split("\n")))
 
     def others(self) -> list["JobProgressDialog"]:
         """The other job dialogs of this window that are on screen."""
