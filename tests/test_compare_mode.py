@@ -123,6 +123,16 @@ def test_cancel_a_retarget_goes_back_to_the_grid_and_the_menu_follows(long_windo
     assert window.compare._progress is not None  # computing it again
 
 
+def test_every_progress_text_names_the_retarget_it_belongs_to(window, qtbot):
+    """A stage of ASRN said only "contact fit (4 of 5)": which method, which target?"""
+    texts = []
+    window.compare.queue.progress.connect(lambda _, what: texts.append(what))
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.add_target_file(str(ASSETS_DIR / "hands" / "laurel.npz"))
+    assert all(t.startswith(("TBS Copy -> laurel", "ASRN -> laurel")) for t in texts), sorted(set(texts))
+    assert "ASRN -> laurel: contact fit" in texts  # a stage inside the retarget, named with it
+
+
 def test_redo_at_once_after_a_cancel_computes_the_cancelled_method(long_window, qtbot):
     """Cancel, then Redo before the running job has stopped: the job was cancelled all the same and never
     came back (the grid waited for it for ever); now it is queued again."""

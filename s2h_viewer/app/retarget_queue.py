@@ -83,10 +83,10 @@ class RetargetQueue(QObject):
                 self._cancel.clear()
             what = f"{METHODS[key.method].label if key.method in METHODS else key.method} -> {target.name}"
 
-            def hook(fraction: float, what: str) -> None:
+            def hook(fraction: float, part: str, job: str = what) -> None:
                 if self._cancel.is_set():
                     raise Cancelled()
-                self.progress.emit(fraction, what)
+                self.progress.emit(fraction, job if part == job else f"{job}: {part}")  # which retarget, always
 
             try:
                 with reporting(hook), stage(0.0, 1.0, what):
