@@ -549,6 +549,15 @@ def test_error_curve_marks_the_worst_frames_and_a_click_jumps(window, qtbot):
     assert window.timeline.frame == target and curve.frame == target
 
 
+def test_the_error_curve_keeps_clear_of_its_caption_and_its_edges(window):
+    """The curve ran through its caption, and a worst frame's ring at the end was cut by the edge."""
+    curve = window.compare.curve
+    caption_top = curve.height() - 4 - curve.fontMetrics().ascent()  # the caption's baseline is 4 px up
+    assert curve._y(0.0) <= caption_top and curve._y(float(curve.error.max())) >= 0
+    ring = 3
+    assert curve._x(0) - ring >= 0 and curve._x(len(curve.error) - 1) + ring <= curve.width() - 1
+
+
 def test_a_jump_while_playing_plays_on_from_the_frame_jumped_to(window, qtbot):
     """Home, a click on the error curve, the frame box: while playing the clock went on from the frame shown
     before the jump, so playback sprang back there at the next tick (a user test found every jump ignored)."""

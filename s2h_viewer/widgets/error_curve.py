@@ -11,7 +11,7 @@ from PySide6.QtWidgets import QWidget
 WORST = 5  # frames marked
 #: for Help's list
 MOUSE = (("click the error curve", "jump to that frame"),)
-MARGIN = 4
+MARGIN = 6  # pixels around the curve: a worst frame's ring (radius 3) at either end stays whole
 
 
 def worst_frames(error: np.ndarray, count: int = WORST, spacing: int | None = None) -> np.ndarray:
@@ -67,8 +67,10 @@ class ErrorCurve(QWidget):
         return MARGIN + frame / max(1, len(self.error) - 1) * (self.width() - 2 * MARGIN)
 
     def _y(self, value: float) -> float:
+        """The curve above the caption's band (it used to run through the caption)."""
         top = max(float(self.error.max()), 1e-9)
-        return self.height() - MARGIN - value / top * (self.height() - 2 * MARGIN)
+        bottom = self.height() - MARGIN - self.fontMetrics().height()
+        return bottom - value / top * (bottom - MARGIN)
 
     def mousePressEvent(self, event) -> None:
         self.frame_clicked.emit(self.frame_at(event.position().x()))
