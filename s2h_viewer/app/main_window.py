@@ -301,12 +301,16 @@ class MainWindow(QMainWindow):
         recent = self.settings.value("files/recent", [])
         return [recent] if isinstance(recent, str) else list(recent or [])
 
+    def _recent_openers(self) -> dict[str, Callable[[str], None]]:
+        """How each kind of recent file opens."""
+        return {"motion": self.load_motion, "target": self.add_target_file, "annotate": self.annotate_file}
+
     def _fill_recent(self) -> None:
         """The recent files, newest first (a hand to annotate opens in Annotate from either tab)."""
         self.recent_menu.clear()
         for entry in self._recent():
             kind, _, path = entry.partition(":")
-            if kind in ("motion", "target", "annotate"):
+            if kind in self._recent_openers():
                 action = self.recent_menu.addAction(f"{Path(path).name} ({kind})")
                 action.triggered.connect(lambda _=False, p=path, k=kind: self._open_recent(k, p))
                 action.setData(kind)
@@ -320,7 +324,7 @@ class MainWindow(QMainWindow):
             self._fill_recent()
             self.error(f"{path}: no longer there (moved or deleted); removed from the recent files.")
             return
-        {"motion": self.load_motion, "target": self.add_target_file, "annotate": self.annotate_file}[kind](path)
+        self._recent_openers()[kind](path)
 
     def _enable_recent(self) -> None:
         """Recent motions and targets are for Compare: disabled in Annotate."""

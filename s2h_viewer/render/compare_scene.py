@@ -296,28 +296,28 @@ def cell_pixels(plotter: pv.Plotter, renderer: pv.Renderer) -> tuple[int, int]:
     return max(1, round((x1 - x0) * width)), max(1, round((y1 - y0) * height))
 
 
-def fit_overlays(plotter: pv.Plotter, hands: list["PosedHand"]) -> None:
-    """Each drawn hand's overlays to its cell's size now (`Overlays.fit`)."""
-    for hand in hands:
-        if hand.overlay is not None and hand.renderer.GetDraw():
-            hand.overlay.fit(min(cell_pixels(plotter, hand.renderer)))
-
-
-def fit_labels(plotter: pv.Plotter, labels: list[CellLabel]) -> None:
-    """The drawn labels to their cells' size now (the window's size and solo change it), in one font: the
-    smallest cell's (the grid's cells differ by a pixel of rounding, the legend's may span rows)."""
+def fit_cells(plotter: pv.Plotter, hands: list["PosedHand"], labels: list[CellLabel]) -> None:
+    """The drawn cells to their size now (the window's size and solo change it): the labels in one font, the
+    smallest cell's (the grid's cells differ by a pixel of rounding, the legend's may span rows); each hand's
+    overlays (`Overlays.fit`); the shared camera for a hand's cell (`fit_view_angle`)."""
     drawn = [(label, cell_pixels(plotter, label.renderer)) for label in labels if label.renderer.GetDraw()]
     if drawn:
         font = label_font(min(w for _, (w, _) in drawn), min(h for _, (_, h) in drawn))
         for label, (width, height) in drawn:
             label.fit(width, height, font)
+    shown = [hand for hand in hands if hand.renderer.GetDraw()]
+    for hand in shown:
+        if hand.overlay is not None:
+            hand.overlay.fit(min(cell_pixels(plotter, hand.renderer)))
+    if shown:
+        fit_view_angle(plotter, shown[0].renderer)
 
 
 def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
              display_faces: int | None = DISPLAY_FACES,
              playing_faces: int | None = None) -> tuple[list[PosedHand], list[CellLabel]]:
     """Fill a plotter made with ``**grid_layout(comparison)``; returns the hands to update per frame and the
-    cells' labels, fitted to the window's size now (`fit_labels` again when it changes).
+    cells' labels, fitted to the window's size now (`fit_cells` again when it changes).
     ``playing_faces``: each skin also at that many faces, drawn while playing (`PosedHand.set_playing`)."""
     plain_text()
     lighter: dict[tuple[int, int | None], HandModel] = {}
@@ -364,8 +364,7 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
                                      color="black", n_labels=4, fmt="%.2f")
         bar.SetVerticalTitleSeparation(12)  # pixels: the title clear of the top label, not over it
     plotter.link_views()
-    fit_labels(plotter, labels)
-    fit_overlays(plotter, hands)
+    fit_cells(plotter, hands, labels)
     set_camera(plotter, "default", [h.hand for h in hands])
     return hands, labels
 

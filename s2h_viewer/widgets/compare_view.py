@@ -22,8 +22,8 @@ from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
 from PySide6.QtWidgets import QVBoxLayout, QWidget
 
 from s2h_viewer.render.compare_scene import (PLAYING_FACES, CellLabel, PosedHand, PosedSkin, ViewOptions,
-                                             apply_options, colour_bar_beside_solo, fit_labels, fit_overlays,
-                                             fit_view_angle, grid_layout, populate)
+                                             apply_options, colour_bar_beside_solo, fit_cells, grid_layout,
+                                             populate)
 from s2h_viewer.retarget.comparison import Comparison
 from s2h_viewer.widgets.vtk_widget import PlotterWidget, window_plotter
 
@@ -106,8 +106,9 @@ class CompareView(QWidget):
         self._wanted = frame
 
     def _render_starts(self) -> None:
-        """The render window starts drawing: the worker poses the frame wanted next meanwhile."""
-        self._fit_cells()
+        """The render window starts drawing: the cells fitted to their size now (the widget's size and solo
+        change it: labels, overlays, camera), and the worker poses the frame wanted next meanwhile."""
+        fit_cells(self.plotter, self._hands, self._labels)
         frame, self._wanted = self._wanted, None
         if frame is None or not self._hands or (self._ahead is not None and self._ahead[0] == frame):
             return
@@ -122,15 +123,6 @@ class CompareView(QWidget):
             return None
         self.prefetched += 1
         return ahead[1].result()
-
-    def _fit_cells(self) -> None:
-        """Before each render: the labels and the camera for the cells' size now (the widget's size and solo
-        change it): each label's font and elision, the hand below the text band and in view in tall cells."""
-        fit_labels(self.plotter, self._labels)
-        fit_overlays(self.plotter, self._hands)
-        shown = next((h.renderer for h in self._hands if h.renderer.GetDraw()), None)
-        if shown is not None:
-            fit_view_angle(self.plotter, shown)
 
     def set_playing(self, playing: bool) -> None:
         self.playing = playing

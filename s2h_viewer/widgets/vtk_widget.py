@@ -136,12 +136,14 @@ class PlotterWidget(QWidget):
             self._pixels = vtkUnsignedCharArray()  # a new array: the last image keeps the old one it shows
             self._pixels.SetNumberOfComponents(4)
             self._pixels.SetNumberOfTuples(width * height)
-        if TOP_ROW_FIRST.begin():
+        top_row_first = TOP_ROW_FIRST.begin()
+        try:
             self._window.GetRGBACharPixelData(0, 0, width - 1, height - 1, 0, self._pixels)
-            TOP_ROW_FIRST.end()
-            return vtk_to_numpy(self._pixels).reshape(height, width, 4)
-        self._window.GetRGBACharPixelData(0, 0, width - 1, height - 1, 0, self._pixels)
-        return np.ascontiguousarray(vtk_to_numpy(self._pixels).reshape(height, width, 4)[::-1])
+        finally:
+            if top_row_first:
+                TOP_ROW_FIRST.end()
+        rows = vtk_to_numpy(self._pixels).reshape(height, width, 4)
+        return rows if top_row_first else np.ascontiguousarray(rows[::-1])
 
     def paintEvent(self, event) -> None:
         if not self.alive:  # a paint queued before ``close_plotter`` would render into a freed window
