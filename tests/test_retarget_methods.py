@@ -17,8 +17,8 @@ from s2h_viewer.samples import ASSETS_DIR, hand_names, load_sample_motions
 from s2h_viewer.retarget.asrn.dataset import build_training_set, sample_batch
 from s2h_viewer.retarget.asrn.inference import MODELS_DIR, load_network, run_network
 from s2h_viewer.retarget.windows import blend_weights, window_starts
-from s2h_viewer.retarget.asrn.training import (TrainConfig, batch_loss, build_model, default_config, load_checkpoint,
-                                               stored_config, train)
+from s2h_viewer.retarget.asrn.training import (GRADIENT_CLIP, TrainConfig, batch_loss, build_model, default_config,
+                                               load_checkpoint, stored_config, train)
 from s2h_viewer.hand.kinematics import forward_kinematics
 from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, PAD_PAIRS, contact_gaps
 from s2h_viewer.semantics.metrics import RetargetScores, score_retarget
@@ -164,27 +164,41 @@ def test_contact_term_sees_each_windows_own_source_contacts(sample_hands):
     assert model.head.weight.grad.abs().sum() > 0
 
 
-def test_training_on_a_tiny_set_lowers_the_loss(sample_hands):
+def test_training_lowers_the_loss_on_batches_it_never_saw(sample_hands):
+    # An untrained network is TBS Copy, whose loss sits next to its floor (-0.98 of a floor near -0.99): a drop
+    # there is decided by kernel rounding. So the network starts knocked off its zero start (a random head, as
+    # after a bad step): its residual breaks the anatomical limits (L_ana ~2) on every window. Thirty clipped
+    # Adam steps on one set of scripts must bring the loss down by far more than rounding (measured: -0.78 ->
+    # -0.99, L_ana 2.06 -> 0.04) on windows of other scripts, cross-hand and same-hand alike; with the
+    # parameters frozen nothing moves and the test fails.
     hands = [sample_hands["birch"], sample_hands["cedar"]]
-    config = TrainConfig(kind="asrn", batch_size=16, learning_rate=2e-3, p_same=0.0)
-    data = build_training_set("asrn", hands, scripts_per_hand=1, gestures_per_script=6, seed=1)
+    config = TrainConfig(kind="asrn", batch_size=16, learning_rate=1e-3, p_same=0.5)
+    seen = build_training_set("asrn", hands, scripts_per_hand=1, gestures_per_script=6, seed=1)
+    unseen = build_training_set("asrn", hands, scripts_per_hand=1, gestures_per_script=6, seed=2)
     torch.manual_seed(0)
     model = build_model(config)
-    rng = np.random.default_rng(0)
-    probe = [sample_batch(data, np.random.default_rng(100 + i), 16, 8, 0.0) for i in range(4)]
+    with torch.no_grad():
+        model.head.weight.normal_(0.0, 0.05)
+    probe = [sample_batch(unseen, np.random.default_rng(100 + i), 16, 8, p_same) for i in range(4) for p_same in (0, 1)]
 
-    def probe_loss() -> float:
+    def probe_loss() -> tuple[float, float]:
         with torch.no_grad():
-            return float(np.mean([batch_loss(model, data, b, config)[0].item() for b in probe]))
+            parts = [batch_loss(model, unseen, batch, config)[1] for batch in probe]
+        return float(np.mean([p["loss"] for p in parts])), float(np.mean([p["anatomy"] for p in parts]))
 
-    before = probe_loss()
+    loss_before, anatomy_before = probe_loss()
+    assert anatomy_before > 1.0  # the start is far from the floor
     optimiser = torch.optim.Adam(model.parameters(), lr=config.learning_rate)
-    for _ in range(60):
-        loss, _ = batch_loss(model, data, sample_batch(data, rng, 16, 8, 0.0), config)
+    rng = np.random.default_rng(0)
+    for _ in range(30):
+        loss, _ = batch_loss(model, seen, sample_batch(seen, rng, 16, 8, config.p_same), config)
         optimiser.zero_grad()
         loss.backward()
+        torch.nn.utils.clip_grad_norm_(model.parameters(), GRADIENT_CLIP)
         optimiser.step()
-    assert probe_loss() < before - 1e-4
+    loss_after, anatomy_after = probe_loss()
+    assert loss_after < loss_before - 0.1
+    assert anatomy_after < 0.1 * anatomy_before
 
 
 def test_train_is_seeded_and_resumes(sample_hands, tmp_path):
