@@ -1,4 +1,4 @@
-"""The `s2h` command: view, annotate, retarget, evaluate, train, render, gestures.
+"""The `s2h` command: view, annotate, retarget, batch, evaluate, train, render, gestures.
 Errors print one line naming the file and the problem, never a traceback."""
 
 from __future__ import annotations
@@ -217,6 +217,29 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_batch(args: argparse.Namespace) -> int:
+    from s2h_viewer.batch.plan import BatchUsageError, TaskOptions
+    from s2h_viewer.batch.runner import BatchConfig, run_batch
+
+    if args.workers is not None and args.workers < 1:
+        raise BatchUsageError(f"--workers {args.workers}: at least one worker is needed")
+
+    config = BatchConfig(args.motions, args.targets, [m for m in args.methods.split(",") if m], args.out,
+                         TaskOptions(format=args.format, side=args.side, render=args.pictures),
+                         scheduler=args.scheduler, workers=args.workers)
+    result = run_batch(config, show_progress=False if args.quiet else None)
+    ok = len(result.rows) - len(result.failed)
+    print(f"{len(result.rows)} tasks: {ok} ok, {len(result.failed)} failed"
+          + (f" ({result.skipped} finished by an earlier run)" if result.skipped else "")
+          + f", {result.seconds:.1f} s" + (" (interrupted: run it again to finish)" if result.interrupted else ""))
+    for row in result.failed[:10]:
+        print(f"  failed: {row['motion']} -> {row['target']} ({row['method']}): {row['error']}", file=sys.stderr)
+    if len(result.failed) > 10:
+        print(f"  ... and {len(result.failed) - 10} more (see the summary)", file=sys.stderr)
+    print(f"wrote {result.summary}\nwrote {result.report}")
+    return result.exit_code
+
+
 def _cmd_view(args: argparse.Namespace) -> int:
     from s2h_viewer.app.main_window import CompareSetup, default_setup, run
     from s2h_viewer.io.files import load_hand_file, load_motion_file
@@ -321,6 +344,26 @@ def build_parser() -> argparse.ArgumentParser:
     rt.add_argument("--quiet", action="store_true", help="no progress bar")
     _add_rig_options(rt)
     rt.set_defaults(func=_cmd_retarget)
+
+    bt = sub.add_parser("batch", help="retarget motion files onto many targets with several methods, on Dask; "
+                                      "a summary.csv and a report.html of every task")
+    bt.add_argument("--motions", nargs="+", required=True, metavar="PATH",
+                    help="motion files or folders of them (.npz .bvh .glb .gltf .fbx, searched recursively)")
+    bt.add_argument("--targets", nargs="+", required=True, metavar="PATH",
+                    help="target hand files, folders of them, or shipped sample names")
+    bt.add_argument("--methods", default="tbs_copy,asrn", help="comma-separated methods (default tbs_copy,asrn)")
+    bt.add_argument("--out", required=True, help="output folder: <motion>/<target>/<method>.<format>, summary.csv, "
+                                                 "report.html; a rerun into it skips finished tasks")
+    bt.add_argument("--format", default="glb", choices=["glb", "bvh", "npz"],
+                    help="motion output (default glb: the target's own file with the animation)")
+    bt.add_argument("--scheduler", help="address of a running Dask scheduler (tcp://host:8786) whose workers have "
+                                        "s2h-viewer installed (default: a local cluster on this machine)")
+    bt.add_argument("--workers", type=int, help="local cluster worker processes (default: one per core)")
+    bt.add_argument("--no-pictures", dest="pictures", action="store_false",
+                    help="skip the worst frame's picture of each task (faster; the report has none)")
+    bt.add_argument("--side", choices=["right", "left"], help="which hand of full-body characters (default: detect)")
+    bt.add_argument("--quiet", action="store_true", help="no progress bar")
+    bt.set_defaults(func=_cmd_batch)
 
     tr = sub.add_parser("train", help="train ASRN or DM on the training hands (CPU, seeded, resumable)")
     tr.add_argument("--kind", choices=["asrn", "dm"], default="asrn")

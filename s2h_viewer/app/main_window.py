@@ -13,6 +13,7 @@ from PySide6.QtWidgets import QDialog, QFileDialog, QMainWindow, QMessageBox, QT
 
 from s2h_viewer.app import exports
 from s2h_viewer.app.annotate_mode import AnnotateMode, ask, os_problem
+from s2h_viewer.app.batch_browser import BatchBrowser
 from s2h_viewer.app.compare_mode import CompareMode, CompareSetup, default_setup
 from s2h_viewer.app.focus import FocusKeeper
 from s2h_viewer.app.tasks import TaskRunner
@@ -60,6 +61,7 @@ class MainWindow(QMainWindow):
         self.tabs.addTab(self.annotate.view, "Annotate")
         self.setCentralWidget(self.tabs)
         self.setAcceptDrops(True)
+        self.batch_browser = BatchBrowser(self)
         self._build_menus()
         self.focus_keeper = FocusKeeper(self)  # shortcuts keep working after a dialog closes without a window manager
         geometry = self.settings.value("window/geometry")
@@ -138,7 +140,8 @@ class MainWindow(QMainWindow):
         bar = self.menuBar()
         file_menu = bar.addMenu("&File")
         compare_only = [self._action(file_menu, "Open motion...", self.open_motion, "Ctrl+O"),
-                        self._action(file_menu, "Add target hand...", self.add_target, "Ctrl+T")]
+                        self._action(file_menu, "Add target hand...", self.add_target, "Ctrl+T"),
+                        self._action(file_menu, "Open batch summary...", self.open_batch, "Ctrl+B")]
         self.recent_menu = file_menu.addMenu("Open recent")
         self._fill_recent()
         file_menu.addSeparator()
@@ -423,6 +426,15 @@ class MainWindow(QMainWindow):
         self.settings.setValue("files/motion_dir", str(Path(path).resolve().parent))
         self._loading.append(("motion", path, motion))
         self.compare.load(motion, source)
+
+    def open_batch(self, path: str | None = None) -> None:
+        """A batch's summary.csv (`s2h batch`) as a table; double-click a row to show it here."""
+        if path is None:
+            self._ask_to_open("Open batch summary", "Batch summaries (summary.csv *.csv)", self.open_batch,
+                              self._last_dir())
+            return
+        self.batch_browser.open(path)
+        self._remember(path)
 
     def _hand_dir(self) -> str:
         return self._start_dir("files/hand_dir", "hands")

@@ -15,7 +15,6 @@ from pathlib import Path
 
 import numpy as np
 import pygltflib
-import trimesh
 from scipy.spatial.transform import Rotation, Slerp
 
 from s2h_viewer.errors import InputFileError, reading, require_readable_file
@@ -521,6 +520,8 @@ def _hand_document(hand: HandModel, motion: Motion) -> tuple[pygltflib.GLTF2, by
     scene_nodes = [0]
     if hand.mesh is not None:
         mesh = hand.mesh
+        import trimesh  # only here: reading a rig does not pay for it
+
         normals = trimesh.Trimesh(mesh.vertices, mesh.faces, process=False).vertex_normals.astype(np.float32)
         top = np.argsort(-mesh.weights, axis=1)[:, :4]
         weights = np.take_along_axis(mesh.weights, top, axis=1)

@@ -5,6 +5,8 @@ Hand space is the rig's wrist bone frame (rotation only, origin at the wrist, me
 is mirrored to a right one (`hand.mirror`) and its motion with it. TBS frames come from the
 annotation sidecar when the file has one, else from the ray solver, else (no mesh) from the palm
 plane; ``hand.meta["annotation"]`` says which.
+Torch and the ray solver are imported where a hand is built or a motion converted, not with the module:
+recognising a rig (`s2h rig`) needs neither.
 """
 
 from __future__ import annotations
@@ -13,13 +15,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import torch
 from scipy.spatial.transform import Rotation
 
-from s2h_viewer.annotate.solver import estimate_radii, palm_plane_frames, solve_tbs_frames
 from s2h_viewer.errors import InputFileError, InvalidHandError, InvalidMotionError
 from s2h_viewer.hand import topology as topo
-from s2h_viewer.hand.kinematics import rig_local_to_tbs, tbs_to_rig_local
 from s2h_viewer.hand.mirror import mirror_hand, reflection
 from s2h_viewer.hand.model import HandModel, SkinnedMesh
 from s2h_viewer.hand.motion import Motion
@@ -106,6 +105,8 @@ def _hand_space(skeleton: RigSkeleton, index: np.ndarray, source: Path) -> tuple
 def build_hand(source: str | Path, skeleton: RigSkeleton, mapping: RigMapping, mesh: RigMesh | None,
                name: str | None = None) -> HandModel:
     """The `HandModel` of a mapped rig, annotated (sidecar, solver or palm plane) and mirrored if left."""
+    from s2h_viewer.annotate.solver import palm_plane_frames
+
     source = Path(source)
     side = mapping.side
     index = _bone_index(skeleton, mapping)
@@ -152,6 +153,8 @@ def _check_mesh(mesh: RigMesh, skeleton: RigSkeleton, source: Path) -> None:
 
 def annotate(hand: HandModel, source: Path) -> HandModel:
     """Set ``hand``'s TBS frames and radii: the sidecar of ``source``, else the solver, else the palm plane."""
+    from s2h_viewer.annotate.solver import estimate_radii, solve_tbs_frames
+
     annotation = load_annotation(source) if source.exists() else None
     solution = solve_tbs_frames(hand) if hand.mesh is not None else None
     if annotation is not None:
@@ -211,6 +214,10 @@ def motion_from_world_rotations(hand: HandModel, world_rotations: np.ndarray, fp
                                 name: str = "") -> Motion:
     """A `Motion` on ``hand`` from the rig's animated world rotations (T, 16, 3, 3) of the wrist and the
     15 articulated bones (in the file's world axes, before any mirroring)."""
+    import torch
+
+    from s2h_viewer.hand.kinematics import rig_local_to_tbs
+
     source = Path(source)
     if not np.isfinite(world_rotations).all():
         bad = ~np.isfinite(world_rotations).all(axis=(1, 2, 3))
@@ -237,6 +244,10 @@ def motion_from_world_rotations(hand: HandModel, world_rotations: np.ndarray, fp
 def world_rotations_from_motion(hand: HandModel, motion: Motion) -> np.ndarray:
     """(T, 16, 3, 3) the rig's bone rotations in hand space (wrist at rest) for ``motion``: what
     exporters write; for a hand loaded as left, mirrored back to the left rig."""
+    import torch
+
+    from s2h_viewer.hand.kinematics import tbs_to_rig_local
+
     q_local = tbs_to_rig_local(hand, torch.as_tensor(motion.q_tbs, dtype=torch.float64)).numpy()
     local = Rotation.from_quat(q_local.reshape(-1, 4), scalar_first=True).as_matrix().reshape(-1, 15, 3, 3)
     rig = hand.rig_frames

@@ -8,12 +8,16 @@ import numpy as np
 import torch
 
 from s2h_viewer.hand import topology as topo
+from s2h_viewer.hand.chunks import frame_chunks
 from s2h_viewer.hand.kinematics import HandPose, forward_kinematics
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.semantics.anatomy import violation_rate
 from s2h_viewer.semantics.asm import semantic_matrix
 from s2h_viewer.semantics.contacts import PAD_PAIRS, PALM_PAIRS, contact_precision_recall, detect_contacts
 from s2h_viewer.semantics.similarity import masked_cosine
+
+#: frames whose ASMs are built at once when a whole clip is scored ((4096, 20, 29, 3) float64: 57 MiB)
+ASM_CHUNK_FRAMES = 4096
 
 
 def per_joint_cosine(d_source: torch.Tensor, d_target: torch.Tensor) -> torch.Tensor:
@@ -71,12 +75,19 @@ def score_retarget(source_hand: HandModel, source_q: np.ndarray | torch.Tensor, 
                    target_q: np.ndarray | torch.Tensor, reference_q: np.ndarray | torch.Tensor | None = None
                    ) -> RetargetScores:
     """All metrics of one retarget: semantics against the source, MSE against ``reference_q`` if given."""
+    return score_retarget_frames(source_hand, source_q, target_hand, target_q, reference_q)[0]
+
+
+def score_retarget_frames(source_hand: HandModel, source_q: np.ndarray | torch.Tensor, target_hand: HandModel,
+                          target_q: np.ndarray | torch.Tensor, reference_q: np.ndarray | torch.Tensor | None = None
+                          ) -> tuple[RetargetScores, np.ndarray]:
+    """`score_retarget`'s scores and the (T,) mean ASM error per frame (the error curve; its argmax is the
+    worst frame). The ASMs are built a chunk of frames at a time, so a long clip's memory stays one chunk's."""
     with torch.no_grad():
         src_pose = forward_kinematics(source_hand, torch.as_tensor(np.asarray(source_q), dtype=torch.float64))
         tgt_q = torch.as_tensor(np.asarray(target_q), dtype=torch.float64)
         tgt_pose = forward_kinematics(target_hand, tgt_q)
-        s_palm, s_finger, s_finger_paper = palm_and_finger_scores(semantic_matrix(src_pose),
-                                                                  semantic_matrix(tgt_pose))
+        (s_palm, s_finger, s_finger_paper), frame_error = _asm_agreement(src_pose, tgt_pose)
         src_contacts, tgt_contacts = detect_contacts(source_hand, src_pose), detect_contacts(target_hand, tgt_pose)
         precision, recall = contact_precision_recall(src_contacts[:, PAD_PAIRS], tgt_contacts[:, PAD_PAIRS])
         palm_recall = contact_precision_recall(src_contacts[:, PALM_PAIRS], tgt_contacts[:, PALM_PAIRS])[1]
@@ -84,7 +95,29 @@ def score_retarget(source_hand: HandModel, source_q: np.ndarray | torch.Tensor, 
         if reference_q is not None:
             ref = forward_kinematics(target_hand, torch.as_tensor(np.asarray(reference_q), dtype=torch.float64))
             mse = joint_position_mse(tgt_pose, ref, target_hand.hand_length)
-        return RetargetScores(s_palm=s_palm, s_finger=s_finger, s_finger_paper=s_finger_paper,
-                              contact_precision=precision,
-                              contact_recall=recall, palm_contact_recall=palm_recall, violation_rate=violation_rate(tgt_q),
-                              jitter=jitter(tgt_pose, target_hand.hand_length), mse=mse)
+        scores = RetargetScores(s_palm=s_palm, s_finger=s_finger, s_finger_paper=s_finger_paper,
+                                contact_precision=precision, contact_recall=recall, palm_contact_recall=palm_recall,
+                                violation_rate=violation_rate(tgt_q), jitter=jitter(tgt_pose, target_hand.hand_length),
+                                mse=mse)
+        return scores, frame_error
+
+
+def _asm_agreement(src_pose: HandPose, tgt_pose: HandPose) -> tuple[tuple[float, float, float], np.ndarray]:
+    """`palm_and_finger_scores` over the whole clip and the (T,) mean ASM error per frame, summed chunk by chunk."""
+    finger, anchors = slice(0, topo.N_FINGER_JOINTS), slice(topo.N_FINGER_JOINTS, None)
+    sums = np.zeros(5)  # palm cosines, palm cells, finger cosines, finger cells, finger cells counting masked
+    n_frames = src_pose.positions.shape[0]
+    frame_error = np.zeros(n_frames)
+    for first, end in frame_chunks(n_frames, ASM_CHUNK_FRAMES):
+        cos, valid = masked_cosine(semantic_matrix(_frames(src_pose, first, end)),
+                                   semantic_matrix(_frames(tgt_pose, first, end)))
+        sums += [float(cos[..., anchors].sum()), float(valid[..., anchors].sum()), float(cos[..., finger].sum()),
+                 float(valid[..., finger].sum()), cos[..., finger].numel()]
+        cells = valid.flatten(1).sum(-1)
+        error = ((1.0 - cos) * valid).flatten(1).sum(-1) / cells.clamp_min(1)
+        frame_error[first:end] = error.numpy()
+    return (float(sums[0] / sums[1]), float(sums[2] / sums[3]), float(sums[2] / sums[4])), frame_error
+
+
+def _frames(pose: HandPose, first: int, end: int) -> HandPose:
+    return HandPose(pose.positions[first:end], pose.frames[first:end])

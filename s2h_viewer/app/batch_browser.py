@@ -1,0 +1,103 @@
+"""File > Open batch: a batch's summary as a table (`widgets.batch_table`), and a row double-clicked there
+shown in Compare: its clip loaded (unless shown already), its target added (unless a target already), its
+method ticked, then that retarget selected at its worst frame once the grid shows it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from PySide6.QtCore import QObject
+
+from s2h_viewer.errors import S2HError
+from s2h_viewer.hand.model import HandModel
+from s2h_viewer.widgets.batch_table import BatchTable
+
+
+class BatchBrowser(QObject):
+    def __init__(self, window):
+        super().__init__(window)
+        self.window = window
+        self.table: BatchTable | None = None
+        self._motion_path: str | None = None
+        self._motion = None
+        self._pending: tuple[HandModel, str, int] | None = None  # (target, method, frame) to select when shown
+        window.comparison_ready.connect(self._select_pending)
+
+    def open(self, path: str) -> BatchTable | None:
+        from s2h_viewer.batch.summary import read_summary
+        try:
+            rows = read_summary(path)
+        except S2HError as exc:
+            self.window.error(str(exc))
+            return None
+        if self.table is not None:
+            self.table.close()
+        self.table = BatchTable(path, rows, self.window)
+        self.table.row_chosen.connect(self.show_row)
+        self.table.show()
+        return self.table
+
+    def show_row(self, row: dict) -> None:
+        """Show one summary row's retarget in Compare (a failed row: its error, in a dialog)."""
+        what = f"{row['motion']} -> {row['target']} ({row['method']})"
+        if row.get("status") != "ok":
+            self.window.error(f"{what} failed in the batch: {row.get('error') or 'no error recorded'}")
+            return
+        from s2h_viewer.retarget.methods import METHODS
+        if row["method"] not in METHODS:
+            self.window.error(f"{what}: this viewer has no method {row['method']!r}")
+            return
+        compare = self.window.compare
+        try:
+            if self._motion_path != row["motion_path"] or compare.state.motion is not self._motion:
+                motion, source = self._read_motion(row["motion_path"])
+            else:
+                motion = None
+            target = self._target(row["target_path"], compare.state.targets)
+        except (S2HError, KeyError) as exc:
+            self.window.error(str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc))
+            return
+        frame = int(row["worst_frame"]) if str(row.get("worst_frame", "")).isdigit() else 0
+        self._pending = (target, row["method"], frame)
+        if motion is not None:
+            self._motion_path, self._motion = row["motion_path"], motion
+            compare.load(motion, source)
+        if all(t is not target for t in compare.state.targets):
+            compare.add_target(target)
+        if row["method"] not in compare.state.methods:
+            compare.set_methods([*compare.state.methods, row["method"]])
+        if not compare.state.missing():
+            self._select_pending()
+
+    def _read_motion(self, path: str):
+        from s2h_viewer.io.files import load_motion_file
+        from s2h_viewer.samples import load_sample_hand
+        motion, rig = load_motion_file(path)
+        return motion, rig or load_sample_hand(motion.hand_name)
+
+    def _target(self, path: str, targets: list[HandModel]) -> HandModel:
+        """The target already in the grid that came from ``path`` (or is the sample of that name), else the hand
+        read from it."""
+        from s2h_viewer.io.files import load_hand_file
+        for hand in targets:
+            if (Path(path).suffix and hand.source and Path(hand.source).resolve() == Path(path).resolve()) or \
+                    (not Path(path).suffix and hand.name == path):
+                return hand
+        hand = load_hand_file(path)
+        return next((t for t in targets if t.same_as(hand)), hand)
+
+    def _select_pending(self) -> None:
+        if self._pending is None:
+            return
+        target, method, frame = self._pending
+        compare = self.window.compare
+        if all(t is not target for t in compare.state.targets) or method not in compare.state.methods:
+            self._pending = None  # the user changed the grid meanwhile (cancelled, removed): nothing to select
+            return
+        key = compare.state.key(target, method)
+        if key not in compare.state.results:
+            return  # not computed yet: the next comparison_ready
+        self._pending = None
+        compare.select(key)
+        compare.timeline.set_frame(min(frame, compare.timeline.n_frames - 1))
+        self.window.statusBar().showMessage(f"{method} -> {target.name}: frame {frame}, the batch's worst", 8000)

@@ -1,0 +1,91 @@
+"""The batch's tasks on Dask distributed, the only module of the project that imports Dask.
+
+Default: a `LocalCluster` on this machine (one worker process per core, one thread each, no dashboard,
+listening on 127.0.0.1); or a running cluster's scheduler address (its workers must have s2h-viewer
+installed). A task whose worker dies (killed, out of memory) is rerun on another by the scheduler, at most
+`ALLOWED_FAILURES` times, then reported failed. Each task is submitted as paths, never arrays: the workers
+read (and cache) the files themselves.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+
+import dask
+from distributed import Client, LocalCluster, as_completed
+from distributed.scheduler import KilledWorker
+
+from s2h_viewer.batch.plan import BatchUsageError, Task
+from s2h_viewer.batch.task import base_row, run_task
+
+#: worker deaths a task survives before it is reported (so at most 3 attempts)
+ALLOWED_FAILURES = 2
+
+#: the nanny sets MALLOC_TRIM_THRESHOLD_=65536 in its workers, which nearly doubled numpy's CPU on this
+#: kind of work (issue 23): left unset, glibc's own threshold applies
+_CONFIG = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
+           "distributed.scheduler.allowed-failures": ALLOWED_FAILURES,
+           "distributed.worker.daemon": False}
+
+
+@contextmanager
+def batch_client(scheduler: str | None = None, workers: int | None = None) -> Iterator[Client]:
+    """A client on ``scheduler``, else on a `LocalCluster` of ``workers`` processes (default: one per core),
+    closed (cluster and workers stopped) on leaving, Ctrl+C included."""
+    with dask.config.set(_CONFIG):
+        if scheduler:
+            try:
+                client = Client(scheduler, timeout="20s")
+            except (OSError, TimeoutError, ValueError) as exc:
+                raise BatchUsageError(f"--scheduler {scheduler}: cannot reach a Dask scheduler there "
+                                      f"({type(exc).__name__}: {' '.join(str(exc).split())})") from None
+            with client:
+                yield client
+            return
+        with local_cluster(workers) as cluster, Client(cluster) as client:
+            yield client
+
+
+@contextmanager
+def local_cluster(workers: int | None = None, **worker_options) -> Iterator[LocalCluster]:
+    """This machine's cluster as a batch wants it: ``workers`` processes (default one per core) of one thread,
+    on 127.0.0.1, no dashboard, worker deaths bounded (`ALLOWED_FAILURES`), glibc's own malloc trimming;
+    ``worker_options`` go to each worker's nanny (``preload``, say)."""
+    with dask.config.set(_CONFIG), LocalCluster(
+            n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True, dashboard_address=None,
+            host="127.0.0.1", scheduler_port=0, silence_logs=40,
+            scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},  # its health routes: any free port, not 8787
+            **worker_options) as cluster:
+        yield cluster
+
+
+def worker_count(client: Client) -> int:
+    return max(1, sum(client.nthreads().values()))
+
+
+def run_tasks(client: Client, tasks: list[Task], on_row: Callable[[dict], None],
+              on_start: Callable[[int], None] | None = None) -> None:
+    """Run ``tasks`` on ``client``'s cluster; ``on_row`` gets each task's row as it finishes (any order).
+    Pure functions of their paths: each task is submitted once under its own key (``pure=False``)."""
+    if not tasks:
+        return
+    futures = {client.submit(run_task, task, pure=False, key=f"s2h-{task.key}-{i}"): task
+               for i, task in enumerate(tasks)}
+    if on_start:
+        on_start(worker_count(client))
+    try:
+        for future in as_completed(futures):
+            task = futures[future]
+            try:
+                row = future.result()
+            except KilledWorker:
+                row = base_row(task) | {"status": "failed", "error": f"the worker running it died "
+                                                                     f"{ALLOWED_FAILURES + 1} times (a crash or "
+                                                                     f"out of memory)"}
+            except Exception as exc:  # the task itself never raises (run_task): this is the cluster's
+                row = base_row(task) | {"status": "failed", "error": f"{type(exc).__name__}: {exc}"}
+            on_row(row)
+    finally:
+        client.cancel(list(futures), force=True)

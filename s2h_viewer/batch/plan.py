@@ -1,0 +1,142 @@
+"""What a batch will do: the motion and target files its paths name, and one task per motion x target x method,
+each with the files it writes under the output folder. Pure: no Dask, no torch.
+
+Layout: ``OUT/<motion>/<target>/<method>.<format>``, beside it ``<method>.worst.png`` (the worst frame, source
+beside retarget) and ``<method>.row.json`` (the task's summary row, written last: a task whose row says ok,
+for the same inputs and options, is finished and skipped by a rerun).
+"""
+
+from __future__ import annotations
+
+import glob
+import hashlib
+import json
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+
+from s2h_viewer.errors import S2HError
+
+FORMATS = ("glb", "bvh", "npz")
+MOTION_SUFFIXES = (".npz", ".bvh", ".glb", ".gltf", ".fbx")
+HAND_SUFFIXES = (".npz", ".glb", ".gltf", ".fbx", ".bvh")
+
+
+class BatchUsageError(S2HError):
+    """A batch that cannot be planned (no motions, an unknown method, a path that is not there): exit 2."""
+
+
+@dataclass(frozen=True)
+class Input:
+    """A motion or target of the batch: its file (or a shipped sample hand's name) and the name it goes by."""
+
+    path: str
+    name: str
+
+    def fingerprint(self) -> list:
+        """Size and modification time of the file and of its sidecars (TBS frames, joint map: they change how it
+        reads); a sample name: itself. A changed input reruns its tasks."""
+        p = Path(self.path)
+        if not p.is_file():
+            return [self.path]
+        files = [p, *sorted(p.parent.glob(f"{glob.escape(p.stem)}.*.json"))]
+        return [[f.name, f.stat().st_size, f.stat().st_mtime_ns] for f in files if f.is_file()]
+
+
+@dataclass(frozen=True)
+class TaskOptions:
+    format: str = "glb"
+    side: str | None = None
+    render: bool = True  # the worst frame's picture
+
+
+@dataclass(frozen=True)
+class Task:
+    motion: Input
+    target: Input
+    method: str
+    out_dir: str
+    options: TaskOptions = field(default_factory=TaskOptions)
+
+    @property
+    def folder(self) -> Path:
+        return Path(self.out_dir) / self.motion.name / self.target.name
+
+    @property
+    def output(self) -> Path:
+        return self.folder / f"{self.method}.{self.options.format}"
+
+    @property
+    def picture(self) -> Path:
+        return self.folder / f"{self.method}.worst.png"
+
+    @property
+    def row_file(self) -> Path:
+        return self.folder / f"{self.method}.row.json"
+
+    @property
+    def key(self) -> str:
+        """What the task's result depends on: inputs (as files are now), method and options."""
+        what = [self.motion.path, self.motion.fingerprint(), self.target.path, self.target.fingerprint(),
+                self.method, asdict(self.options)]
+        return hashlib.sha256(json.dumps(what, sort_keys=True, default=str).encode()).hexdigest()[:16]
+
+    def finished_row(self) -> dict | None:
+        """The row of an earlier run of this very task if it finished (ok, same key, output there), else None."""
+        try:
+            row = json.loads(self.row_file.read_text())
+        except (OSError, ValueError):
+            return None
+        if not isinstance(row, dict) or row.get("status") != "ok" or row.get("key") != self.key:
+            return None
+        return row if self.output.exists() else None
+
+
+def _files(paths: list[str], suffixes: tuple[str, ...], what: str, allow_names: bool) -> list[Path | str]:
+    """Files named by ``paths`` (folders searched recursively for ``suffixes``, sorted), in the order given."""
+    found: list[Path | str] = []
+    for raw in paths:
+        path = Path(raw)
+        if path.is_dir():
+            inside = sorted(p for p in path.rglob("*") if p.is_file() and p.suffix.lower() in suffixes
+                            and not p.name.startswith("."))
+            if not inside:
+                raise BatchUsageError(f"{path}: no {what} files ({', '.join(suffixes)}) in this folder")
+            found += inside
+        elif path.exists() or path.suffix:
+            found.append(path)  # a file (a missing or unreadable one fails its own tasks, with its error)
+        elif allow_names:
+            found.append(raw)  # a shipped sample hand's name
+        else:
+            raise BatchUsageError(f"{raw}: no such file or folder")
+    return found
+
+
+def _named(items: list[Path | str]) -> list[Input]:
+    """Each file named by its stem; stems that clash get their parent folders' names before them."""
+    inputs: list[Input] = []
+    seen: set[str] = set()
+    for item in dict.fromkeys(str(i) for i in items):  # each file once
+        path = Path(item)
+        stem = path.stem if path.suffix else item
+        name, parents = stem, list(path.resolve().parent.parts[::-1]) if path.suffix else []
+        while name in seen and parents:
+            name = f"{parents.pop(0)}__{name}"
+        if name in seen:
+            raise BatchUsageError(f"{item}: two inputs would be written to the same folder {name!r}")
+        seen.add(name)
+        inputs.append(Input(str(path.resolve()) if path.suffix else item, name))
+    return inputs
+
+
+def plan_batch(motions: list[str], targets: list[str], methods: list[str], out_dir: str | Path,
+               options: TaskOptions = TaskOptions(), known_methods: tuple[str, ...] = ()) -> list[Task]:
+    """The batch's tasks, motion-major; a `BatchUsageError` for what no task could run."""
+    if options.format not in FORMATS:
+        raise BatchUsageError(f"--format {options.format}: use one of {', '.join(FORMATS)}")
+    unknown = [m for m in methods if known_methods and m not in known_methods]
+    if unknown or not methods:
+        raise BatchUsageError(f"unknown method {', '.join(unknown) or '(none)'}; available: {', '.join(known_methods)}")
+    motion_inputs = _named(_files(motions, MOTION_SUFFIXES, "motion", allow_names=False))
+    target_inputs = _named(_files(targets, HAND_SUFFIXES, "hand", allow_names=True))
+    out = str(Path(out_dir))
+    return [Task(m, t, method, out, options) for m in motion_inputs for t in target_inputs for method in methods]

@@ -1,0 +1,125 @@
+"""``report.html``: the batch as one static page a person can skim: failures on top, a table sortable by any
+column (click its head) and filtered by a text box, each row with its worst frame's picture (source beside
+retarget) and links to its files. Links are relative, so the folder can be moved or shared whole.
+"""
+
+from __future__ import annotations
+
+import html
+import math
+import os
+from pathlib import Path
+
+from s2h_viewer.batch.summary import ordered
+from s2h_viewer.io.atomic import atomic_path
+
+_SHOWN = (("motion", "motion"), ("target", "target"), ("method", "method"), ("status", "status"),
+          ("frames", "frames"), ("s_palm", "S_palm"), ("s_finger", "S_finger"), ("contact_p", "contact P"),
+          ("contact_r", "contact R"), ("violations", "violations"), ("sideways_deg", "sideways (deg)"),
+          ("worst_frame", "worst frame"), ("seconds", "seconds"))
+
+_STYLE = """
+body { font: 14px system-ui, sans-serif; margin: 1.2em; color: #222; }
+h1 { font-size: 1.3em; margin: 0 0 .3em; }
+.counts span { margin-right: 1.2em; }
+.failed-count { color: #b00020; font-weight: 600; }
+input { font: inherit; padding: .3em .5em; width: 24em; margin: .6em 0; }
+table { border-collapse: collapse; }
+th { position: sticky; top: 0; background: #f0f0f0; cursor: pointer; user-select: none; white-space: nowrap; }
+th, td { border: 1px solid #ccc; padding: .25em .5em; vertical-align: middle; }
+th.sorted-asc::after { content: " \\25B2"; } th.sorted-desc::after { content: " \\25BC"; }
+td.num { text-align: right; font-variant-numeric: tabular-nums; }
+tr.failed td { background: #fde7ea; }
+td.error { color: #b00020; max-width: 40em; }
+img { height: 120px; display: block; }
+"""
+
+_SCRIPT = """
+const table = document.getElementById('rows');
+const body = table.tBodies[0];
+document.getElementById('filter').addEventListener('input', e => {
+  const words = e.target.value.toLowerCase().split(/\\s+/).filter(Boolean);
+  for (const row of body.rows) {
+    const text = row.dataset.text;
+    row.hidden = !words.every(w => text.includes(w));
+  }
+});
+table.tHead.addEventListener('click', e => {
+  const th = e.target.closest('th');
+  if (!th || th.dataset.col === undefined) return;
+  const col = Number(th.dataset.col);
+  const asc = !th.classList.contains('sorted-asc');
+  for (const h of table.tHead.rows[0].cells) h.classList.remove('sorted-asc', 'sorted-desc');
+  th.classList.add(asc ? 'sorted-asc' : 'sorted-desc');
+  const key = r => r.cells[col].dataset.sort;
+  const rows = Array.from(body.rows);
+  rows.sort((a, b) => {
+    const x = key(a), y = key(b), nx = parseFloat(x), ny = parseFloat(y);
+    const c = (!isNaN(nx) && !isNaN(ny)) ? nx - ny : x.localeCompare(y);
+    return asc ? c : -c;
+  });
+  rows.forEach(r => body.appendChild(r));
+});
+"""
+
+
+def _relative(path: str, folder: Path) -> str:
+    return Path(os.path.relpath(Path(path).resolve(), folder.resolve())).as_posix()
+
+
+def _value(row: dict, key: str) -> tuple[str, str]:
+    """(shown text, sort key) of one cell."""
+    value = row.get(key, "")
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "n/a", ""
+        return (f"{value:.1f}" if key in ("sideways_deg", "seconds") else f"{value:.3f}"), repr(value)
+    return str(value), str(value)
+
+
+def write_report(rows: list[dict], path: str | Path, title: str = "s2h batch") -> Path:
+    path = Path(path)
+    folder = path.parent
+    rows = ordered(rows)
+    failed = sum(r.get("status") == "failed" for r in rows)
+    head = "".join(f'<th data-col="{i}">{html.escape(label)}</th>' for i, (_, label) in enumerate(_SHOWN))
+    head += '<th>worst frame: source | retarget</th><th>files</th><th>error / note</th>'
+    lines = []
+    for row in rows:
+        cells = []
+        for key, _ in _SHOWN:
+            text, sort = _value(row, key)
+            numeric = key not in ("motion", "target", "method", "status")
+            cells.append(f'<td{" class=num" if numeric else ""} data-sort="{html.escape(sort)}">'
+                         f'{html.escape(text)}</td>')
+        picture = row.get("picture") or ""
+        cells.append(f'<td><a href="{html.escape(_relative(picture, folder))}"><img loading="lazy" alt="frame '
+                     f'{row.get("worst_frame", "")}" src="{html.escape(_relative(picture, folder))}"></a></td>'
+                     if picture else "<td></td>")
+        links = [f'<a href="{html.escape(_relative(row[k], folder))}">{label}</a>'
+                 for k, label in (("output", "output"), ("motion_path", "motion"), ("target_path", "target"))
+                 if row.get(k) and (k == "output" or Path(row[k]).is_file())]
+        cells.append(f"<td>{' '.join(links)}</td>")
+        note = row.get("error") or (f"{row['sideways_at'].replace('@', ' at frame ')}"
+                                    if row.get("sideways_at") else "")
+        cells.append(f'<td class="error">{html.escape(note)}</td>' if row.get("error") else
+                     f"<td>{html.escape(note)}</td>")
+        text = " ".join(str(row.get(k, "")) for k in ("motion", "target", "method", "status", "error")).lower()
+        css = ' class="failed"' if row.get("status") == "failed" else ""
+        lines.append(f'<tr{css} data-text="{html.escape(text)}">{"".join(cells)}</tr>')
+    page = f"""<!doctype html>
+<html lang="en"><head><meta charset="utf-8"><title>{html.escape(title)}</title><style>{_STYLE}</style></head>
+<body>
+<h1>{html.escape(title)}</h1>
+<div class="counts"><span>{len(rows)} tasks</span><span>{len(rows) - failed} ok</span>
+<span class="{'failed-count' if failed else ''}">{failed} failed</span></div>
+<input id="filter" type="search" placeholder="filter: words of motion, target, method, status or error">
+<table id="rows"><thead><tr>{head}</tr></thead><tbody>
+{chr(10).join(lines)}
+</tbody></table>
+<script>{_SCRIPT}</script>
+</body></html>
+"""
+    with atomic_path(path) as tmp:
+        tmp.write_text(page, encoding="utf-8")
+    return path

@@ -1,0 +1,115 @@
+"""`s2h batch`: plan, skip what an earlier run finished, run the rest on the cluster with a progress bar
+(done / failed / running, ETA), then write ``summary.csv`` and ``report.html``.
+
+Exit status: 0 when every task is ok, 1 when some failed (the summary says which), 2 for a usage error
+(raised as `BatchUsageError` before anything runs), 130 after Ctrl+C (the cluster stopped, the finished
+tasks kept, no half-written file left: outputs are renamed into place whole, and the temporary files of
+interrupted writes are removed).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from tqdm import tqdm
+
+from s2h_viewer.batch.plan import Task, TaskOptions, plan_batch
+from s2h_viewer.batch.report import write_report
+from s2h_viewer.batch.summary import write_summary
+from s2h_viewer.batch.task import base_row
+from s2h_viewer.io.atomic import remove_stale_temps
+
+
+@dataclass(frozen=True)
+class BatchConfig:
+    motions: list[str]
+    targets: list[str]
+    methods: list[str]
+    out: str
+    options: TaskOptions = TaskOptions()
+    scheduler: str | None = None  # a running Dask scheduler's address; None: a LocalCluster here
+    workers: int | None = None  # LocalCluster processes (default: one per core)
+
+
+@dataclass
+class BatchResult:
+    rows: list[dict]  # one per task, in the plan's order
+    skipped: int  # finished by an earlier run
+    seconds: float
+    summary: Path
+    report: Path
+    interrupted: bool = False
+    failed: list[dict] = field(default_factory=list)
+
+    @property
+    def exit_code(self) -> int:
+        return 130 if self.interrupted else (1 if self.failed else 0)
+
+
+def run_batch(config: BatchConfig, show_progress: bool | None = None) -> BatchResult:
+    """Run a batch (see the module docstring); ``show_progress`` None: a bar when stderr is a terminal."""
+    from s2h_viewer.retarget import METHODS  # registers every method, to check the names before any work
+
+    start = time.perf_counter()
+    tasks = plan_batch(config.motions, config.targets, config.methods, config.out, config.options, tuple(METHODS))
+    rows: dict[int, dict] = {}
+    for i, task in enumerate(tasks):
+        earlier = task.finished_row()
+        if earlier is not None:
+            rows[i] = earlier
+    skipped = len(rows)
+    todo = [i for i in range(len(tasks)) if i not in rows]
+    index = {(tasks[i].motion.name, tasks[i].target.name, tasks[i].method): i for i in todo}
+    interrupted = False
+    with tqdm(total=len(tasks), initial=skipped, desc="batch", unit="task", file=sys.stderr,
+              disable=(not sys.stderr.isatty()) if show_progress is None else not show_progress) as bar:
+        counts = {"ok": sum(r["status"] == "ok" for r in rows.values()), "failed": 0, "running": 0}
+        workers = [0]
+
+        def show() -> None:
+            counts["running"] = min(workers[0], len(tasks) - len(rows))
+            bar.set_postfix_str(f"ok {counts['ok']}, failed {counts['failed']}, running {counts['running']}"
+                                + (f", {skipped} done before" if skipped else ""), refresh=False)
+
+        def started(n_workers: int) -> None:
+            workers[0] = n_workers
+            show()
+            bar.refresh()
+
+        def finished(row: dict) -> None:
+            i = index[(row["motion"], row["target"], row["method"])]
+            rows[i] = row
+            counts["ok" if row["status"] == "ok" else "failed"] += 1
+            show()
+            bar.update()
+
+        if todo:
+            from s2h_viewer.batch.cluster import batch_client, run_tasks
+
+            try:
+                with batch_client(config.scheduler, config.workers) as client:
+                    run_tasks(client, [tasks[i] for i in todo], finished, started)
+            except KeyboardInterrupt:
+                interrupted = True
+    if interrupted:
+        for i in todo:
+            if i not in rows:
+                rows[i] = base_row(tasks[i]) | {"status": "failed", "error": "not run: the batch was interrupted "
+                                                                             "(Ctrl+C); run it again to finish"}
+                _remove_partial_files(tasks[i])
+    ordered_rows = [rows[i] for i in range(len(tasks))]
+    out = Path(config.out)
+    summary = write_summary(ordered_rows, out / "summary.csv")
+    report = write_report(ordered_rows, out / "report.html", title=f"s2h batch: {out.resolve().name}")
+    return BatchResult(ordered_rows, skipped, time.perf_counter() - start, summary, report, interrupted,
+                       [r for r in ordered_rows if r["status"] != "ok"])
+
+
+def _remove_partial_files(task: Task) -> None:
+    """The temporary files a write killed by Ctrl+C left behind (their process is gone by now)."""
+    for path in (task.output, task.picture, task.row_file, task.output.with_name(f"{task.method}.tbs.json")):
+        if path.parent.exists():
+            remove_stale_temps(path)

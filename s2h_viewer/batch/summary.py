@@ -1,0 +1,64 @@
+"""``summary.csv``: one row per task, in the plan's order, failures first; read back by the viewer.
+
+Scores are written with 4 decimals; a score with nothing to measure (no contacts: DESIGN.md section 5) is
+empty, not "nan".
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+from s2h_viewer.errors import InputFileError, reading, require_readable_file
+from s2h_viewer.io.atomic import atomic_path
+
+COLUMNS = ("motion", "target", "method", "status", "error", "frames", "seconds", "s_palm", "s_finger",
+           "contact_p", "contact_r", "palm_r", "violations", "sideways_deg", "sideways_at", "worst_frame",
+           "worst_error", "output", "picture", "motion_path", "target_path")
+SCORES = ("s_palm", "s_finger", "contact_p", "contact_r", "palm_r", "violations", "sideways_deg", "worst_error")
+
+
+def _cell(value) -> str:
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return ""
+    if isinstance(value, float):
+        return f"{value:.4f}"
+    return str(value)
+
+
+def ordered(rows: list[dict]) -> list[dict]:
+    """Failures first, each group in the plan's order (the sort is stable)."""
+    return sorted(rows, key=lambda r: r.get("status") != "failed")
+
+
+def write_summary(rows: list[dict], path: str | Path) -> Path:
+    path = Path(path)
+    with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:
+        writer = csv.writer(f)
+        writer.writerow(COLUMNS)
+        for row in ordered(rows):
+            writer.writerow([_cell(row.get(c)) for c in COLUMNS])
+    return path
+
+
+def read_summary(path: str | Path) -> list[dict]:
+    """The rows of a batch's ``summary.csv`` (scores as floats, NaN where empty), for the viewer."""
+    path = require_readable_file(path)
+    with reading(path, "a batch summary"):
+        with open(path, newline="") as f:
+            rows = list(csv.DictReader(f))
+    if not rows and path.read_text().strip() and not path.read_text().startswith("motion,"):
+        raise InputFileError(path, "not a batch summary (its first line should name the columns motion, "
+                                   "target, method, ...)")
+    missing = [c for c in ("motion", "target", "method", "status") if rows and c not in rows[0]]
+    if missing:
+        raise InputFileError(path, f"not a batch summary: no column {', '.join(missing)}")
+    for row in rows:
+        for key in SCORES:
+            try:
+                row[key] = float(row.get(key) or "nan")
+            except ValueError:
+                raise InputFileError(path, f"{key} {row[key]!r} of {row['motion']} -> {row['target']} "
+                                           f"({row['method']}) is not a number") from None
+    return rows

@@ -1,0 +1,124 @@
+"""One batch task, in whatever process runs it: read the motion and target (cached per process), retarget,
+score, write the output, the worst frame's picture and the summary row, each atomically (the row last).
+
+No Dask here: the cluster calls `run_task`, and so can a test or a loop in one process. A task never raises:
+a file that cannot be read, or any other failure, becomes a failed row with its one-line error.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+import traceback
+from collections import OrderedDict
+from pathlib import Path
+
+import numpy as np
+
+from s2h_viewer.batch.plan import Task
+from s2h_viewer.errors import S2HError
+from s2h_viewer.io.atomic import atomic_path
+
+#: inputs each worker keeps loaded (hands with their meshes and solved frames, motions with their rigs)
+CACHE_SIZE = 24
+_cache: OrderedDict[tuple, object] = OrderedDict()
+
+
+def _cached(key: tuple, load):
+    if key in _cache:
+        _cache.move_to_end(key)
+        return _cache[key]
+    value = load()
+    _cache[key] = value
+    while len(_cache) > CACHE_SIZE:
+        _cache.popitem(last=False)
+    return value
+
+
+def _load_motion(task: Task):
+    """The motion and the hand it is performed on (its own rig, else its sample hand)."""
+    from s2h_viewer.io.files import RigOptions, load_motion_file
+    from s2h_viewer.samples import load_sample_hand
+
+    def load():
+        motion, rig = load_motion_file(task.motion.path, options=RigOptions(side=task.options.side))
+        return motion, rig or load_sample_hand(motion.hand_name)
+
+    return _cached(("motion", task.motion.path, repr(task.motion.fingerprint()), task.options.side), load)
+
+
+def _load_target(task: Task):
+    from s2h_viewer.io.files import RigOptions, load_hand_file
+
+    return _cached(("hand", task.target.path, repr(task.target.fingerprint()), task.options.side),
+                   lambda: load_hand_file(task.target.path, RigOptions(side=task.options.side)))
+
+
+def base_row(task: Task) -> dict:
+    return {"motion": task.motion.name, "target": task.target.name, "method": task.method, "key": task.key,
+            "motion_path": task.motion.path, "target_path": task.target.path, "output": "", "picture": ""}
+
+
+def run_task(task: Task) -> dict:
+    """Do one task and return its summary row (also written to ``task.row_file``)."""
+    start = time.perf_counter()
+    row = base_row(task)
+    try:
+        row |= _retarget_and_write(task)
+        row["status"], row["error"] = "ok", ""
+    except S2HError as exc:
+        row["status"], row["error"] = "failed", str(exc)
+    except KeyError as exc:  # an unknown method or joint, raised with its message
+        row["status"], row["error"] = "failed", str(exc.args[0] if exc.args else exc)
+    except Exception as exc:  # a bug or a library's surprise: one line in the summary, the traceback in the row
+        row["status"], row["error"] = "failed", f"{type(exc).__name__}: {' '.join(str(exc).split())}"
+        row["traceback"] = traceback.format_exc()
+    row["seconds"] = round(time.perf_counter() - start, 3)
+    with atomic_path(task.row_file) as tmp:
+        tmp.write_text(json.dumps(row, indent=1))
+    return row
+
+
+def _retarget_and_write(task: Task) -> dict:
+    from s2h_viewer.io.files import save_motion_file
+    from s2h_viewer.retarget import retarget
+    from s2h_viewer.semantics.flexion import sideways_peak
+    from s2h_viewer.semantics.metrics import score_retarget_frames
+    from s2h_viewer.hand.kinematics import forward_kinematics
+
+    motion, source = _load_motion(task)
+    target = _load_target(task)
+    moved = retarget(motion, source, target, task.method)
+    scores, frame_error = score_retarget_frames(source, motion.q_tbs, target, moved.q_tbs)
+    worst = int(np.argmax(frame_error)) if len(frame_error) else 0
+    positions = forward_kinematics(target, moved.q_tbs).positions.numpy()
+    peak = sideways_peak(positions)
+    save_motion_file(task.output, moved, target)
+    row = {"frames": motion.n_frames, "s_palm": scores.s_palm, "s_finger": scores.s_finger,
+           "contact_p": scores.contact_precision, "contact_r": scores.contact_recall,
+           "palm_r": scores.palm_contact_recall, "violations": scores.violation_rate,
+           "sideways_deg": peak.degrees, "sideways_at": "" if np.isnan(peak.degrees) else f"{peak.joint}@{peak.frame}",
+           "worst_frame": worst, "worst_error": float(frame_error[worst]) if len(frame_error) else 0.0,
+           "output": str(task.output)}
+    if task.options.render:
+        _render_worst(task, source, motion, target, moved, worst)
+        row["picture"] = str(task.picture)
+    return row
+
+
+def _render_worst(task: Task, source, motion, target, moved, frame: int) -> None:
+    """The worst frame, source beside retarget, off screen."""
+    from s2h_viewer.render.offscreen import render_hands
+
+    render_hands([source, target], [motion.q_tbs[frame], moved.q_tbs[frame]], task.picture,
+                 labels=[f"source {source.name} f{frame}", f"{task.method} -> {target.name} f{frame}"],
+                 columns=2, view="palm", cell_size=(320, 320))
+
+
+def read_row(task: Task) -> dict | None:
+    """The row an earlier run wrote for ``task`` (whatever its status), None when there is none."""
+    try:
+        row = json.loads(Path(task.row_file).read_text())
+    except (OSError, ValueError):
+        return None
+    return row if isinstance(row, dict) else None

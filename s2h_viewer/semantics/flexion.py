@@ -1,0 +1,69 @@
+"""Sideways flexion (DESIGN.md section 9): how far a finger's PIP or DIP bends out of its curl plane.
+
+For each PIP/DIP joint flexing more than `MIN_FLEXION_DEG` in a frame, the angle between its flexion axis
+(parent bone x child bone, from FK positions) and the palm's across axis (index MCP -> pinky MCP): 0 is a
+clean curl toward the palm, 90 a finger bending sideways. From positions alone, so it holds for any rig.
+The thumb's IP is left out: opposition turns its hinge away from the palm's across axis by design.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from s2h_viewer.hand import topology as topo
+
+MIN_FLEXION_DEG = 10.0
+#: a joint's tightest curls: frames where it flexes at least this share of its largest flexion in the clip
+TIGHTEST_SHARE = 0.8
+#: the PIP and DIP joints of the four fingers, as (name, index into the 21 joints)
+HINGE_JOINTS: tuple[tuple[str, int], ...] = tuple(
+    (f"{finger}_{level}", topo.JOINT_NAMES.index(f"{finger}_{level}"))
+    for finger in topo.FINGERS[1:] for level in ("pip", "dip"))
+
+
+def flexion_and_sideways(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(T, 8) flexion and sideways angles in degrees of `HINGE_JOINTS` from (T, 21, 3) joint positions;
+    sideways is NaN where the joint flexes less than `MIN_FLEXION_DEG` (no axis to speak of)."""
+    positions = np.asarray(positions, dtype=np.float64)
+    joints = np.array([j for _, j in HINGE_JOINTS])
+    parent = positions[:, joints] - positions[:, topo.PARENTS[joints]]
+    child = positions[:, joints + 1] - positions[:, joints]
+    axis = np.cross(parent, child)
+    sin = np.linalg.norm(axis, axis=-1)
+    cos = (parent * child).sum(-1)
+    flexion = np.degrees(np.arctan2(sin, cos))
+    index_mcp, pinky_mcp = topo.JOINT_NAMES.index("index_mcp"), topo.JOINT_NAMES.index("pinky_mcp")
+    across = positions[:, pinky_mcp] - positions[:, index_mcp]
+    across /= np.maximum(np.linalg.norm(across, axis=-1, keepdims=True), 1e-12)
+    along = np.abs((axis * across[:, None]).sum(-1)) / np.maximum(sin, 1e-12)
+    sideways = np.degrees(np.arccos(np.clip(along, 0.0, 1.0)))
+    return flexion, np.where(flexion > MIN_FLEXION_DEG, sideways, np.nan)
+
+
+@dataclass(frozen=True)
+class SidewaysPeak:
+    """The clip's worst sideways flexion at its tightest curls: degrees, which joint, which frame."""
+
+    degrees: float  # NaN when no PIP/DIP flexes past MIN_FLEXION_DEG
+    joint: str = ""
+    frame: int = -1
+
+    def describe(self) -> str:
+        if np.isnan(self.degrees):
+            return "no finger curls"
+        name = self.joint.replace("_", " ").replace("pip", "PIP").replace("dip", "DIP")
+        return f"{name} bends {self.degrees:.0f} deg sideways at frame {self.frame}"
+
+
+def sideways_peak(positions: np.ndarray) -> SidewaysPeak:
+    """The largest sideways angle over each joint's tightest-curl frames (at least `TIGHTEST_SHARE` of that
+    joint's largest flexion, and past `MIN_FLEXION_DEG`): the clip's figure."""
+    flexion, sideways = flexion_and_sideways(positions)
+    tightest = (flexion >= TIGHTEST_SHARE * flexion.max(axis=0, keepdims=True)) & ~np.isnan(sideways)
+    if not tightest.any():
+        return SidewaysPeak(float("nan"))
+    masked = np.where(tightest, sideways, -1.0)
+    frame, joint = np.unravel_index(int(np.argmax(masked)), masked.shape)
+    return SidewaysPeak(float(masked[frame, joint]), HINGE_JOINTS[joint][0], int(frame))

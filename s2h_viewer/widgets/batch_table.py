@@ -1,0 +1,93 @@
+"""A batch's ``summary.csv`` as a table, worst first (failures, then the lowest S_finger); double-click (or
+Enter on) a row to look at that clip, target and method in the compare grid. Sortable by any column."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+from PySide6.QtCore import Qt, Signal
+from PySide6.QtGui import QColor, QKeySequence, QShortcut
+from PySide6.QtWidgets import QDialog, QHeaderView, QLabel, QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget
+
+#: (header, row key, decimals or None for text)
+COLUMNS = (("Motion", "motion", None), ("Target", "target", None), ("Method", "method", None),
+           ("Status", "status", None), ("S_finger", "s_finger", 3), ("S_palm", "s_palm", 3),
+           ("Contact P", "contact_p", 3), ("Contact R", "contact_r", 3), ("Violations", "violations", 3),
+           ("Sideways\n(deg)", "sideways_deg", 1), ("Worst\nframe", "worst_frame", None), ("Error", "error", None))
+FAILED_COLOUR = QColor("#fde7ea")
+
+
+def worst_first(rows: list[dict]) -> list[dict]:
+    """Failures first, then by S_finger from the lowest (a row with no score after those with one)."""
+    def key(row: dict) -> tuple:
+        score = row.get("s_finger", math.nan)
+        return row.get("status") != "failed", math.isnan(score), score
+    return sorted(rows, key=key)
+
+
+class _Item(QTableWidgetItem):
+    """A cell that sorts by number where it holds one."""
+
+    def __init__(self, text: str, number: float | None):
+        super().__init__(text)
+        self.number = number
+
+    def __lt__(self, other: QTableWidgetItem) -> bool:
+        if isinstance(other, _Item) and self.number is not None and other.number is not None:
+            return self.number < other.number
+        return super().__lt__(other)
+
+
+class BatchTable(QDialog):
+    """The rows of one batch; ``row_chosen`` carries the summary row a person double-clicked."""
+
+    row_chosen = Signal(dict)
+
+    def __init__(self, summary: str | Path, rows: list[dict], parent: QWidget | None = None):
+        super().__init__(parent)
+        self.rows = worst_first(rows)
+        failed = sum(r.get("status") == "failed" for r in self.rows)
+        self.setWindowTitle(f"Batch: {Path(summary).parent.name}/{Path(summary).name}")
+        self.table = QTableWidget(len(self.rows), len(COLUMNS), self)
+        self.table.setHorizontalHeaderLabels([c for c, _, _ in COLUMNS])
+        self.table.verticalHeader().setVisible(False)
+        self.table.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
+        self.table.setSelectionBehavior(QTableWidget.SelectionBehavior.SelectRows)
+        self.table.setSelectionMode(QTableWidget.SelectionMode.SingleSelection)
+        for r, row in enumerate(self.rows):
+            for c, (_, key, decimals) in enumerate(COLUMNS):
+                value = row.get(key, "")
+                if decimals is not None:
+                    number = None if math.isnan(value) else float(value)
+                    item = _Item("n/a" if number is None else f"{number:.{decimals}f}", number)
+                    item.setTextAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
+                else:
+                    text = str(value)
+                    item = _Item(text, float(text) if key == "worst_frame" and text.isdigit() else None)
+                if key == "error" and value:
+                    item.setToolTip(str(value))
+                if key == "sideways_deg" and row.get("sideways_at"):
+                    joint, _, frame = str(row["sideways_at"]).partition("@")
+                    item.setToolTip(f"{joint.replace('_', ' ')} at frame {frame}")
+                item.setData(Qt.ItemDataRole.UserRole, r)
+                if row.get("status") == "failed":
+                    item.setBackground(FAILED_COLOUR)
+                self.table.setItem(r, c, item)
+        self.table.resizeColumnsToContents()
+        self.table.horizontalHeader().setSectionResizeMode(len(COLUMNS) - 1, QHeaderView.ResizeMode.Stretch)
+        self.table.setSortingEnabled(True)
+        self.table.cellDoubleClicked.connect(lambda r, _c: self._choose(r))
+        QShortcut(QKeySequence(Qt.Key.Key_Return), self.table, lambda: self._choose(self.table.currentRow()))
+        if self.rows:
+            self.table.selectRow(0)
+        layout = QVBoxLayout(self)
+        layout.addWidget(QLabel(f"{len(self.rows)} tasks, {failed} failed. Worst first; click a heading to sort, "
+                                f"double-click a row (or Enter) to show it in Compare at its worst frame."))
+        layout.addWidget(self.table)
+        self.resize(min(1200, self.table.horizontalHeader().length() + 40), 420)
+
+    def _choose(self, table_row: int) -> None:
+        item = self.table.item(table_row, 0)
+        if item is not None:
+            self.row_chosen.emit(self.rows[item.data(Qt.ItemDataRole.UserRole)])

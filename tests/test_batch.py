@@ -1,0 +1,180 @@
+"""`s2h batch` on real Dask clusters: a LocalCluster of 2 worker processes, and a scheduler and worker started as
+`dask` subprocesses on 127.0.0.1 (ended by their pids). Results against the in-process retarget, a corrupt
+target, a worker that dies, reruns, the summary, the report."""
+
+from __future__ import annotations
+
+import csv
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from s2h_viewer.batch.cluster import local_cluster
+from s2h_viewer.batch.plan import BatchUsageError, TaskOptions, plan_batch
+from s2h_viewer.batch.runner import BatchConfig, run_batch
+from s2h_viewer.batch.summary import COLUMNS, read_summary
+from s2h_viewer.cli import main
+from s2h_viewer.io.files import load_hand_file, load_motion_file
+from s2h_viewer.io.npz import load_motion
+from s2h_viewer.retarget import METHODS, retarget
+from s2h_viewer.samples import ASSETS_DIR
+
+PLUGIN = Path(__file__).parent / "batch_plugins" / "crash_once.py"
+GESTURES = str(ASSETS_DIR / "motions" / "gestures.npz")
+COUNTING = str(ASSETS_DIR / "motions" / "counting.npz")
+GODOT_LEFT = str(ASSETS_DIR / "hands" / "real" / "godot_hand_l.gltf")
+
+
+@pytest.fixture(scope="module")
+def cluster(tmp_path_factory):
+    """2 worker processes that know the crash_once method; the marker file of each test is its own."""
+    import importlib.util
+    spec = importlib.util.spec_from_file_location("crash_once", PLUGIN)
+    spec.loader.exec_module(importlib.util.module_from_spec(spec))  # the client knows the method too
+    os.environ["S2H_CRASH_MARKER"] = str(tmp_path_factory.mktemp("crash") / "crashed")
+    with local_cluster(2, preload=[str(PLUGIN)]) as local:
+        yield local
+    os.environ.pop("S2H_CRASH_MARKER", None)
+
+
+@pytest.fixture
+def corrupt_target(tmp_path) -> str:
+    path = tmp_path / "inputs" / "broken.glb"
+    path.parent.mkdir()
+    path.write_bytes(b"glTF\x02\x00\x00\x00" + (10_000).to_bytes(4, "little") + b"\x00" * 40)  # declares 10000 bytes
+    return str(path)
+
+
+def summary_without_timings(path: Path) -> list[dict]:
+    with open(path, newline="") as f:
+        return [{k: v for k, v in row.items() if k != "seconds"} for row in csv.DictReader(f)]
+
+
+def test_the_plan_names_every_task_and_refuses_what_cannot_run(tmp_path):
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    for folder in ("a", "b"):
+        (tmp_path / folder / "clip.npz").write_bytes(Path(GESTURES).read_bytes())
+    tasks = plan_batch([str(tmp_path / "a"), str(tmp_path / "b")], ["iris", GODOT_LEFT], ["tbs_copy", "asrn"],
+                       tmp_path / "out", known_methods=tuple(METHODS))
+    assert len(tasks) == 2 * 2 * 2
+    assert [t.motion.name for t in tasks[::4]] == ["clip", "b__clip"]  # the same stem twice: told apart
+    assert tasks[0].output == tmp_path / "out" / "clip" / "iris" / "tbs_copy.glb"
+    assert len({t.key for t in tasks}) == len(tasks)
+    with pytest.raises(BatchUsageError, match="unknown method nope"):
+        plan_batch([GESTURES], ["iris"], ["nope"], tmp_path, known_methods=tuple(METHODS))
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(BatchUsageError, match="no motion files"):
+        plan_batch([str(tmp_path / "empty")], ["iris"], ["tbs_copy"], tmp_path, known_methods=tuple(METHODS))
+    with pytest.raises(BatchUsageError, match="--format fbx"):
+        plan_batch([GESTURES], ["iris"], ["tbs_copy"], tmp_path, TaskOptions(format="fbx"), tuple(METHODS))
+
+
+def test_a_batch_on_a_local_cluster_equals_the_in_process_retarget_and_a_rerun_skips_it(cluster, tmp_path,
+                                                                                    corrupt_target):
+    out = tmp_path / "out"
+    config = BatchConfig([GESTURES], ["iris", corrupt_target], ["tbs_copy", "asrn"], str(out),
+                         TaskOptions(format="npz"), scheduler=cluster.scheduler_address)
+    first = run_batch(config, show_progress=False)
+    assert first.exit_code == 1 and first.skipped == 0
+    by_task = {(r["target"], r["method"]): r for r in first.rows}
+    for method in ("tbs_copy", "asrn"):  # a corrupt target fails its own tasks, with its one-line error
+        failed = by_task[("broken", method)]
+        assert failed["status"] == "failed" and failed["error"].startswith(corrupt_target)
+        assert "\n" not in failed["error"] and not (out / "gestures" / "broken" / f"{method}.npz").exists()
+    motion, _ = load_motion_file(GESTURES)
+    source, target = load_hand_file("birch"), load_hand_file("iris")
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)  # as the workers run (the nanny's OMP_NUM_THREADS=1): the same kernels, bit for bit
+    try:
+        for method in ("tbs_copy", "asrn"):
+            row = by_task[("iris", method)]
+            assert row["status"] == "ok" and row["frames"] == motion.n_frames
+            written = load_motion(out / "gestures" / "iris" / f"{method}.npz")
+            assert np.array_equal(written.q_tbs, retarget(motion, source, target, method).q_tbs)
+            assert Path(row["picture"]).stat().st_size > 1000
+            assert 0.9 < row["s_finger"] <= 1.0 and 0 <= row["worst_frame"] < motion.n_frames
+    finally:
+        torch.set_num_threads(threads)
+    rows = read_summary(out / "summary.csv")
+    assert [r["status"] for r in rows] == ["failed", "failed", "ok", "ok"]  # failures on top
+    assert list(rows[0]) == list(COLUMNS)
+    page = (out / "report.html").read_text()
+    assert page.count("<tr") == 5 and "1 failed" not in page and "2 failed" in page
+    assert 'src="gestures/iris/asrn.worst.png"' in page
+
+    row_files = sorted((out / "gestures" / "iris").glob("*.row.json"))
+    stamps = [p.stat().st_mtime_ns for p in row_files]
+    before = summary_without_timings(out / "summary.csv")
+    second = run_batch(config, show_progress=False)
+    assert second.skipped == 2 and second.exit_code == 1  # the ok tasks skipped, the broken file tried again
+    assert [p.stat().st_mtime_ns for p in row_files] == stamps
+    assert summary_without_timings(out / "summary.csv") == before
+
+
+def test_a_task_whose_worker_dies_is_run_again_and_finishes(cluster, tmp_path):
+    marker = Path(os.environ["S2H_CRASH_MARKER"])
+    marker.unlink(missing_ok=True)
+    result = run_batch(BatchConfig([COUNTING], ["iris"], ["crash_once"], str(tmp_path),
+                                   TaskOptions(format="npz", render=False), scheduler=cluster.scheduler_address),
+                       show_progress=False)
+    assert marker.exists()  # the first attempt killed its worker
+    assert result.exit_code == 0 and result.rows[0]["status"] == "ok"
+    assert (tmp_path / "counting" / "iris" / "crash_once.npz").exists()
+
+
+def _start(args: list[str], log: Path) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", *args], stdout=log.open("w"), stderr=subprocess.STDOUT,
+                            start_new_session=True)
+
+
+def _stop(process: subprocess.Popen) -> None:
+    """End a process we started, by its pid: SIGTERM, then SIGKILL if it lingers."""
+    if process.poll() is None:
+        os.kill(process.pid, signal.SIGTERM)
+        try:
+            process.wait(timeout=20)
+        except subprocess.TimeoutExpired:
+            os.kill(process.pid, signal.SIGKILL)
+            process.wait()
+
+
+def test_the_cli_on_its_own_local_cluster_and_on_a_scheduler_started_here_give_the_same_summary(tmp_path, capsys):
+    args = ["batch", "--motions", COUNTING, "--targets", "iris", GODOT_LEFT, "--methods", "tbs_copy",
+            "--format", "bvh", "--no-pictures", "--quiet"]
+    assert main([*args, "--out", str(tmp_path / "local"), "--workers", "2"]) == 0
+    assert "2 tasks: 2 ok, 0 failed" in capsys.readouterr().out
+
+    scheduler_file = tmp_path / "scheduler.json"
+    scheduler = _start(["distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", "0", "--no-dashboard",
+                        "--scheduler-file", str(scheduler_file)], tmp_path / "scheduler.log")
+    worker = None
+    try:
+        deadline = time.monotonic() + 60
+        while not scheduler_file.exists() and time.monotonic() < deadline and scheduler.poll() is None:
+            time.sleep(0.2)
+        import json
+        address = json.loads(scheduler_file.read_text())["address"]
+        assert address.startswith("tcp://127.0.0.1:")
+        worker = _start(["distributed.cli.dask_worker", address, "--host", "127.0.0.1", "--nworkers", "1",
+                         "--nthreads", "1", "--no-dashboard"], tmp_path / "worker.log")
+        assert main([*args, "--out", str(tmp_path / "remote"), "--scheduler", address]) == 0
+    finally:
+        for process in (worker, scheduler):
+            if process is not None:
+                _stop(process)
+    local, remote = (summary_without_timings(tmp_path / name / "summary.csv") for name in ("local", "remote"))
+    for rows in (local, remote):
+        for row in rows:
+            row["output"] = Path(row["output"]).name
+    assert local == remote and len(local) == 2
+    assert main(["batch", "--motions", COUNTING, "--targets", "iris", "--out", str(tmp_path / "x"),
+                 "--scheduler", "tcp://127.0.0.1:9", "--quiet"]) == 2  # no scheduler there: one line, exit 2
+    assert "cannot reach a Dask scheduler" in capsys.readouterr().err
