@@ -229,13 +229,16 @@ def _cmd_batch(args: argparse.Namespace) -> int:
                          scheduler=args.scheduler, workers=args.workers)
     result = run_batch(config, show_progress=False if args.quiet else None)
     ok = len(result.rows) - len(result.failed)
-    print(f"{len(result.rows)} tasks: {ok} ok, {len(result.failed)} failed"
+    not_run = sum(bool(r.get("not_run")) for r in result.failed)
+    print(f"{len(result.rows)} tasks: {ok} ok, {len(result.failed) - not_run} failed"
+          + (f", {not_run} not run" if not_run else "")
           + (f" ({result.skipped} finished by an earlier run)" if result.skipped else "")
           + f", {result.seconds:.1f} s" + (" (interrupted: run it again to finish)" if result.interrupted else ""))
-    for row in result.failed[:10]:
+    failed = [r for r in result.failed if not r.get("not_run")]
+    for row in failed[:10]:
         print(f"  failed: {row['motion']} -> {row['target']} ({row['method']}): {row['error']}", file=sys.stderr)
-    if len(result.failed) > 10:
-        print(f"  ... and {len(result.failed) - 10} more (see the summary)", file=sys.stderr)
+    if len(failed) > 10:
+        print(f"  ... and {len(failed) - 10} more (see the summary)", file=sys.stderr)
     print(f"wrote {result.summary}\nwrote {result.report}")
     return result.exit_code
 

@@ -178,3 +178,46 @@ def test_the_cli_on_its_own_local_cluster_and_on_a_scheduler_started_here_give_t
     assert main(["batch", "--motions", COUNTING, "--targets", "iris", "--out", str(tmp_path / "x"),
                  "--scheduler", "tcp://127.0.0.1:9", "--quiet"]) == 2  # no scheduler there: one line, exit 2
     assert "cannot reach a Dask scheduler" in capsys.readouterr().err
+
+
+def _live_processes_in_group(pgid: int) -> list[int]:
+    """Processes of a process group that still run (zombies left to a non-reaping init are not running)."""
+    live = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[2]) == pgid and fields[0] != "Z":
+            live.append(int(stat.parent.name))
+    return live
+
+
+def test_ctrl_c_stops_the_cluster_keeps_what_finished_and_leaves_no_partial_file(tmp_path):
+    out = tmp_path / "out"
+    command = [sys.executable, "-m", "s2h_viewer.cli", "batch", "--motions", GESTURES, COUNTING, "--targets", "iris",
+               "laurel", "juniper", "--methods", "tbs_copy,asrn", "--format", "npz", "--no-pictures", "--quiet",
+               "--out", str(out), "--workers", "2"]
+    batch = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             start_new_session=True)  # its own process group, as a terminal's job is
+    try:
+        deadline = time.monotonic() + 240
+        while not list(out.rglob("*.row.json")) and time.monotonic() < deadline and batch.poll() is None:
+            time.sleep(0.2)
+        assert batch.poll() is None, batch.communicate()
+        os.killpg(batch.pid, signal.SIGINT)  # Ctrl+C: the whole group, workers included
+        stdout, stderr = batch.communicate(timeout=120)
+    finally:
+        if batch.poll() is None:
+            os.killpg(batch.pid, signal.SIGKILL)
+    assert batch.returncode == 130, stderr
+    assert "interrupted: run it again to finish" in stdout and "Traceback" not in stderr
+    deadline = time.monotonic() + 30  # the workers' nannies end them as the client closes the cluster
+    while _live_processes_in_group(batch.pid) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert not _live_processes_in_group(batch.pid)  # no worker outlives it
+    assert not [p for p in out.rglob(".*") if p.is_file()]  # no temporary file of a killed write
+    rows = read_summary(out / "summary.csv")
+    done = [r for r in rows if r["status"] == "ok"]
+    assert 1 <= len(done) < 12 and all(Path(r["output"]).stat().st_size > 0 for r in done)
+    assert all("interrupted" in r["error"] for r in rows if r["status"] != "ok")

@@ -10,6 +10,8 @@ read (and cache) the files themselves.
 from __future__ import annotations
 
 import os
+import signal
+import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
@@ -53,12 +55,30 @@ def local_cluster(workers: int | None = None, **worker_options) -> Iterator[Loca
     """This machine's cluster as a batch wants it: ``workers`` processes (default one per core) of one thread,
     on 127.0.0.1, no dashboard, worker deaths bounded (`ALLOWED_FAILURES`), glibc's own malloc trimming;
     ``worker_options`` go to each worker's nanny (``preload``, say)."""
-    with dask.config.set(_CONFIG), LocalCluster(
-            n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True, dashboard_address=None,
-            host="127.0.0.1", scheduler_port=0, silence_logs=40,
-            scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},  # its health routes: any free port, not 8787
-            **worker_options) as cluster:
-        yield cluster
+    with dask.config.set(_CONFIG):
+        with _sigint_ignored():  # while the workers start: they keep ignoring it
+            cluster = LocalCluster(
+                n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
+                dashboard_address=None, host="127.0.0.1", scheduler_port=0, silence_logs=40,
+                scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},  # its health routes: any free port
+                **worker_options)
+        with cluster:
+            yield cluster
+
+
+@contextmanager
+def _sigint_ignored() -> Iterator[None]:
+    """SIGINT ignored in the block. Processes started in it keep ignoring it across their exec: Ctrl+C in a
+    terminal reaches the whole process group, and each worker would die printing a traceback, where the
+    client stops them instead. Only where Python can set handlers (the main thread)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def worker_count(client: Client) -> int:

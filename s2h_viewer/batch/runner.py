@@ -97,8 +97,9 @@ def run_batch(config: BatchConfig, show_progress: bool | None = None) -> BatchRe
     if interrupted:
         for i in todo:
             if i not in rows:
-                rows[i] = base_row(tasks[i]) | {"status": "failed", "error": "not run: the batch was interrupted "
-                                                                             "(Ctrl+C); run it again to finish"}
+                rows[i] = base_row(tasks[i]) | {"status": "failed", "not_run": True,
+                                                "error": "not run: the batch was interrupted (Ctrl+C); run it "
+                                                         "again to finish"}
                 _remove_partial_files(tasks[i])
     ordered_rows = [rows[i] for i in range(len(tasks))]
     out = Path(config.out)

@@ -16,6 +16,7 @@ from s2h_viewer.io.atomic import atomic_path
 COLUMNS = ("motion", "target", "method", "status", "error", "frames", "seconds", "s_palm", "s_finger",
            "contact_p", "contact_r", "palm_r", "violations", "sideways_deg", "sideways_at", "worst_frame",
            "worst_error", "output", "picture", "motion_path", "target_path")
+COUNTS = ("frames", "worst_frame")
 SCORES = ("s_palm", "s_finger", "contact_p", "contact_r", "palm_r", "violations", "sideways_deg", "worst_error")
 
 
@@ -43,7 +44,8 @@ def write_summary(rows: list[dict], path: str | Path) -> Path:
 
 
 def read_summary(path: str | Path) -> list[dict]:
-    """The rows of a batch's ``summary.csv`` (scores as floats, NaN where empty), for the viewer."""
+    """The rows of a batch's ``summary.csv`` (scores as floats, NaN where empty; frame counts as ints), for the
+    viewer."""
     path = require_readable_file(path)
     with reading(path, "a batch summary"):
         with open(path, newline="") as f:
@@ -55,6 +57,9 @@ def read_summary(path: str | Path) -> list[dict]:
     if missing:
         raise InputFileError(path, f"not a batch summary: no column {', '.join(missing)}")
     for row in rows:
+        for key in COUNTS:
+            if str(row.get(key) or "").isdigit():
+                row[key] = int(row[key])
         for key in SCORES:
             try:
                 row[key] = float(row.get(key) or "nan")

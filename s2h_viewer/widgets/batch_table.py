@@ -36,7 +36,7 @@ class _Item(QTableWidgetItem):
     def __lt__(self, other: QTableWidgetItem) -> bool:
         if isinstance(other, _Item) and self.number is not None and other.number is not None:
             return self.number < other.number
-        return super().__lt__(other)
+        return self.text().lower() < other.text().lower()  # (super().__lt__ comes back here under PySide6)
 
 
 class BatchTable(QDialog):

@@ -1,0 +1,66 @@
+"""File > Open batch in the real window: a batch's summary as a table, worst first; a double-clicked row shown in
+Compare (its clip, target and method) at its worst frame; a failed row says why."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+from PySide6.QtCore import Qt
+from PySide6.QtWidgets import QMessageBox
+
+from compare_window import open_compare_window
+from s2h_viewer.batch.plan import TaskOptions, plan_batch
+from s2h_viewer.batch.summary import write_summary
+from s2h_viewer.batch.task import run_task
+from s2h_viewer.retarget import METHODS
+from s2h_viewer.samples import ASSETS_DIR
+
+pytestmark = pytest.mark.filterwarnings("ignore::DeprecationWarning")
+
+
+@pytest.fixture(scope="module")
+def summary(tmp_path_factory) -> Path:
+    """A real batch's summary (its tasks run in this process): counting onto laurel, two methods, and a
+    target that cannot be read."""
+    out = tmp_path_factory.mktemp("batch")
+    broken = out / "broken.glb"
+    broken.write_text("not a glb")
+    tasks = plan_batch([str(ASSETS_DIR / "motions" / "counting.npz")], ["laurel", str(broken)],
+                       ["tbs_copy", "dm"], out, TaskOptions(format="npz", render=False), tuple(METHODS))
+    return write_summary([run_task(t) for t in tasks], out / "summary.csv")
+
+
+def test_a_double_clicked_row_is_shown_in_compare_at_its_worst_frame(qtbot, sample_hands, tmp_path, summary,
+                                                                     monkeypatch):
+    win = open_compare_window(qtbot, sample_hands, tmp_path)
+    win.open_batch(str(summary))
+    table = win.batch_browser.table
+    qtbot.waitExposed(table)
+    rows = table.rows
+    assert [r["status"] for r in rows] == ["failed", "failed", "ok", "ok"]  # worst first: failures, then S_finger
+    assert rows[2]["s_finger"] <= rows[3]["s_finger"]
+
+    shown = []
+    monkeypatch.setattr(QMessageBox, "critical", lambda *args: shown.append(args[2]))
+    view = table.table
+    view.sortItems(0)  # sorted by a heading: a row still opens its own task
+
+    def double_click(row: int) -> None:
+        where = view.visualItemRect(view.item(row, 0)).center()
+        qtbot.mouseClick(view.viewport(), Qt.MouseButton.LeftButton, pos=where)  # a double click's first press
+        qtbot.mouseDClick(view.viewport(), Qt.MouseButton.LeftButton, pos=where)
+
+    double_click(next(r for r in range(view.rowCount()) if view.item(r, 3).text() == "failed"))
+    assert shown and "failed in the batch" in shown[-1] and "broken.glb" in shown[-1]
+
+    chosen = next(r for r in range(view.rowCount()) if view.item(r, 2).text() == "dm"
+                  and view.item(r, 3).text() == "ok")
+    wanted = table.rows[view.item(chosen, 0).data(Qt.ItemDataRole.UserRole)]
+    with qtbot.waitSignal(win.comparison_ready, timeout=120_000):
+        double_click(chosen)
+    qtbot.waitUntil(lambda: win.compare.selected_result().method == "dm", timeout=30_000)
+    selected = win.compare.selected_result()
+    assert selected.target.name == "laurel" and win.compare.state.motion.name == "counting"
+    assert win.timeline.frame == wanted["worst_frame"]
+    assert "dm" in win.compare.state.methods and len(shown) == 1
