@@ -81,6 +81,13 @@ def _sigint_ignored() -> Iterator[None]:
         signal.signal(signal.SIGINT, previous)
 
 
+def warm_up() -> None:
+    """Import what every task needs (torch, the methods, the readers and writers, off-screen rendering)."""
+    import s2h_viewer.io.files  # noqa: F401
+    import s2h_viewer.render.offscreen  # noqa: F401
+    import s2h_viewer.retarget  # noqa: F401
+
+
 def worker_count(client: Client) -> int:
     return max(1, sum(client.nthreads().values()))
 
@@ -91,6 +98,7 @@ def run_tasks(client: Client, tasks: list[Task], on_row: Callable[[dict], None],
     Pure functions of their paths: each task is submitted once under its own key (``pure=False``)."""
     if not tasks:
         return
+    client.run(warm_up)  # every worker at once: the first task's seconds then measure the task alone
     futures = {client.submit(run_task, task, pure=False, key=f"s2h-{task.key}-{i}"): task
                for i, task in enumerate(tasks)}
     if on_start:

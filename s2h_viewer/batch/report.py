@@ -13,25 +13,26 @@ from pathlib import Path
 from s2h_viewer.batch.summary import ordered
 from s2h_viewer.io.atomic import atomic_path
 
-_SHOWN = (("motion", "motion"), ("target", "target"), ("method", "method"), ("status", "status"),
-          ("frames", "frames"), ("s_palm", "S_palm"), ("s_finger", "S_finger"), ("contact_p", "contact P"),
-          ("contact_r", "contact R"), ("violations", "violations"), ("sideways_deg", "sideways (deg)"),
-          ("worst_frame", "worst frame"), ("seconds", "seconds"))
+_NAMES = (("motion", "motion"), ("target", "target"), ("method", "method"), ("status", "status"))
+_SCORES = (("s_finger", "S_finger"), ("s_palm", "S_palm"), ("contact_p", "contact P"), ("contact_r", "contact R"),
+           ("violations", "violations"), ("sideways_deg", "sideways deg"), ("worst_frame", "worst frame"),
+           ("frames", "frames"), ("seconds", "seconds"))
 
 _STYLE = """
-body { font: 14px system-ui, sans-serif; margin: 1.2em; color: #222; }
+body { font: 13px system-ui, sans-serif; margin: 1em; color: #222; }
 h1 { font-size: 1.3em; margin: 0 0 .3em; }
 .counts span { margin-right: 1.2em; }
 .failed-count { color: #b00020; font-weight: 600; }
 input { font: inherit; padding: .3em .5em; width: 24em; margin: .6em 0; }
 table { border-collapse: collapse; }
 th { position: sticky; top: 0; background: #f0f0f0; cursor: pointer; user-select: none; white-space: nowrap; }
-th, td { border: 1px solid #ccc; padding: .25em .5em; vertical-align: middle; }
+th, td { border: 1px solid #ccc; padding: .2em .4em; vertical-align: middle; }
+th { white-space: normal; max-width: 6em; }
 th.sorted-asc::after { content: " \\25B2"; } th.sorted-desc::after { content: " \\25BC"; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; }
 tr.failed td { background: #fde7ea; }
 td.error { color: #b00020; max-width: 40em; }
-img { height: 120px; display: block; }
+img { height: 150px; display: block; }
 """
 
 _SCRIPT = """
@@ -77,31 +78,44 @@ def _value(row: dict, key: str) -> tuple[str, str]:
     return str(value), str(value)
 
 
+def _sideways_note(row: dict) -> str:
+    """"ring DIP bends 40 deg sideways at frame 212" from the row's sideways columns ("" if no finger curls)."""
+    joint, _, frame = str(row.get("sideways_at") or "").partition("@")
+    degrees = row.get("sideways_deg")
+    if not joint or not isinstance(degrees, float) or math.isnan(degrees):
+        return ""
+    finger, _, level = joint.partition("_")
+    return f"{finger} {level.upper()} bends {degrees:.0f} deg sideways at frame {frame}"
+
+
+def _cell(row: dict, key: str, numeric: bool) -> str:
+    text, sort = _value(row, key)
+    return f'<td{" class=num" if numeric else ""} data-sort="{html.escape(sort)}">{html.escape(text)}</td>'
+
+
 def write_report(rows: list[dict], path: str | Path, title: str = "s2h batch") -> Path:
     path = Path(path)
     folder = path.parent
     rows = ordered(rows)
     failed = sum(r.get("status") == "failed" for r in rows)
-    head = "".join(f'<th data-col="{i}">{html.escape(label)}</th>' for i, (_, label) in enumerate(_SHOWN))
-    head += '<th>worst frame: source | retarget</th><th>files</th><th>error / note</th>'
+    head = "".join(f'<th data-col="{i}">{html.escape(label)}</th>' for i, (_, label) in enumerate(_NAMES))
+    head += '<th>worst frame: source | retarget</th>'
+    head += "".join(f'<th data-col="{len(_NAMES) + 1 + i}">{html.escape(label)}</th>'
+                    for i, (_, label) in enumerate(_SCORES))
+    head += '<th>files</th><th>error / note</th>'
     lines = []
     for row in rows:
-        cells = []
-        for key, _ in _SHOWN:
-            text, sort = _value(row, key)
-            numeric = key not in ("motion", "target", "method", "status")
-            cells.append(f'<td{" class=num" if numeric else ""} data-sort="{html.escape(sort)}">'
-                         f'{html.escape(text)}</td>')
+        cells = [_cell(row, key, numeric=False) for key, _ in _NAMES]
         picture = row.get("picture") or ""
         cells.append(f'<td><a href="{html.escape(_relative(picture, folder))}"><img loading="lazy" alt="frame '
                      f'{row.get("worst_frame", "")}" src="{html.escape(_relative(picture, folder))}"></a></td>'
                      if picture else "<td></td>")
+        cells += [_cell(row, key, numeric=True) for key, _ in _SCORES]
         links = [f'<a href="{html.escape(_relative(row[k], folder))}">{label}</a>'
                  for k, label in (("output", "output"), ("motion_path", "motion"), ("target_path", "target"))
                  if row.get(k) and (k == "output" or Path(row[k]).is_file())]
-        cells.append(f"<td>{' '.join(links)}</td>")
-        note = row.get("error") or (f"{row['sideways_at'].replace('@', ' at frame ')}"
-                                    if row.get("sideways_at") else "")
+        cells.append(f"<td>{'<br>'.join(links)}</td>")
+        note = row.get("error") or _sideways_note(row)
         cells.append(f'<td class="error">{html.escape(note)}</td>' if row.get("error") else
                      f"<td>{html.escape(note)}</td>")
         text = " ".join(str(row.get(k, "")) for k in ("motion", "target", "method", "status", "error")).lower()

@@ -43,6 +43,7 @@ class BatchResult:
     report: Path
     interrupted: bool = False
     failed: list[dict] = field(default_factory=list)
+    startup_seconds: float = 0.0  # planning, the cluster's start and its workers' imports, before the first task
 
     @property
     def exit_code(self) -> int:
@@ -67,7 +68,7 @@ def run_batch(config: BatchConfig, show_progress: bool | None = None) -> BatchRe
     with tqdm(total=len(tasks), initial=skipped, desc="batch", unit="task", file=sys.stderr,
               disable=(not sys.stderr.isatty()) if show_progress is None else not show_progress) as bar:
         counts = {"ok": sum(r["status"] == "ok" for r in rows.values()), "failed": 0, "running": 0}
-        workers = [0]
+        workers, started_at = [0], [start]
 
         def show() -> None:
             counts["running"] = min(workers[0], len(tasks) - len(rows))
@@ -76,6 +77,7 @@ def run_batch(config: BatchConfig, show_progress: bool | None = None) -> BatchRe
 
         def started(n_workers: int) -> None:
             workers[0] = n_workers
+            started_at[0] = time.perf_counter()
             show()
             bar.refresh()
 
@@ -106,7 +108,7 @@ def run_batch(config: BatchConfig, show_progress: bool | None = None) -> BatchRe
     summary = write_summary(ordered_rows, out / "summary.csv")
     report = write_report(ordered_rows, out / "report.html", title=f"s2h batch: {out.resolve().name}")
     return BatchResult(ordered_rows, skipped, time.perf_counter() - start, summary, report, interrupted,
-                       [r for r in ordered_rows if r["status"] != "ok"])
+                       [r for r in ordered_rows if r["status"] != "ok"], started_at[0] - start)
 
 
 def _remove_partial_files(task: Task) -> None:

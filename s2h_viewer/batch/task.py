@@ -111,8 +111,8 @@ def _render_worst(task: Task, source, motion, target, moved, frame: int) -> None
     from s2h_viewer.render.offscreen import render_hands
 
     render_hands([source, target], [motion.q_tbs[frame], moved.q_tbs[frame]], task.picture,
-                 labels=[f"source {source.name} f{frame}", f"{task.method} -> {target.name} f{frame}"],
-                 columns=2, view="palm", cell_size=(320, 320))
+                 labels=[f"source, frame {frame}", f"{task.method}, frame {frame}"],
+                 columns=2, view="palm", cell_size=(300, 320))
 
 
 def read_row(task: Task) -> dict | None:
