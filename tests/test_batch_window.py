@@ -7,9 +7,9 @@ from pathlib import Path
 
 import pytest
 from PySide6.QtCore import Qt
-from PySide6.QtWidgets import QMessageBox
+from PySide6.QtWidgets import QFileDialog, QLineEdit, QMessageBox
 
-from compare_window import open_compare_window
+from compare_window import open_compare_window, when_shown
 from s2h_viewer.batch.plan import TaskOptions, plan_batch
 from s2h_viewer.batch.summary import write_summary
 from s2h_viewer.batch.task import run_task
@@ -34,7 +34,15 @@ def summary(tmp_path_factory) -> Path:
 def test_a_double_clicked_row_is_shown_in_compare_at_its_worst_frame(qtbot, sample_hands, tmp_path, summary,
                                                                      monkeypatch):
     win = open_compare_window(qtbot, sample_hands, tmp_path)
-    win.open_batch(str(summary))
+    open_action = next(a for a in win.menuBar().actions()[0].menu().actions() if a.text().startswith("Open batch"))
+    assert open_action.shortcut().toString() == "Ctrl+B"
+
+    def choose_summary(dialog: QFileDialog) -> None:
+        dialog.findChild(QLineEdit, "fileNameEdit").setText(str(summary))
+        dialog.accept()
+
+    when_shown(QFileDialog, choose_summary)
+    open_action.trigger()  # File > Open batch summary..., the file typed into its dialog
     table = win.batch_browser.table
     qtbot.waitExposed(table)
     rows = table.rows

@@ -1,4 +1,5 @@
-"""File > Open batch: a batch's summary as a table (`widgets.batch_table`), and a row double-clicked there
+"""File > Open batch: a batch's summary as a table (`widgets.batch_table`) in a dock under the grid (drag it
+out to float it, close it with its button), and a row double-clicked there
 shown in Compare: its clip loaded (unless shown already), its target added (unless a target already), its
 method ticked, then that retarget selected at its worst frame once the grid shows it."""
 
@@ -6,7 +7,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from PySide6.QtCore import QObject
+from PySide6.QtCore import QObject, Qt
+from PySide6.QtWidgets import QDockWidget
 
 from s2h_viewer.errors import S2HError
 from s2h_viewer.hand.model import HandModel
@@ -18,6 +20,11 @@ class BatchBrowser(QObject):
         super().__init__(window)
         self.window = window
         self.table: BatchTable | None = None
+        self.dock = QDockWidget("Batch", window)
+        self.dock.setObjectName("batch_dock")
+        self.dock.setAllowedAreas(Qt.DockWidgetArea.BottomDockWidgetArea | Qt.DockWidgetArea.RightDockWidgetArea)
+        window.addDockWidget(Qt.DockWidgetArea.BottomDockWidgetArea, self.dock)
+        self.dock.hide()
         self._motion_path: str | None = None
         self._motion = None
         self._pending: tuple[HandModel, str, int] | None = None  # (target, method, frame) to select when shown
@@ -31,10 +38,14 @@ class BatchBrowser(QObject):
             self.window.error(str(exc))
             return None
         if self.table is not None:
-            self.table.close()
-        self.table = BatchTable(path, rows, self.window)
+            self.table.deleteLater()
+        self.table = BatchTable(path, rows)
         self.table.row_chosen.connect(self.show_row)
-        self.table.show()
+        self.dock.setWidget(self.table)
+        self.dock.setWindowTitle(self.table.windowTitle())
+        self.dock.show()
+        self.dock.raise_()
+        self.table.table.setFocus()
         return self.table
 
     def show_row(self, row: dict) -> None:

@@ -141,7 +141,7 @@ class MainWindow(QMainWindow):
         file_menu = bar.addMenu("&File")
         compare_only = [self._action(file_menu, "Open motion...", self.open_motion, "Ctrl+O"),
                         self._action(file_menu, "Add target hand...", self.add_target, "Ctrl+T"),
-                        self._action(file_menu, "Open batch summary...", self.open_batch, "Ctrl+B")]
+                        self._action(file_menu, "Open batch summary...", self.ask_batch, "Ctrl+B")]
         self.recent_menu = file_menu.addMenu("Open recent")
         self._fill_recent()
         file_menu.addSeparator()
@@ -427,14 +427,15 @@ class MainWindow(QMainWindow):
         self._loading.append(("motion", path, motion))
         self.compare.load(motion, source)
 
-    def open_batch(self, path: str | None = None) -> None:
+    def ask_batch(self) -> None:
+        last = Path(str(self.settings.value("files/batch_dir", "")))
+        self._ask_to_open("Open batch summary", "Batch summaries (summary.csv *.csv)", self.open_batch,
+                          str(last) if str(last) not in ("", ".") and last.is_dir() else str(Path.cwd()))
+
+    def open_batch(self, path: str) -> None:
         """A batch's summary.csv (`s2h batch`) as a table; double-click a row to show it here."""
-        if path is None:
-            self._ask_to_open("Open batch summary", "Batch summaries (summary.csv *.csv)", self.open_batch,
-                              self._last_dir())
-            return
-        self.batch_browser.open(path)
-        self._remember(path)
+        if self.batch_browser.open(path) is not None:
+            self.settings.setValue("files/batch_dir", str(Path(path).resolve().parent))
 
     def _hand_dir(self) -> str:
         return self._start_dir("files/hand_dir", "hands")

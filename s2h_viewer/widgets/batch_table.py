@@ -8,7 +8,7 @@ from pathlib import Path
 
 from PySide6.QtCore import Qt, Signal
 from PySide6.QtGui import QColor, QKeySequence, QShortcut
-from PySide6.QtWidgets import QDialog, QHeaderView, QLabel, QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget
+from PySide6.QtWidgets import QHeaderView, QLabel, QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget
 
 #: (header, row key, decimals or None for text)
 COLUMNS = (("Motion", "motion", None), ("Target", "target", None), ("Method", "method", None),
@@ -39,7 +39,7 @@ class _Item(QTableWidgetItem):
         return self.text().lower() < other.text().lower()  # (super().__lt__ comes back here under PySide6)
 
 
-class BatchTable(QDialog):
+class BatchTable(QWidget):
     """The rows of one batch; ``row_chosen`` carries the summary row a person double-clicked."""
 
     row_chosen = Signal(dict)
@@ -48,7 +48,8 @@ class BatchTable(QDialog):
         super().__init__(parent)
         self.rows = worst_first(rows)
         failed = sum(r.get("status") == "failed" for r in self.rows)
-        self.setWindowTitle(f"Batch: {Path(summary).parent.name}/{Path(summary).name}")
+        self.setWindowTitle(f"Batch: {Path(summary).parent.name}/{Path(summary).name} ({len(self.rows)} tasks, "
+                            f"{failed} failed)")
         self.table = QTableWidget(len(self.rows), len(COLUMNS), self)
         self.table.setHorizontalHeaderLabels([c for c, _, _ in COLUMNS])
         self.table.verticalHeader().setVisible(False)
@@ -60,7 +61,8 @@ class BatchTable(QDialog):
                 value = row.get(key, "")
                 if decimals is not None:
                     number = None if math.isnan(value) else float(value)
-                    item = _Item("n/a" if number is None else f"{number:.{decimals}f}", number)
+                    empty = "" if row.get("status") == "failed" else "n/a"  # a failed task measured nothing
+                    item = _Item(empty if number is None else f"{number:.{decimals}f}", number)
                     item.setTextAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
                 else:
                     text = str(value)
@@ -76,16 +78,17 @@ class BatchTable(QDialog):
                 self.table.setItem(r, c, item)
         self.table.resizeColumnsToContents()
         self.table.horizontalHeader().setSectionResizeMode(len(COLUMNS) - 1, QHeaderView.ResizeMode.Stretch)
+        self.table.horizontalHeader().setSortIndicator(-1, Qt.SortOrder.AscendingOrder)  # worst first until a click
         self.table.setSortingEnabled(True)
         self.table.cellDoubleClicked.connect(lambda r, _c: self._choose(r))
         QShortcut(QKeySequence(Qt.Key.Key_Return), self.table, lambda: self._choose(self.table.currentRow()))
         if self.rows:
             self.table.selectRow(0)
         layout = QVBoxLayout(self)
-        layout.addWidget(QLabel(f"{len(self.rows)} tasks, {failed} failed. Worst first; click a heading to sort, "
-                                f"double-click a row (or Enter) to show it in Compare at its worst frame."))
+        layout.setContentsMargins(4, 2, 4, 4)
+        layout.addWidget(QLabel("Worst first (failures, then the lowest S_finger); click a heading to sort, "
+                                "double-click a row (or Enter) to show it in Compare at its worst frame."))
         layout.addWidget(self.table)
-        self.resize(min(1200, self.table.horizontalHeader().length() + 40), 420)
 
     def _choose(self, table_row: int) -> None:
         item = self.table.item(table_row, 0)
