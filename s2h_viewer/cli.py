@@ -228,13 +228,14 @@ def _cmd_batch(args: argparse.Namespace) -> int:
                          TaskOptions(format=args.format, side=args.side, render=args.pictures),
                          scheduler=args.scheduler, workers=args.workers)
     result = run_batch(config, show_progress=False if args.quiet else None)
-    ok = len(result.rows) - len(result.failed)
-    not_run = sum(bool(r.get("not_run")) for r in result.failed)
-    print(f"{len(result.rows)} tasks: {ok} ok, {len(result.failed) - not_run} failed"
-          + (f", {not_run} not run" if not_run else "")
+    ok = sum(r["status"] == "ok" for r in result.rows)
+    not_run = sum(r["status"] == "not run" for r in result.rows)
+    warned = sum(bool(r.get("warning")) for r in result.rows if r["status"] == "ok")
+    print(f"{len(result.rows)} tasks: {ok} ok" + (f" ({warned} with a warning)" if warned else "")
+          + f", {len(result.failed)} failed" + (f", {not_run} not run" if not_run else "")
           + (f" ({result.skipped} finished by an earlier run)" if result.skipped else "")
           + f", {result.seconds:.1f} s" + (" (interrupted: run it again to finish)" if result.interrupted else ""))
-    failed = [r for r in result.failed if not r.get("not_run")]
+    failed = result.failed
     for row in failed[:10]:
         print(f"  failed: {row['motion']} -> {row['target']} ({row['method']}): {row['error']}", file=sys.stderr)
     if len(failed) > 10:
@@ -354,7 +355,8 @@ def build_parser() -> argparse.ArgumentParser:
                     help="motion files or folders of them (.npz .bvh .glb .gltf .fbx, searched recursively)")
     bt.add_argument("--targets", nargs="+", required=True, metavar="PATH",
                     help="target hand files, folders of them, or shipped sample names")
-    bt.add_argument("--methods", default="tbs_copy,asrn", help="comma-separated methods (default tbs_copy,asrn)")
+    bt.add_argument("--methods", default="tbs_copy,asrn", help="comma-separated, of copy, tbs_copy, dm, asrn, "
+                                                               "asm_opt (default tbs_copy,asrn)")
     bt.add_argument("--out", required=True, help="output folder: <motion>/<target>/<method>.<format>, summary.csv, "
                                                  "report.html; a rerun into it skips finished tasks")
     bt.add_argument("--format", default="glb", choices=["glb", "bvh", "npz"],

@@ -10,6 +10,10 @@ from s2h_viewer import samples
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.procedural import generate_hand
 
+# Every test on one thread: the same results on any machine whatever its cores, and no threads spinning for
+# a busy 2-core machine (the training test took 531 s with torch's two threads there, 51 s with one).
+torch.set_num_threads(1)
+
 
 @pytest.fixture(scope="session")
 def sample_hands() -> dict[str, HandModel]:

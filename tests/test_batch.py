@@ -39,7 +39,7 @@ def cluster(tmp_path_factory):
     spec = importlib.util.spec_from_file_location("crash_once", PLUGIN)
     spec.loader.exec_module(importlib.util.module_from_spec(spec))  # the client knows the method too
     os.environ["S2H_CRASH_MARKER"] = str(tmp_path_factory.mktemp("crash") / "crashed")
-    with local_cluster(2, preload=[str(PLUGIN)]) as local:
+    with local_cluster(2, preload=(str(PLUGIN),)) as local:
         yield local
     os.environ.pop("S2H_CRASH_MARKER", None)
 
@@ -68,6 +68,12 @@ def test_the_plan_names_every_task_and_refuses_what_cannot_run(tmp_path):
     assert [t.motion.name for t in tasks[::4]] == ["clip", "b__clip"]  # the same stem twice: told apart
     assert tasks[0].output == tmp_path / "out" / "clip" / "iris" / "tbs_copy.glb"
     assert len({t.key for t in tasks}) == len(tasks)
+    with pytest.raises(BatchUsageError, match="nope.glb: no such file or folder"):  # not a task failing later
+        plan_batch([GESTURES], [str(tmp_path / "nope.glb")], ["tbs_copy"], tmp_path, known_methods=tuple(METHODS))
+    with pytest.raises(BatchUsageError, match="avatars: no such file or folder or a shipped hand .aster, "):
+        plan_batch([GESTURES], ["avatars"], ["tbs_copy"], tmp_path, known_methods=tuple(METHODS))
+    assert len(plan_batch([GESTURES], ["iris", str(ASSETS_DIR / "hands" / "iris.npz")], ["tbs_copy"], tmp_path,
+                          known_methods=tuple(METHODS))) == 1  # one hand by its name and its file: once
     with pytest.raises(BatchUsageError, match="unknown method nope"):
         plan_batch([GESTURES], ["iris"], ["nope"], tmp_path, known_methods=tuple(METHODS))
     (tmp_path / "empty").mkdir()
@@ -105,6 +111,7 @@ def test_a_batch_on_a_local_cluster_equals_the_in_process_retarget_and_a_rerun_s
         torch.set_num_threads(threads)
     rows = read_summary(out / "summary.csv")
     assert [r["status"] for r in rows] == ["failed", "failed", "ok", "ok"]  # failures on top
+    assert rows[2]["warning"] == ""  # iris's rig is the project's own
     assert list(rows[0]) == list(COLUMNS)
     page = (out / "report.html").read_text()
     assert page.count("<tr") == 5 and "1 failed" not in page and "2 failed" in page
@@ -114,9 +121,12 @@ def test_a_batch_on_a_local_cluster_equals_the_in_process_retarget_and_a_rerun_s
     stamps = [p.stat().st_mtime_ns for p in row_files]
     before = summary_without_timings(out / "summary.csv")
     second = run_batch(config, show_progress=False)
-    assert second.skipped == 2 and second.exit_code == 1  # the ok tasks skipped, the broken file tried again
+    assert second.skipped == 4 and second.exit_code == 1  # all skipped: the broken file fails the same way
     assert [p.stat().st_mtime_ns for p in row_files] == stamps
     assert summary_without_timings(out / "summary.csv") == before
+    Path(corrupt_target).write_bytes(Path(corrupt_target).read_bytes() + b"\x00")  # the file changed: tried again
+    third = run_batch(config, show_progress=False)
+    assert third.skipped == 2 and [r["status"] for r in third.rows].count("failed") == 2
 
 
 def test_a_task_whose_worker_dies_is_run_again_and_finishes(cluster, tmp_path):
@@ -220,4 +230,17 @@ def test_ctrl_c_stops_the_cluster_keeps_what_finished_and_leaves_no_partial_file
     rows = read_summary(out / "summary.csv")
     done = [r for r in rows if r["status"] == "ok"]
     assert 1 <= len(done) < 12 and all(Path(r["output"]).stat().st_size > 0 for r in done)
-    assert all("interrupted" in r["error"] for r in rows if r["status"] != "ok")
+    assert all(r["status"] == "not run" and "interrupted" in r["error"] for r in rows if r["status"] != "ok")
+    assert len(done) == sum(1 for p in out.rglob("*.row.json"))  # a task that finished as it stopped is ok here
+
+
+def test_a_rig_recognised_with_low_confidence_is_flagged_in_its_row(tmp_path):
+    from s2h_viewer.batch.task import run_task
+    oculus = str(ASSETS_DIR / "hands" / "real" / "r_hand_skeletal_lowres.fbx")  # names read by topology alone
+    low, good = (run_task(task) for task in plan_batch([COUNTING], [oculus, "iris"], ["tbs_copy"], tmp_path,
+                                                      TaskOptions(format="npz", render=False), tuple(METHODS)))
+    assert low["status"] == "ok" and good["status"] == "ok" and good["warning"] == ""
+    assert "target rig recognised with confidence 0.0" in low["warning"] and "s2h rig" in low["warning"]
+    page = (tmp_path / "report.html")
+    from s2h_viewer.batch.report import write_report
+    assert low["warning"] in write_report([low, good], page).read_text().replace("&#x27;", "'").replace("&quot;", '"')

@@ -51,6 +51,10 @@ class BatchBrowser(QObject):
     def show_row(self, row: dict) -> None:
         """Show one summary row's retarget in Compare (a failed row: its error, in a dialog)."""
         what = f"{row['motion']} -> {row['target']} ({row['method']})"
+        if row.get("status") == "not run":
+            self.window.error(f"{what} was not run: the batch was interrupted first. Run the same s2h batch "
+                              f"command again to finish it.")
+            return
         if row.get("status") != "ok":
             self.window.error(f"{what} failed in the batch: {row.get('error') or 'no error recorded'}")
             return

@@ -9,6 +9,7 @@ read (and cache) the files themselves.
 
 from __future__ import annotations
 
+import logging
 import os
 import signal
 import threading
@@ -36,47 +37,56 @@ _CONFIG = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
 def batch_client(scheduler: str | None = None, workers: int | None = None) -> Iterator[Client]:
     """A client on ``scheduler``, else on a `LocalCluster` of ``workers`` processes (default: one per core),
     closed (cluster and workers stopped) on leaving, Ctrl+C included."""
-    with dask.config.set(_CONFIG):
-        if scheduler:
-            try:
-                client = Client(scheduler, timeout="20s")
-            except (OSError, TimeoutError, ValueError) as exc:
-                raise BatchUsageError(f"--scheduler {scheduler}: cannot reach a Dask scheduler there "
-                                      f"({type(exc).__name__}: {' '.join(str(exc).split())})") from None
-            with client:
+    logger = logging.getLogger("distributed")
+    level = logger.level
+    logger.setLevel(logging.CRITICAL)  # its chatter as a cluster stops after a Ctrl+C: the bar says enough
+    try:
+        with dask.config.set(_CONFIG):
+            if scheduler:
+                try:
+                    client = Client(scheduler, timeout="20s")
+                except (OSError, TimeoutError, ValueError) as exc:
+                    raise BatchUsageError(f"--scheduler {scheduler}: cannot reach a Dask scheduler there "
+                                          f"({type(exc).__name__}: {' '.join(str(exc).split())})") from None
+                with client:
+                    yield client
+                return
+            with local_cluster(workers) as cluster, Client(cluster) as client:
                 yield client
-            return
-        with local_cluster(workers) as cluster, Client(cluster) as client:
-            yield client
+    finally:
+        logger.setLevel(level)
 
 
 @contextmanager
-def local_cluster(workers: int | None = None, **worker_options) -> Iterator[LocalCluster]:
+def local_cluster(workers: int | None = None, preload: tuple[str, ...] = ()) -> Iterator[LocalCluster]:
     """This machine's cluster as a batch wants it: ``workers`` processes (default one per core) of one thread,
-    on 127.0.0.1, no dashboard, worker deaths bounded (`ALLOWED_FAILURES`), glibc's own malloc trimming;
-    ``worker_options`` go to each worker's nanny (``preload``, say)."""
+    on 127.0.0.1, no dashboard, worker deaths bounded (`ALLOWED_FAILURES`), glibc's own malloc trimming, deaf
+    to Ctrl+C (`worker_setup`); ``preload``: more modules or files each worker runs as it starts. A Ctrl+C
+    while the workers start is held until they are up, then stops them."""
     with dask.config.set(_CONFIG):
-        with _sigint_ignored():  # while the workers start: they keep ignoring it
+        with _sigint_held() as caught:
             cluster = LocalCluster(
                 n_workers=workers or os.cpu_count() or 1, threads_per_worker=1, processes=True,
-                dashboard_address=None, host="127.0.0.1", scheduler_port=0, silence_logs=40,
+                dashboard_address=None, host="127.0.0.1", scheduler_port=0, silence_logs=logging.CRITICAL,
                 scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},  # its health routes: any free port
-                **worker_options)
+                preload=["s2h_viewer.batch.worker_setup", *preload])
         with cluster:
+            if caught:
+                raise KeyboardInterrupt
             yield cluster
 
 
 @contextmanager
-def _sigint_ignored() -> Iterator[None]:
-    """SIGINT ignored in the block. Processes started in it keep ignoring it across their exec: Ctrl+C in a
-    terminal reaches the whole process group, and each worker would die printing a traceback, where the
-    client stops them instead. Only where Python can set handlers (the main thread)."""
+def _sigint_held() -> Iterator[list]:
+    """Ctrl+C in the block is noted (the list it yields gets an entry), not raised: a cluster interrupted half
+    built would leave its workers running. Only where Python can set handlers (the main thread)."""
+    caught: list = []
     if threading.current_thread() is not threading.main_thread():
-        yield
+        yield caught
         return
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    previous = signal.signal(signal.SIGINT, lambda *_: caught.append(True))
     try:
-        yield
+        yield caught
     finally:
         signal.signal(signal.SIGINT, previous)
 

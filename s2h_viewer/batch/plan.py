@@ -17,8 +17,10 @@ from pathlib import Path
 from s2h_viewer.errors import S2HError
 
 FORMATS = ("glb", "bvh", "npz")
-MOTION_SUFFIXES = (".npz", ".bvh", ".glb", ".gltf", ".fbx")
-HAND_SUFFIXES = (".npz", ".glb", ".gltf", ".fbx", ".bvh")
+#: what a folder is searched for: every file the readers take, and VRM avatars (GLB files by another name), so
+#: that a file s2h cannot read yet fails its own tasks, saying why, instead of vanishing from the batch
+MOTION_SUFFIXES = (".npz", ".bvh", ".glb", ".gltf", ".fbx", ".vrm")
+HAND_SUFFIXES = (".npz", ".glb", ".gltf", ".fbx", ".bvh", ".vrm")
 
 
 class BatchUsageError(S2HError):
@@ -81,18 +83,26 @@ class Task:
         return hashlib.sha256(json.dumps(what, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
     def finished_row(self) -> dict | None:
-        """The row of an earlier run of this very task if it finished (ok, same key, output there), else None."""
+        """The row of an earlier run of this very task (same key: same inputs, method and options) if it
+        finished: ok with its output there, or failed on its input files (the same files fail the same way;
+        a worker's death or an interruption is tried again). Else None."""
         try:
             row = json.loads(self.row_file.read_text())
         except (OSError, ValueError):
             return None
-        if not isinstance(row, dict) or row.get("status") != "ok" or row.get("key") != self.key:
+        if not isinstance(row, dict) or row.get("key") != self.key:
             return None
-        return row if self.output.exists() else None
+        if row.get("status") == "ok":
+            return row if self.output.exists() else None
+        return row if row.get("status") == "failed" and row.get("input_error") else None
 
 
 def _files(paths: list[str], suffixes: tuple[str, ...], what: str, allow_names: bool) -> list[Path | str]:
     """Files named by ``paths`` (folders searched recursively for ``suffixes``, sorted), in the order given."""
+    from s2h_viewer.samples import ASSETS_DIR, read_index
+
+    samples = {h["name"]: ASSETS_DIR / h["file"] for h in read_index()["hands"]} if allow_names else {}
+    sample_names = list(samples)
     found: list[Path | str] = []
     for raw in paths:
         path = Path(raw)
@@ -102,12 +112,13 @@ def _files(paths: list[str], suffixes: tuple[str, ...], what: str, allow_names: 
             if not inside:
                 raise BatchUsageError(f"{path}: no {what} files ({', '.join(suffixes)}) in this folder")
             found += inside
-        elif path.exists() or path.suffix:
-            found.append(path)  # a file (a missing or unreadable one fails its own tasks, with its error)
-        elif allow_names:
-            found.append(raw)  # a shipped sample hand's name
+        elif path.exists():
+            found.append(path)  # a file (an unreadable one fails its own tasks, with its error)
+        elif allow_names and not path.suffix and raw in samples:
+            found.append(samples[raw])  # a shipped sample hand, by name: its file (given twice, it runs once)
         else:
-            raise BatchUsageError(f"{raw}: no such file or folder")
+            names = f" or a shipped hand ({', '.join(sample_names)})" if allow_names and not path.suffix else ""
+            raise BatchUsageError(f"{raw}: no such file or folder{names}")
     return found
 
 

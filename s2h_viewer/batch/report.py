@@ -31,7 +31,10 @@ th { white-space: normal; max-width: 6em; }
 th.sorted-asc::after { content: " \\25B2"; } th.sorted-desc::after { content: " \\25BC"; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; }
 tr.failed td { background: #fde7ea; }
-td.error { color: #b00020; max-width: 40em; }
+tr.not-run td { background: #f3f3f3; color: #777; }
+td.error { color: #b00020; max-width: 22em; }
+td.note { max-width: 16em; }
+.failures { color: #b00020; margin: .4em 0; } .failures ul { margin: .2em 0; } .failures .tasks { color: #555; }
 img { height: 150px; display: block; }
 """
 
@@ -78,6 +81,20 @@ def _value(row: dict, key: str) -> tuple[str, str]:
     return str(value), str(value)
 
 
+def _failure_groups(rows: list[dict]) -> str:
+    """One line per distinct error, with how many tasks it failed: three bad files in a big batch read as
+    three lines here, not as a screen of red rows."""
+    groups: dict[str, int] = {}
+    for row in rows:
+        if row.get("status") == "failed":
+            groups[row.get("error") or "no error recorded"] = groups.get(row.get("error") or "no error recorded", 0) + 1
+    if not groups:
+        return ""
+    items = "".join(f"<li>{html.escape(error)} <span class=tasks>({count} task{'s' if count > 1 else ''})</span></li>"
+                    for error, count in sorted(groups.items(), key=lambda g: -g[1]))
+    return f'<div class="failures"><b>Failures</b><ul>{items}</ul></div>'
+
+
 def _sideways_note(row: dict) -> str:
     """"ring DIP bends 40 deg sideways at frame 212" from the row's sideways columns ("" if no finger curls)."""
     joint, _, frame = str(row.get("sideways_at") or "").partition("@")
@@ -98,35 +115,39 @@ def write_report(rows: list[dict], path: str | Path, title: str = "s2h batch") -
     folder = path.parent
     rows = ordered(rows)
     failed = sum(r.get("status") == "failed" for r in rows)
+    not_run = sum(r.get("status") == "not run" for r in rows)
+    ok = len(rows) - failed - not_run
     head = "".join(f'<th data-col="{i}">{html.escape(label)}</th>' for i, (_, label) in enumerate(_NAMES))
-    head += '<th>worst frame: source | retarget</th>'
+    head += '<th>error / note</th><th>worst frame: source | retarget</th>'
     head += "".join(f'<th data-col="{len(_NAMES) + 1 + i}">{html.escape(label)}</th>'
                     for i, (_, label) in enumerate(_SCORES))
-    head += '<th>files</th><th>error / note</th>'
+    head += '<th>files</th>'
     lines = []
     for row in rows:
         cells = [_cell(row, key, numeric=False) for key, _ in _NAMES]
+        note = "<br>".join(html.escape(n) for n in (row.get("error"), row.get("warning"), _sideways_note(row)) if n)
+        cells.append(f'<td class="{"error" if row.get("error") or row.get("warning") else "note"}">{note}</td>')
         picture = row.get("picture") or ""
         cells.append(f'<td><a href="{html.escape(_relative(picture, folder))}"><img loading="lazy" alt="frame '
                      f'{row.get("worst_frame", "")}" src="{html.escape(_relative(picture, folder))}"></a></td>'
                      if picture else "<td></td>")
-        cells += [_cell(row, key, numeric=True) for key, _ in _SCORES]
+        measured = row.get("status") == "ok"  # a task that failed or did not run measured nothing: no "n/a"
+        cells += [_cell(row, key, numeric=True) if measured or key == "seconds" else '<td class=num data-sort=""></td>'
+                  for key, _ in _SCORES]
         links = [f'<a href="{html.escape(_relative(row[k], folder))}">{label}</a>'
                  for k, label in (("output", "output"), ("motion_path", "motion"), ("target_path", "target"))
                  if row.get(k) and (k == "output" or Path(row[k]).is_file())]
         cells.append(f"<td>{'<br>'.join(links)}</td>")
-        note = row.get("error") or _sideways_note(row)
-        cells.append(f'<td class="error">{html.escape(note)}</td>' if row.get("error") else
-                     f"<td>{html.escape(note)}</td>")
         text = " ".join(str(row.get(k, "")) for k in ("motion", "target", "method", "status", "error")).lower()
-        css = ' class="failed"' if row.get("status") == "failed" else ""
+        css = {"failed": ' class="failed"', "not run": ' class="not-run"'}.get(row.get("status"), "")
         lines.append(f'<tr{css} data-text="{html.escape(text)}">{"".join(cells)}</tr>')
     page = f"""<!doctype html>
 <html lang="en"><head><meta charset="utf-8"><title>{html.escape(title)}</title><style>{_STYLE}</style></head>
 <body>
 <h1>{html.escape(title)}</h1>
-<div class="counts"><span>{len(rows)} tasks</span><span>{len(rows) - failed} ok</span>
-<span class="{'failed-count' if failed else ''}">{failed} failed</span></div>
+<div class="counts"><span>{len(rows)} tasks</span><span>{ok} ok</span>
+<span class="{'failed-count' if failed else ''}">{failed} failed</span>{f'<span>{not_run} not run (interrupted: run the batch again)</span>' if not_run else ''}</div>
+{_failure_groups(rows)}
 <input id="filter" type="search" placeholder="filter: words of motion, target, method, status or error">
 <table id="rows"><thead><tr>{head}</tr></thead><tbody>
 {chr(10).join(lines)}

@@ -3,12 +3,13 @@
 
 Exit status: 0 when every task is ok, 1 when some failed (the summary says which), 2 for a usage error
 (raised as `BatchUsageError` before anything runs), 130 after Ctrl+C (the cluster stopped, the finished
-tasks kept, no half-written file left: outputs are renamed into place whole, and the temporary files of
-interrupted writes are removed).
+tasks kept, the others "not run", no half-written file left: outputs are renamed into place whole, and the
+temporary files of interrupted writes are removed).
 """
 
 from __future__ import annotations
 
+import os
 import sys
 import time
 from dataclasses import dataclass, field
@@ -42,7 +43,7 @@ class BatchResult:
     summary: Path
     report: Path
     interrupted: bool = False
-    failed: list[dict] = field(default_factory=list)
+    failed: list[dict] = field(default_factory=list)  # status failed (tasks an interrupt left are "not run")
     startup_seconds: float = 0.0  # planning, the cluster's start and its workers' imports, before the first task
 
     @property
@@ -91,6 +92,9 @@ def run_batch(config: BatchConfig, show_progress: bool | None = None) -> BatchRe
         if todo:
             from s2h_viewer.batch.cluster import batch_client, run_tasks
 
+            where = f"connecting to {config.scheduler}" if config.scheduler else \
+                f"starting {config.workers or os.cpu_count() or 1} local workers"
+            bar.set_postfix_str(f"{where} (imports take a few seconds)", refresh=True)
             try:
                 with batch_client(config.scheduler, config.workers) as client:
                     run_tasks(client, [tasks[i] for i in todo], finished, started)
@@ -98,17 +102,16 @@ def run_batch(config: BatchConfig, show_progress: bool | None = None) -> BatchRe
                 interrupted = True
     if interrupted:
         for i in todo:
-            if i not in rows:
-                rows[i] = base_row(tasks[i]) | {"status": "failed", "not_run": True,
-                                                "error": "not run: the batch was interrupted (Ctrl+C); run it "
-                                                         "again to finish"}
+            if i not in rows:  # finished while the cluster stopped (its row written whole), or not run
                 _remove_partial_files(tasks[i])
+                rows[i] = tasks[i].finished_row() or base_row(tasks[i]) | {
+                    "status": "not run", "error": "the batch was interrupted (Ctrl+C) first; run it again to finish"}
     ordered_rows = [rows[i] for i in range(len(tasks))]
     out = Path(config.out)
     summary = write_summary(ordered_rows, out / "summary.csv")
     report = write_report(ordered_rows, out / "report.html", title=f"s2h batch: {out.resolve().name}")
     return BatchResult(ordered_rows, skipped, time.perf_counter() - start, summary, report, interrupted,
-                       [r for r in ordered_rows if r["status"] != "ok"], started_at[0] - start)
+                       [r for r in ordered_rows if r["status"] == "failed"], started_at[0] - start)
 
 
 def _remove_partial_files(task: Task) -> None:

@@ -1,4 +1,5 @@
-"""``summary.csv``: one row per task, in the plan's order, failures first; read back by the viewer.
+"""``summary.csv``: one row per task, in the plan's order, failures first (then tasks an interrupted batch did
+not run); read back by the viewer. Status: ok, failed, or "not run".
 
 Scores are written with 4 decimals; a score with nothing to measure (no contacts: DESIGN.md section 5) is
 empty, not "nan".
@@ -13,7 +14,7 @@ from pathlib import Path
 from s2h_viewer.errors import InputFileError, reading, require_readable_file
 from s2h_viewer.io.atomic import atomic_path
 
-COLUMNS = ("motion", "target", "method", "status", "error", "frames", "seconds", "s_palm", "s_finger",
+COLUMNS = ("motion", "target", "method", "status", "error", "warning", "frames", "seconds", "s_palm", "s_finger",
            "contact_p", "contact_r", "palm_r", "violations", "sideways_deg", "sideways_at", "worst_frame",
            "worst_error", "output", "picture", "motion_path", "target_path")
 COUNTS = ("frames", "worst_frame")
@@ -29,8 +30,8 @@ def _cell(value) -> str:
 
 
 def ordered(rows: list[dict]) -> list[dict]:
-    """Failures first, each group in the plan's order (the sort is stable)."""
-    return sorted(rows, key=lambda r: r.get("status") != "failed")
+    """Failures first, then tasks not run, then the rest, each group in the plan's order (the sort is stable)."""
+    return sorted(rows, key=lambda r: {"failed": 0, "not run": 1}.get(r.get("status"), 2))
 
 
 def write_summary(rows: list[dict], path: str | Path) -> Path:

@@ -66,8 +66,8 @@ def run_task(task: Task) -> dict:
     try:
         row |= _retarget_and_write(task)
         row["status"], row["error"] = "ok", ""
-    except S2HError as exc:
-        row["status"], row["error"] = "failed", str(exc)
+    except S2HError as exc:  # a file that cannot be read or is not a hand: the same files fail the same way
+        row["status"], row["error"], row["input_error"] = "failed", str(exc), True
     except KeyError as exc:  # an unknown method or joint, raised with its message
         row["status"], row["error"] = "failed", str(exc.args[0] if exc.args else exc)
     except Exception as exc:  # a bug or a library's surprise: one line in the summary, the traceback in the row
@@ -88,6 +88,7 @@ def _retarget_and_write(task: Task) -> dict:
 
     motion, source = _load_motion(task)
     target = _load_target(task)
+    warning = rig_warning(source, "source") or rig_warning(target, "target")
     moved = retarget(motion, source, target, task.method)
     scores, frame_error = score_retarget_frames(source, motion.q_tbs, target, moved.q_tbs)
     worst = int(np.argmax(frame_error)) if len(frame_error) else 0
@@ -99,11 +100,25 @@ def _retarget_and_write(task: Task) -> dict:
            "palm_r": scores.palm_contact_recall, "violations": scores.violation_rate,
            "sideways_deg": peak.degrees, "sideways_at": "" if np.isnan(peak.degrees) else f"{peak.joint}@{peak.frame}",
            "worst_frame": worst, "worst_error": float(frame_error[worst]) if len(frame_error) else 0.0,
-           "output": str(task.output)}
+           "output": str(task.output), "warning": warning}
     if task.options.render:
         _render_worst(task, source, motion, target, moved, worst)
         row["picture"] = str(task.picture)
     return row
+
+
+#: a rig recognised with less confidence than this is flagged in the task's row (its hand may be misread)
+LOW_RIG_CONFIDENCE = 0.5
+
+
+def rig_warning(hand, role: str) -> str:
+    """A line for the row when ``hand``'s bones were recognised with low confidence, else ""."""
+    confidence = hand.meta.get("rig_confidence")
+    if confidence is None or confidence >= LOW_RIG_CONFIDENCE:
+        return ""
+    how = hand.meta.get("rig_scheme", "")
+    return (f"{role} rig recognised with confidence {confidence:.2f} ({how} scheme): its joints may be misread; "
+            f"check with `s2h rig {hand.source}` or give a joint map")
 
 
 def _render_worst(task: Task, source, motion, target, moved, frame: int) -> None:

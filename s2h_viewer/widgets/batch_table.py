@@ -14,7 +14,7 @@ from PySide6.QtWidgets import QHeaderView, QLabel, QTableWidget, QTableWidgetIte
 COLUMNS = (("Motion", "motion", None), ("Target", "target", None), ("Method", "method", None),
            ("Status", "status", None), ("S_finger", "s_finger", 3), ("S_palm", "s_palm", 3),
            ("Contact P", "contact_p", 3), ("Contact R", "contact_r", 3), ("Violations", "violations", 3),
-           ("Sideways\n(deg)", "sideways_deg", 1), ("Worst\nframe", "worst_frame", None), ("Error", "error", None))
+           ("Sideways\n(deg)", "sideways_deg", 1), ("Worst\nframe", "worst_frame", None), ("Error or warning", "error", None))
 FAILED_COLOUR = QColor("#fde7ea")
 
 
@@ -22,7 +22,7 @@ def worst_first(rows: list[dict]) -> list[dict]:
     """Failures first, then by S_finger from the lowest (a row with no score after those with one)."""
     def key(row: dict) -> tuple:
         score = row.get("s_finger", math.nan)
-        return row.get("status") != "failed", math.isnan(score), score
+        return {"failed": 0, "not run": 1}.get(row.get("status"), 2), math.isnan(score), score
     return sorted(rows, key=key)
 
 
@@ -59,9 +59,11 @@ class BatchTable(QWidget):
         for r, row in enumerate(self.rows):
             for c, (_, key, decimals) in enumerate(COLUMNS):
                 value = row.get(key, "")
+                if key == "error":
+                    value = value or (f"warning: {row['warning']}" if row.get("warning") else "")
                 if decimals is not None:
                     number = None if math.isnan(value) else float(value)
-                    empty = "" if row.get("status") == "failed" else "n/a"  # a failed task measured nothing
+                    empty = "n/a" if row.get("status") == "ok" else ""  # a failed task measured nothing
                     item = _Item(empty if number is None else f"{number:.{decimals}f}", number)
                     item.setTextAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
                 else:
@@ -73,7 +75,7 @@ class BatchTable(QWidget):
                     joint, _, frame = str(row["sideways_at"]).partition("@")
                     item.setToolTip(f"{joint.replace('_', ' ')} at frame {frame}")
                 item.setData(Qt.ItemDataRole.UserRole, r)
-                if row.get("status") == "failed":
+                if row.get("status") != "ok":
                     item.setBackground(FAILED_COLOUR)
                 self.table.setItem(r, c, item)
         self.table.resizeColumnsToContents()
