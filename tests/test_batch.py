@@ -39,9 +39,12 @@ def cluster(tmp_path_factory):
     spec = importlib.util.spec_from_file_location("crash_once", PLUGIN)
     spec.loader.exec_module(importlib.util.module_from_spec(spec))  # the client knows the method too
     os.environ["S2H_CRASH_MARKER"] = str(tmp_path_factory.mktemp("crash") / "crashed")
-    with local_cluster(2, preload=(str(PLUGIN),)) as local:
-        yield local
-    os.environ.pop("S2H_CRASH_MARKER", None)
+    try:
+        with local_cluster(2, preload=(str(PLUGIN),)) as local:
+            yield local
+    finally:
+        os.environ.pop("S2H_CRASH_MARKER", None)
+        METHODS.pop("crash_once", None)  # the registry is global: later tests list every method
 
 
 @pytest.fixture

@@ -27,8 +27,10 @@ from s2h_viewer.batch.task import base_row, run_task
 ALLOWED_FAILURES = 2
 
 #: the nanny sets MALLOC_TRIM_THRESHOLD_=65536 in its workers, which nearly doubled numpy's CPU on this
-#: kind of work (issue 23): left unset, glibc's own threshold applies
+#: kind of work (issue 23): left unset, glibc's own threshold applies. Off-screen pictures render in one
+#: thread per worker (Mesa's llvmpipe takes every core otherwise): a worker per core, each on one thread
 _CONFIG = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
+           "distributed.nanny.pre-spawn-environ.LP_NUM_THREADS": 1,
            "distributed.scheduler.allowed-failures": ALLOWED_FAILURES,
            "distributed.worker.daemon": False}
 
