@@ -32,6 +32,11 @@ ALLOWED_FAILURES = 2
 _CONFIG = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None,
            "distributed.nanny.pre-spawn-environ.LP_NUM_THREADS": 1,
            "distributed.scheduler.allowed-failures": ALLOWED_FAILURES,
+           # the workers' sampling profiler (a stack every 10 ms, for a dashboard we do not run) competes with
+           # each task for the GIL
+           "distributed.worker.profile.enabled": False,
+           # each worker holds its next task while it runs one, so no task waits on a round trip to the scheduler
+           "distributed.scheduler.worker-saturation": 2.0,
            "distributed.worker.daemon": False}
 
 
@@ -94,10 +99,21 @@ def _sigint_held() -> Iterator[list]:
 
 
 def warm_up() -> None:
-    """Import what every task needs (torch, the methods, the readers and writers, off-screen rendering)."""
+    """What every worker's first task would pay: the imports (torch, the methods, the readers and writers),
+    the off-screen render context (a second of its own the first time) and the networks."""
+    import pyvista as pv
+
     import s2h_viewer.io.files  # noqa: F401
     import s2h_viewer.render.offscreen  # noqa: F401
-    import s2h_viewer.retarget  # noqa: F401
+    import s2h_viewer.semantics.flexion  # noqa: F401
+    from s2h_viewer.retarget.asrn.inference import MODELS_DIR, load_network
+
+    for name in ("asrn", "dm"):
+        load_network(str(MODELS_DIR / f"{name}.pt"))
+    plotter = pv.Plotter(off_screen=True, window_size=(64, 64))
+    plotter.add_mesh(pv.Sphere())
+    plotter.screenshot(None)
+    plotter.close()
 
 
 def worker_count(client: Client) -> int:
