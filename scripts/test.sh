@@ -21,7 +21,7 @@ if [ -z "${DISPLAY:-}" ]; then
     fi
   fi
   if command -v xvfb-run >/dev/null; then
-    exec xvfb-run -a -s "-screen 0 1600x1000x24" "$PY" -m pytest -q -m "not benchmark and not fuzz_long"
+    exec xvfb-run -a -s "-screen 0 1600x1000x24" "$PY" -m pytest -q --durations=25 -m "not benchmark and not fuzz_long"
   fi
 fi
-exec "$PY" -m pytest -q -m "not benchmark and not fuzz_long"
+exec "$PY" -m pytest -q --durations=25 -m "not benchmark and not fuzz_long"

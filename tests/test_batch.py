@@ -211,8 +211,10 @@ def test_ctrl_c_stops_the_cluster_keeps_what_finished_and_leaves_no_partial_file
     command = [sys.executable, "-m", "s2h_viewer.cli", "batch", "--motions", GESTURES, COUNTING, "--targets", "iris",
                "laurel", "juniper", "--methods", "tbs_copy,asrn", "--format", "npz", "--no-pictures", "--quiet",
                "--out", str(out), "--workers", "2"]
+    # its own process group, as a terminal's job is, and Ctrl+C heard there whoever started the tests (a shell
+    # without job control starts a background job, and all it starts, with SIGINT ignored)
     batch = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                             start_new_session=True)  # its own process group, as a terminal's job is
+                             start_new_session=True, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         deadline = time.monotonic() + 240
         while not list(out.rglob("*.row.json")) and time.monotonic() < deadline and batch.poll() is None:
