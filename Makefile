@@ -26,6 +26,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_real_rigs.py
 	$(PY) benchmarks/bench_playback.py
 	$(PY) benchmarks/bench_batch.py
+	$(PY) benchmarks/bench_tracking.py
 	$(if $(DISPLAY),,xvfb-run -a -s "-screen 0 1600x1000x24") $(PY) benchmarks/bench_window_playback.py
 
 # reproduces assets/models/{asrn,dm}.pt (seeded): both at once, one core each (small batches gain

@@ -15,12 +15,16 @@ from s2h_viewer.errors import S2HError
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
     from s2h_viewer import samples
-    from s2h_viewer.io.npz import load_motion
+    from s2h_viewer.io.files import load_hand_file, load_motion_file
     from s2h_viewer.retarget.evaluation import evaluate, format_markdown, summarise, write_results
 
     hands = {h.name: h for h in samples.load_sample_hands("all")}
-    motions = [load_motion(p) for p in args.motion] if args.motion else samples.load_sample_motions()
-    from s2h_viewer.io.files import load_hand_file
+    motions = samples.load_sample_motions() if not args.motion else []
+    for path in args.motion or []:  # a motion file on its own rig (a recording: on the hand fitted to it)
+        motion, rig = load_motion_file(path, options=_rig_options(args))
+        if rig is not None:
+            hands[motion.hand_name] = rig
+        motions.append(motion)
 
     targets = args.target or samples.hand_names("test")
     for target in targets:  # a target may also be a hand file (a real rig, say)
@@ -135,7 +139,7 @@ def _rig_options(args: argparse.Namespace):
     from s2h_viewer.io.files import RigOptions
 
     return RigOptions(side=args.side, scheme=args.scheme, joint_map=args.joint_map,
-                      animation=getattr(args, "animation", None))
+                      animation=getattr(args, "animation", None), fps=getattr(args, "fps", None))
 
 
 def _cmd_rig(args: argparse.Namespace) -> int:
@@ -207,6 +211,8 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
         from s2h_viewer.samples import load_sample_hand
         source = load_sample_hand(motion.hand_name)
     target = load_hand_file(args.target, options)
+    if motion.fit is not None:
+        print(f"{args.motion}: {motion.fit.describe()}")
     with _progress_bar(f"retarget ({args.method})", motion.n_frames, "frame",
                        disable=args.quiet or None):  # None: no bar when not on a terminal
         retargeted = retarget(motion, source, target, args.method)
@@ -270,6 +276,8 @@ def _add_rig_options(parser: argparse.ArgumentParser) -> None:
                                             "<stem>.joints.json beside each hand file, if there)")
     parser.add_argument("--animation", help="which animation (glTF) or take (FBX) of a motion file: name or index "
                                             "(default: the first; `s2h rig FILE` lists them)")
+    parser.add_argument("--fps", type=float, help="frame rate of a tracking recording that does not say it "
+                                                  "(keypoint .npy/.npz; default 30), or to override its own")
 
 
 def _cmd_gestures(args: argparse.Namespace) -> int:
@@ -293,7 +301,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     ev = sub.add_parser("evaluate", help="retarget sample motions onto held-out hands and score each method")
     ev.add_argument("--methods", default="copy,tbs_copy,dm,asrn,asm_opt", help="comma-separated method names")
-    ev.add_argument("--motion", action="append", help="motion npz (default: the shipped samples); repeatable")
+    ev.add_argument("--motion", action="append", help="motion file (.npz .bvh .glb .gltf .fbx, or a tracking "
+                    "recording .json .npy; default: the shipped samples); repeatable")
     ev.add_argument("--target", action="append", help="target sample hand name or hand file (default: the test "
                                                       "split); repeatable")
     ev.add_argument("--out", default="results", help="folder for evaluation.csv and evaluation.md")
@@ -340,7 +349,8 @@ def build_parser() -> argparse.ArgumentParser:
     an.set_defaults(func=_cmd_annotate)
 
     rt = sub.add_parser("retarget", help="retarget a motion file onto a target hand and export it")
-    rt.add_argument("--motion", required=True, help="motion file (.npz .bvh .glb .gltf .fbx)")
+    rt.add_argument("--motion", required=True, help="motion file (.npz .bvh .glb .gltf .fbx), or a tracking "
+                    "recording: WebXR/OpenXR joint poses or MediaPipe landmarks (.json), keypoints (.npy .npz)")
     rt.add_argument("--source", help="hand the motion is performed on (default: its own rig, or its sample hand)")
     rt.add_argument("--target", required=True, help="target hand file or sample name")
     rt.add_argument("--method", default="asrn", help="copy, tbs_copy, dm, asrn or asm_opt")
@@ -352,7 +362,8 @@ def build_parser() -> argparse.ArgumentParser:
     bt = sub.add_parser("batch", help="retarget motion files onto many targets with several methods, on Dask; "
                                       "a summary.csv and a report.html of every task")
     bt.add_argument("--motions", nargs="+", required=True, metavar="PATH",
-                    help="motion files or folders of them (.npz .bvh .glb .gltf .fbx, searched recursively)")
+                    help="motion files or folders of them (.npz .bvh .glb .gltf .fbx, tracking recordings .json "
+                         ".npy; folders searched recursively)")
     bt.add_argument("--targets", nargs="+", required=True, metavar="PATH",
                     help="target hand files, folders of them, or shipped sample names")
     bt.add_argument("--methods", default="tbs_copy,asrn", help="comma-separated, of copy, tbs_copy, dm, asrn, "

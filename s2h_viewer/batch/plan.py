@@ -19,7 +19,7 @@ from s2h_viewer.errors import S2HError
 FORMATS = ("glb", "bvh", "npz")
 #: what a folder is searched for: every file the readers take, and VRM avatars (GLB files by another name), so
 #: that a file s2h cannot read yet fails its own tasks, saying why, instead of vanishing from the batch
-MOTION_SUFFIXES = (".npz", ".bvh", ".glb", ".gltf", ".fbx", ".vrm")
+MOTION_SUFFIXES = (".npz", ".bvh", ".glb", ".gltf", ".fbx", ".vrm", ".json", ".npy")
 HAND_SUFFIXES = (".npz", ".glb", ".gltf", ".fbx", ".bvh", ".vrm")
 
 
@@ -97,6 +97,19 @@ class Task:
         return row if row.get("status") == "failed" and row.get("input_error") else None
 
 
+def names_format(path: Path) -> bool:
+    """A JSON file in a searched folder is a motion if it says it is a tracking recording near its start
+    (sidecars and summaries beside the motions are not)."""
+    from s2h_viewer.io.recordings import JSON_FORMATS
+
+    try:
+        with path.open("rb") as stream:
+            head = stream.read(4096).decode("utf-8", "replace")
+    except OSError:
+        return False
+    return any(f'"{kind}"' in head for kind in JSON_FORMATS) and '"format"' in head
+
+
 def _files(paths: list[str], suffixes: tuple[str, ...], what: str, allow_names: bool) -> list[Path | str]:
     """Files named by ``paths`` (folders searched recursively for ``suffixes``, sorted), in the order given."""
     from s2h_viewer.samples import ASSETS_DIR, read_index
@@ -108,7 +121,7 @@ def _files(paths: list[str], suffixes: tuple[str, ...], what: str, allow_names: 
         path = Path(raw)
         if path.is_dir():
             inside = sorted(p for p in path.rglob("*") if p.is_file() and p.suffix.lower() in suffixes
-                            and not p.name.startswith("."))
+                            and not p.name.startswith(".") and (p.suffix.lower() != ".json" or names_format(p)))
             if not inside:
                 raise BatchUsageError(f"{path}: no {what} files ({', '.join(suffixes)}) in this folder")
             found += inside

@@ -27,6 +27,9 @@ class Motion:
     hand_name: str = ""
     labels: np.ndarray = field(default=None)  # type: ignore[assignment]
     meta: dict = field(default_factory=dict)  # provenance, e.g. the gesture script and seed it was made from
+    #: the `tracking.fitter.TrackingFit` this motion was fitted in (keypoints, residual), None for an authored
+    #: motion; never saved, and not carried into a retargeted motion
+    fit: object = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         self.q_tbs = np.asarray(self.q_tbs, dtype=np.float32)

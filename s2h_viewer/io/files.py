@@ -1,7 +1,9 @@
 """One entry point per direction, by file suffix: hands and motions in, retargeted motion out.
 
 Hands: ``.npz`` (the project's), ``.glb``/``.gltf``, ``.fbx``, ``.bvh`` (skeleton only), or the name
-of a shipped sample hand. Motions: ``.npz``, ``.bvh``, ``.glb``/``.gltf`` animation, ``.fbx`` take.
+of a shipped sample hand. Motions: ``.npz``, ``.bvh``, ``.glb``/``.gltf`` animation, ``.fbx`` take, and
+tracking recordings (WebXR/OpenXR or MediaPipe ``.json``, keypoint ``.npy``/``.npz``: `io.recordings`),
+which come with a source hand fitted to them (`tracking.fitter`).
 Retargeted motion out: ``.npz``, ``.bvh``, ``.glb``.
 """
 
@@ -18,7 +20,7 @@ from s2h_viewer.hand.motion import Motion
 from s2h_viewer.hand.rig_mapping import load_user_mapping
 
 HAND_SUFFIXES = (".npz", ".glb", ".gltf", ".fbx", ".bvh")
-MOTION_SUFFIXES = (".npz", ".bvh", ".glb", ".gltf", ".fbx")
+MOTION_SUFFIXES = (".npz", ".bvh", ".glb", ".gltf", ".fbx", ".json", ".npy")
 EXPORT_SUFFIXES = (".npz", ".bvh", ".glb")
 
 
@@ -44,12 +46,13 @@ def save_joint_map(hand_file: str | Path, mapping: dict[str, str], path: str | P
 class RigOptions:
     """How to read a rig: which hand (None: as names or geometry say), which naming scheme, a user joint
     map (a JSON file or a dict; else the file's own ``<stem>.joints.json`` if there is one), which animation
-    or take."""
+    or take; and a tracking recording's frame rate where the file has none (keypoint arrays)."""
 
     side: str | None = None
     scheme: str | None = None
     joint_map: str | Path | dict[str, str] | None = None
     animation: str | int | None = None
+    fps: float | None = None
 
     def mapping(self, hand_file: str | Path | None = None) -> dict[str, str] | None:
         """The user's joint map, else ``hand_file``'s sidecar joint map, else None (recognise the rig)."""
@@ -98,9 +101,16 @@ def _load_hand(path: Path, suffix: str, options: RigOptions) -> HandModel:
 def load_motion_file(path: str | Path, hand: HandModel | None = None, options: RigOptions = RigOptions()
                      ) -> tuple[Motion, HandModel | None]:
     """A motion and the hand it is performed on: the file's own rig for BVH/glTF/FBX (``hand`` may be
-    given to skip re-reading it), None for an npz (its ``hand_name`` names a sample hand)."""
+    given to skip re-reading it), the hand fitted to a tracking recording (the motion's ``fit`` holds the
+    keypoints and residual), None for an npz (its ``hand_name`` names a sample hand)."""
     path = Path(path)
     suffix = _suffix(require_readable_file(path), MOTION_SUFFIXES, "motion")
+    from s2h_viewer.io.recordings import is_recording
+    if is_recording(path):
+        from s2h_viewer.io.recordings import read_recording
+        from s2h_viewer.tracking.fitter import fit_recording
+        fit = fit_recording(read_recording(path, options.side, options.fps))
+        return fit.motion, fit.hand
     with reading(path, "a motion"):
         return _load_motion(path, suffix, hand, options)
 
@@ -123,7 +133,8 @@ def _load_motion(path: Path, suffix: str, hand: HandModel | None, options: RigOp
 
 
 def list_animations(path: str | Path) -> list[str]:
-    """Names of a motion file's animations (glTF) or takes (FBX); one unnamed clip for BVH and npz."""
+    """Names of a motion file's animations (glTF) or takes (FBX); one unnamed clip for BVH, npz and
+    recordings."""
     path = Path(path)
     suffix = _suffix(path, MOTION_SUFFIXES, "motion")
     if suffix in (".glb", ".gltf"):

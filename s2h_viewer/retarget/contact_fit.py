@@ -83,13 +83,30 @@ def fit_contacts(source_q: np.ndarray, source_hand: HandModel, target_hand: Hand
     is changed in place (a long clip's rotations are not copied)."""
     source_q = np.asarray(source_q)
     out = np.asarray(target_q, dtype=np.float32)
-    batches = _batches(runs_around(disagreement(source_hand, source_q, target_hand, out), config.reach),
-                       config.batch_frames)
+    frames = disagreement(source_hand, source_q, target_hand, out)
+    return _fit_frames(out, frames, lambda idx: pad_gaps(source_hand, source_q[idx]), target_hand, config)
+
+
+def fit_contacts_to_gaps(source_gaps: np.ndarray, hand: HandModel, q_tbs: np.ndarray,
+                         config: ContactFitConfig = ContactFitConfig()) -> np.ndarray:
+    """(T, 15, 4) ``q_tbs`` on ``hand`` with its pad contacts made to agree with ``source_gaps`` (T, 10), pad
+    gaps in hand lengths measured elsewhere (a tracked hand's keypoints, say), as `fit_contacts` does."""
+    out = np.asarray(q_tbs, dtype=np.float32)
+    touching = source_gaps < CONTACT_TOLERANCE
+    frames = np.zeros(len(out), dtype=bool)
+    for first, end in frame_chunks(len(out)):
+        frames[first:end] = (touching[first:end] != (pad_gaps(hand, out[first:end]) < CONTACT_TOLERANCE)).any(-1)
+    return _fit_frames(out, frames, lambda idx: source_gaps[idx], hand, config)
+
+
+def _fit_frames(out: np.ndarray, disagree: np.ndarray, source_gaps_at, hand: HandModel, config: ContactFitConfig
+                ) -> np.ndarray:
+    """The fit of `fit_contacts` on the runs around the ``disagree`` frames, source gaps from ``source_gaps_at``."""
+    batches = _batches(runs_around(disagree, config.reach), config.batch_frames)
     for i, batch in enumerate(batches):
         frames = np.concatenate([np.arange(a, b) for a, b in batch])
         with stage(i / len(batches), (i + 1) / len(batches)), torch_threads(1):
-            out[frames] = _fit_runs(out[frames], pad_gaps(source_hand, source_q[frames]), [b - a for a, b in batch],
-                                    target_hand, config)
+            out[frames] = _fit_runs(out[frames], source_gaps_at(frames), [b - a for a, b in batch], hand, config)
     report(1.0)
     return out
 
