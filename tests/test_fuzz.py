@@ -28,7 +28,10 @@ from s2h_viewer.io.annotation import Annotation, save_annotation, sidecar_path
 from s2h_viewer.io.bvh import save_bvh
 from s2h_viewer.io.files import RigOptions, load_hand_file, load_motion_file
 from s2h_viewer.io.gltf import save_gltf_motion
+from s2h_viewer.io.mediapipe_hand import save_mediapipe_hand
 from s2h_viewer.io.npz import load_motion
+from s2h_viewer.io.webxr_hand import save_webxr_hand
+from s2h_viewer.tracking.synthetic import synthetic_recording
 
 ASSETS = samples.ASSETS_DIR
 WEBXR = ASSETS / "hands" / "webxr" / "generic-hand-right.glb"
@@ -57,9 +60,16 @@ def originals(tmp_path_factory) -> dict[str, Path]:
                               hand_copy)
     valid_sidecar = folder / "valid.tbs.json"
     valid_sidecar.write_bytes(sidecar.read_bytes())
+    recording = synthetic_recording(samples.load_sample_hand("iris"), short, noise_mm=2.0, lost=0.1, seed=1)
+    recording.positions, recording.orientations = recording.positions[:24], recording.orientations[:24]
+    recording.labels = None
+    np.save(folder / "keypoints.npy", recording.positions)
     return {"npz hand": ASSETS / "hands" / "iris.npz", "npz motion": ASSETS / "motions" / "gestures.npz",
             "glTF hand": WEBXR, "glTF motion": anim, "BVH": bvh, "FBX": FBX, "sidecar": valid_sidecar,
-            "annotated hand": hand_copy, "joint map": joint_map}
+            "annotated hand": hand_copy, "joint map": joint_map,
+            "WebXR recording": save_webxr_hand(folder / "webxr.json", recording),
+            "MediaPipe recording": save_mediapipe_hand(folder / "mediapipe.json", recording, "Left"),
+            "keypoint array": folder / "keypoints.npy"}
 
 
 #: reader -> (mutator, loader of the damaged file at a path, suffix of the damaged file)
@@ -70,10 +80,13 @@ READERS = {
     "glTF motion": (mutate_gltf, load_motion_file, ".glb"),
     "BVH": (mutate_bvh, load_motion_file, ".bvh"),
     "FBX": (mutate_bytes, load_motion_file, ".fbx"),
+    "WebXR recording": (mutate_json, load_motion_file, ".json"),
+    "MediaPipe recording": (mutate_json, load_motion_file, ".json"),
+    "keypoint array": (mutate_bytes, load_motion_file, ".npy"),
 }
 #: inputs per reader in the default run (``fuzz_long`` runs ten times as many)
 COUNTS = {"npz hand": 50, "npz motion": 50, "glTF hand": 50, "glTF motion": 40, "BVH": 50, "FBX": 6,
-          "sidecar": 30, "joint map": 15}
+          "sidecar": 30, "joint map": 15, "WebXR recording": 20, "MediaPipe recording": 20, "keypoint array": 15}
 
 
 def _fuzz_readers(originals: dict[str, Path], folder: Path, seed: int, scale: int) -> Tally:

@@ -139,6 +139,7 @@ class CompareMode(QWidget):
         self._done_in_batch = 0
         self._resume_playing = False  # the timeline played when retargets paused it: it plays on after
         self._progress: JobProgressDialog | None = None
+        self.show_fit_residual = False  # the curve shows a tracked source's fit residual (View menu)
         self.view = CompareView()
         self.timeline = Timeline()
         self.curve = ErrorCurve()
@@ -422,8 +423,22 @@ class CompareMode(QWidget):
 
     def _show_selected_curve(self) -> None:
         result = self.selected_result()
-        self.curve.set_curve(result.frame_error, label(result))
+        fit = self.comparison.motion.fit if self.comparison is not None else None
+        if self.show_fit_residual and fit is not None:
+            self.curve.set_curve(fit.residual_mm, f"{self.comparison.source.name}",
+                                 "tracking fit residual per frame, mm",
+                                 f"{int(fit.filled.sum())} frames filled (drawn at 0). ")
+        else:
+            self.curve.set_curve(result.frame_error, label(result))
         self.heatmap.set_title(f"ASM error, {label(result)}")
+
+    def set_fit_residual_shown(self, shown: bool) -> None:
+        """The error curve shows the tracked source's fit residual (mm per frame) instead of the selected
+        retarget's ASM error."""
+        self.show_fit_residual = shown
+        if self.comparison is not None:
+            self._show_selected_curve()
+            self.curve.set_frame(self.timeline.frame)
 
     def _playing_changed(self, playing: bool) -> None:
         """Lighter skins while playing; paused, the full ones and the heatmap at the frame shown."""

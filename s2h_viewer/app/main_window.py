@@ -185,6 +185,11 @@ class MainWindow(QMainWindow):
             self.view.set_options(skeleton=on)), "Ctrl+K", checkable=True)
         self.contact_overlay = self._action(view_menu, "Contact overlay (lost contacts in red)", lambda on: (
             self.view.set_options(contacts=on)), "Ctrl+J", checkable=True)
+        self.keypoint_dots = self._action(view_menu, "Tracked keypoints on the source (recordings)", lambda on: (
+            self.view.set_options(keypoints=on)), "Ctrl+D", checkable=True)
+        self.keypoint_dots.setChecked(True)
+        self.fit_residual = self._action(view_menu, "Error curve: tracking fit residual (recordings)",
+                                         self.compare.set_fit_residual_shown, "Ctrl+F", checkable=True)
         view_menu.addSeparator()
         for preset, text, key in (("palm", "Camera: palm", "Ctrl+1"), ("back", "Camera: back", "Ctrl+2"),
                                   ("side", "Camera: side", "Ctrl+3"), ("default", "Camera: reset", "Ctrl+0")):
@@ -410,7 +415,8 @@ class MainWindow(QMainWindow):
         self._loading = [entry for entry in self._loading if id(entry[2]) not in shown]
 
     def open_motion(self) -> None:
-        self._ask_to_open("Open motion", "Motions (*.npz *.bvh *.glb *.gltf *.fbx)", self.load_motion,
+        self._ask_to_open("Open motion", "Motions and tracking recordings (*.npz *.bvh *.glb *.gltf *.fbx *.json "
+                          "*.npy)", self.load_motion,
                           self._start_dir("files/motion_dir", "motions"))
 
     def load_motion(self, path: str) -> None:

@@ -27,9 +27,26 @@ def is_keypoint_npz(path: Path) -> bool:
     return "schema" not in names and bool(names & set(ARRAY_KEYS) or len(names - {"fps"}) == 1)
 
 
+def _check_npy_size(path: Path) -> None:
+    """An .npy's header declares its array's shape and type: the bytes after it must be exactly that many
+    (numpy itself ignores bytes appended after the data)."""
+    with path.open("rb") as stream:
+        version = np.lib.format.read_magic(stream)
+        read_header = np.lib.format.read_array_header_1_0 if version == (1, 0) else \
+            np.lib.format.read_array_header_2_0
+        shape, _, dtype = read_header(stream)
+        offset = stream.tell()
+    declared = offset + int(np.prod(shape, dtype=np.int64)) * dtype.itemsize
+    size = path.stat().st_size
+    if size != declared:
+        raise InputFileError(path, f"its header declares a {'x'.join(map(str, shape))} {dtype} array "
+                                   f"({declared - offset} bytes of data), the file holds {size - offset}")
+
+
 def _load(path: Path) -> tuple[np.ndarray, object]:
     try:
         if path.suffix.lower() == ".npy":
+            _check_npy_size(path)
             return np.load(path, allow_pickle=False), None
         with np.load(path, allow_pickle=False) as arrays:
             keys = [k for k in ARRAY_KEYS if k in arrays.files] or [k for k in arrays.files if k != "fps"]

@@ -22,6 +22,7 @@ from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.kinematics import HandPose
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.skinning import skin_vertices
+from s2h_viewer.render.keypoint_dots import KeypointDots
 from s2h_viewer.render.scene import BONE_COLOUR, SKIN_COLOUR, display_hand, skeleton, surface, to_view
 from s2h_viewer.retarget.comparison import Comparison
 from s2h_viewer.retarget.methods import METHODS
@@ -82,6 +83,7 @@ class PosedHand:
                  opacity: float, playing_hand: HandModel | None = None):
         self.hand, self.pose, self.joint_error = hand, pose, joint_error
         self.overlay: Overlays | None = None
+        self.keypoints: KeypointDots | None = None  # a tracked source's recorded keypoints
         self.renderer = plotter.renderer  # the subplot it is drawn in
         self.frame, self.playing = 0, False
         self.levels: list[Skin] = []  # the full skin, then the one drawn while playing (if any)
@@ -155,6 +157,8 @@ class PosedHand:
         self.frame = frame
         if self.overlay is not None:
             self.overlay.show(frame)
+        if self.keypoints is not None:
+            self.keypoints.show(frame)
         if not self.levels:
             self.bones.points = to_view(self.hand, self.pose.positions[frame].numpy().astype(np.float64))
             return
@@ -309,6 +313,8 @@ def fit_cells(plotter: pv.Plotter, hands: list["PosedHand"], labels: list[CellLa
     for hand in shown:
         if hand.overlay is not None:
             hand.overlay.fit(min(cell_pixels(plotter, hand.renderer)))
+        if hand.keypoints is not None:
+            hand.keypoints.fit(min(cell_pixels(plotter, hand.renderer)))
     if shown:
         fit_view_angle(plotter, shown[0].renderer)
 
@@ -330,8 +336,10 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
         return lighter[id(hand), faces]
 
     source_contacts = detect_contacts(comparison.source, comparison.source_pose)
+    fit = comparison.motion.fit
     panels = [((0, 0), comparison.source, comparison.source_pose, None, None,
-               f"source: {comparison.source.name}")]
+               f"source: {comparison.source.name}" + ("" if fit is None else
+                                                     f"\ntracked: fit residual {np.nanmean(fit.residual_mm):.1f} mm"))]
     for row, target in enumerate(dict.fromkeys(id(r.target) for r in comparison.results)):
         results = [r for r in comparison.results if id(r.target) == target]
         panels += [((row, 1 + k), r.target, r.pose, r.joint_error, source_contacts,
@@ -347,6 +355,8 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
                           playing_hand=None if playing_faces is None else light(hand, playing_faces))
         posed.overlay = Overlays(plotter, hand, pose, expected)
         posed.renderer = plotter.renderer
+        if cell == (0, 0) and fit is not None:
+            posed.keypoints = KeypointDots(plotter, hand, fit.keypoints, fit.filled)
         hands.append(posed)
         labels.append(add_label(plotter, label))
     below = source_cell_below(comparison)
@@ -495,6 +505,7 @@ class ViewOptions:
     camera: str = "default"
     skeleton: bool = False
     contacts: bool = False
+    keypoints: bool = True  # a tracked source's recorded keypoints
     opacity: float = 1.0
 
 
@@ -506,6 +517,8 @@ def apply_options(plotter: pv.Plotter, hands: list[PosedHand], options: ViewOpti
     for hand in hands:
         hand.set_opacity(min(options.opacity, SKELETON_OPACITY) if options.skeleton else options.opacity)
         hand.overlay.set_visible(options.skeleton, options.contacts)
+        if hand.keypoints is not None:
+            hand.keypoints.set_visible(options.keypoints)
     if camera:
         set_camera(plotter, options.camera, [h.hand for h in hands])
 

@@ -16,6 +16,8 @@ from s2h_viewer.hand.mirror import reflection
 
 #: a hand smaller or larger than this (wrist to middle knuckle, metres) is not in metres
 PALM_LENGTH_RANGE = (0.03, 0.2)
+#: a keypoint further than this (metres) from the recording's origin is not a tracked hand
+MAX_COORDINATE = 1000.0
 
 
 @dataclass(eq=False)
@@ -51,14 +53,18 @@ def handedness_score(positions: np.ndarray, orientations: np.ndarray | None = No
     its thumb lie on the other side (positions)."""
     ok = np.isfinite(positions).all(axis=(1, 2))
     p = positions[ok] - positions[ok, :1]
-    if not len(p):
+    with np.errstate(all="ignore"):  # frames a tracker collapsed (a palm of no size) say nothing: dropped
+        normal = np.cross(p[:, topo.joint_index("pinky_mcp")], p[:, topo.joint_index("index_mcp")])
+        size = np.linalg.norm(normal, axis=-1)
+        palm = np.linalg.norm(p[:, topo.joint_index("middle_mcp")], axis=-1)
+        keep = np.isfinite(size) & (size > 1e-12) & (palm > 1e-6)
+    if not keep.any():
         return 0.0
-    normal = np.cross(p[:, topo.joint_index("pinky_mcp")], p[:, topo.joint_index("index_mcp")])
-    normal /= np.linalg.norm(normal, axis=-1, keepdims=True).clip(1e-12)
+    ok[ok] = keep
+    p, normal, palm = p[keep], normal[keep] / size[keep, None], palm[keep]
     if orientations is not None:
         splay = orientations[ok][:, [0, *topo.KNUCKLE_JOINTS[1:]]][..., 2]  # wrist and finger MCPs: (n, 5, 3)
         return float(np.einsum("nkc,nc->nk", splay, normal).mean())
-    palm = np.linalg.norm(p[:, topo.joint_index("middle_mcp")], axis=-1)
     depth = np.einsum("njc,nc->nj", p, normal) / palm[:, None]  # out of the back, in palm lengths
     back_side = depth[:, topo.TIP_JOINTS[1:]].mean(1) + depth[:, [topo.joint_index("thumb_mcp"),
                                                                   topo.joint_index("thumb_ip")]].mean(1)
@@ -82,6 +88,11 @@ def check_scale(recording: KeypointRecording, path) -> None:
     from s2h_viewer.errors import InputFileError
 
     p = recording.positions[recording.valid]
+    far = np.abs(p).max(axis=(1, 2)) > MAX_COORDINATE
+    if far.any():
+        frame = int(np.flatnonzero(recording.valid)[np.argmax(far)])
+        raise InputFileError(path, f"frame {frame} holds a keypoint {np.abs(p[np.argmax(far)]).max():.3g} m from "
+                                   f"the origin, beyond any tracking space ({MAX_COORDINATE:g} m)")
     palm = float(np.median(np.linalg.norm(p[:, topo.joint_index("middle_mcp")] - p[:, 0], axis=-1)))
     low, high = PALM_LENGTH_RANGE
     if not low <= palm <= high:

@@ -1,5 +1,5 @@
-"""The selected retarget's ASM error per frame as a curve under the timeline: a click jumps to that
-frame, the worst frames are marked, the current frame is a vertical line."""
+"""A per-frame curve under the timeline (the selected retarget's ASM error, or a tracked source's fit
+residual): a click jumps to that frame, the worst frames are marked, the current frame is a vertical line."""
 
 from __future__ import annotations
 
@@ -27,7 +27,7 @@ def worst_frames(error: np.ndarray, count: int = WORST, spacing: int | None = No
 
 
 class ErrorCurve(QWidget):
-    """Emits ``frame_clicked(frame)``; ``set_curve`` gives the (T,) error and a title for the tooltip."""
+    """Emits ``frame_clicked(frame)``; ``set_curve`` gives the (T,) values, a title and what they measure."""
 
     frame_clicked = Signal(int)
 
@@ -39,14 +39,17 @@ class ErrorCurve(QWidget):
         self.worst = np.zeros(0, dtype=int)
         self.frame = 0
         self.title = ""
+        self.quantity = "ASM error per frame"
         self._curve: QPixmap | None = None  # the curve and its marks, drawn once per curve and size
 
-    def set_curve(self, error: np.ndarray, title: str) -> None:
-        self.error, self.title = np.asarray(error, dtype=float), title
+    def set_curve(self, error: np.ndarray, title: str, quantity: str = "ASM error per frame",
+                  note: str = "") -> None:
+        """``error`` (T,); NaN frames (none measured there) are drawn at 0 and never marked worst."""
+        self.error, self.title, self.quantity = np.nan_to_num(np.asarray(error, dtype=float)), title, quantity
         self.worst = worst_frames(self.error)
         self._curve = None
-        self.setToolTip(f"{title}: mean ASM error per frame; worst frames (red): "
-                        f"{', '.join(str(f) for f in self.worst)}. Click to jump.")
+        self.setToolTip(f"{title}: {quantity}; worst frames (red): "
+                        f"{', '.join(str(f) for f in self.worst)}. {note}Click to jump.")
         self.update()
 
     def set_frame(self, frame: int) -> None:
@@ -90,7 +93,7 @@ class ErrorCurve(QWidget):
             painter.drawLine(QPointF(x, MARGIN), QPointF(x, MARGIN + 8))
             painter.drawEllipse(QPointF(x, self._y(self.error[frame])), 3, 3)
         painter.setPen(QPen(QColor("black"), 1))
-        painter.drawText(MARGIN + 2, self.height() - 4, f"ASM error per frame ({self.title})   max {self.error.max():.3f}")
+        painter.drawText(MARGIN + 2, self.height() - 4, f"{self.quantity} ({self.title})   max {self.error.max():.3f}")
         painter.end()
         return pixmap
 
