@@ -334,7 +334,7 @@ def build_parser() -> argparse.ArgumentParser:
     rd.set_defaults(func=_cmd_render)
 
     vw = sub.add_parser("view", help="the desktop viewer: compare retargeting methods on a timeline")
-    vw.add_argument("--motion", help="motion file (default: the shipped gestures clip)")
+    vw.add_argument("--motion", help="motion file or tracking recording (default: the shipped gestures clip)")
     vw.add_argument("--target", action="append", help="target hand file or sample name (default: iris, laurel)")
     vw.add_argument("--methods", help="comma-separated methods (default: the last used, or tbs_copy,asrn)")
     _add_rig_options(vw)

@@ -16,8 +16,8 @@ from s2h_viewer.hand.mirror import reflection
 
 #: a hand smaller or larger than this (wrist to middle knuckle, metres) is not in metres
 PALM_LENGTH_RANGE = (0.03, 0.2)
-#: a keypoint further than this (metres) from the recording's origin is not a tracked hand
-MAX_COORDINATE = 1000.0
+#: a keypoint further than this (metres) from the recording's origin is not a tracked hand (nor a unit slip)
+MAX_COORDINATE = 1e6
 
 
 @dataclass(eq=False)
@@ -88,16 +88,16 @@ def check_scale(recording: KeypointRecording, path) -> None:
     from s2h_viewer.errors import InputFileError
 
     p = recording.positions[recording.valid]
-    far = np.abs(p).max(axis=(1, 2)) > MAX_COORDINATE
-    if far.any():
-        frame = int(np.flatnonzero(recording.valid)[np.argmax(far)])
-        raise InputFileError(path, f"frame {frame} holds a keypoint {np.abs(p[np.argmax(far)]).max():.3g} m from "
-                                   f"the origin, beyond any tracking space ({MAX_COORDINATE:g} m)")
     palm = float(np.median(np.linalg.norm(p[:, topo.joint_index("middle_mcp")] - p[:, 0], axis=-1)))
     low, high = PALM_LENGTH_RANGE
     if not low <= palm <= high:
         raise InputFileError(path, f"wrist to middle knuckle is {palm:.4g} (median over frames), not a hand in "
                                    f"metres ({low}-{high} m): tracked keypoints must be in metres")
+    far = np.abs(p).max(axis=(1, 2)) > MAX_COORDINATE
+    if far.any():
+        frame = int(np.flatnonzero(recording.valid)[np.argmax(far)])
+        raise InputFileError(path, f"frame {frame} holds a keypoint {np.abs(p[np.argmax(far)]).max():.3g} m from "
+                                   f"the origin, beyond any tracking space ({MAX_COORDINATE:g} m)")
 
 
 def sided_by_geometry(recording: KeypointRecording, side: str | None) -> KeypointRecording:
