@@ -99,7 +99,7 @@ def main() -> None:
                 result = retarget(motion, source, target, method)
                 got = {pose: signature(target, result, frames[pose]) for pose in POSES}
                 kept = sum(got[p] == want[p] for p in POSES)
-                print(f"| {kind} | {target.name} | {method} | " + " | ".join(
+                print(f"| {kind} | {target.name}{f' ({side})' if side else ''} | {method} | " + " | ".join(
                     g if g == want[p] else f"**{g}**" for p, g in got.items()) + f" | {kept}/{len(POSES)} |")
     if args.pictures:
         from s2h_viewer.render.compare_scene import ViewOptions, render_comparison

@@ -28,6 +28,9 @@ BONE_TOLERANCE = 0.3
 #: than they are off theirs, is an outlier (a smooth motion's midpoints are off by half its acceleration)
 SPIKE_DISTANCE = 0.015  # metres
 SPIKE_SIGMAS = 8.0
+#: fingers whose chains are refined as a whole: the thumb, whose base a tracker moves and the fitted palm
+#: keeps fixed (the others' bones, aimed from where their parent put them, already meet the keypoints)
+REFINED_FINGERS = (0,)
 #: candidate rolls (deg) of the thumb's frames and of each finger's (as many of each)
 ROLL_STEP_DEG = 2.5
 ROLL_SAMPLE = 250  # frames the rolls are judged on (every k-th)
@@ -178,7 +181,8 @@ def fit_recording(recording: KeypointRecording, mesh: bool = True) -> TrackingFi
         sigma = smoothing.estimate_noise(flat, use)
     # smoothed where they were recorded (the wrist's path and turn with the fingers), gaps filled
     weights = use.astype(np.float64)
-    world = smoothing.smooth(flat, weights, smoothing.choose_smoothing(flat, weights, sigma)).reshape(positions.shape)
+    lam = smoothing.choose_smoothing(flat, weights, sigma)
+    world = smoothing.follow_fast_moves(flat, weights, lam, sigma).reshape(positions.shape)
     template = skeleton.palm_template(world[use])
     rotation = skeleton.align_palm(world, template)
     wrist = world[:, 0]
@@ -192,7 +196,7 @@ def fit_recording(recording: KeypointRecording, mesh: bool = True) -> TrackingFi
     rolls = _finger_rolls(template, lengths, smoothed[use], recording.name, thumb_roll)
     hand = skeleton.build_hand(template, lengths, recording.name, rolls, recording.radii,
                                source=f"{recording.format}:{recording.name}")
-    angles = ik.refine_chains(hand, smoothed, ik.solve(hand, smoothed))
+    angles = ik.refine_chains(hand, smoothed, ik.solve(hand, smoothed), REFINED_FINGERS)
     q = _keep_recorded_contacts(hand, ik.angles_to_quats(angles), smoothed, use)
     fitted = forward_kinematics(hand, q).positions.numpy().astype(np.float64)
     residual = np.full(len(positions), np.nan)

@@ -82,7 +82,8 @@ def _chain_points(hand: HandModel, f: int, params: np.ndarray) -> np.ndarray:
     return points
 
 
-def refine_chains(hand: HandModel, positions: np.ndarray, angles: np.ndarray) -> np.ndarray:
+def refine_chains(hand: HandModel, positions: np.ndarray, angles: np.ndarray, fingers=range(topo.N_FINGERS)
+                  ) -> np.ndarray:
     """(T, 15, 3) ``angles`` (from `solve`) refined finger by finger by Levenberg-Marquardt so its three
     child joints meet the keypoints as a whole (tips weighted most), within the limits: a bone aimed at
     its recorded child from where its parent left it cannot make up for a parent that is off (a thumb whose
@@ -90,7 +91,7 @@ def refine_chains(hand: HandModel, positions: np.ndarray, angles: np.ndarray) ->
     low, high, splay_limit = BEND_LOW.numpy(), BEND_HIGH.numpy() - BEND_MARGIN, SPLAY_LIMIT.numpy()
     out = angles.copy()
     weights = np.repeat(CHAIN_WEIGHTS, 3)
-    for f in range(topo.N_FINGERS):
+    for f in fingers:
         a = 3 * f
         params = np.stack([angles[:, a, 1], angles[:, a, 2], angles[:, a + 1, 1], angles[:, a + 2, 1]], -1)
         lower = np.array([low[a], -splay_limit[a], low[a + 1], low[a + 2]])

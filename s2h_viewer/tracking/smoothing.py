@@ -4,7 +4,10 @@ Each coordinate's trajectory ``x`` minimises ``sum_t w_t (x_t - y_t)^2 + lambda 
 noise ``sigma`` is estimated from the recording itself (third differences of white noise have variance
 20 sigma^2; a median of them, so a smooth motion's own third differences barely count), and ``lambda`` is
 the one whose fit leaves residuals of that size (the discrepancy principle): a clean recording passes
-almost untouched, a noisy one is smoothed as much as its noise asks. Frames with weight 0
+almost untouched, a noisy one is smoothed as much as its noise asks. One lambda for a whole clip would
+flatten its fast moves (a finger snapping shut) as much as its still stretches, so `follow_fast_moves`
+then raises each joint's data weight wherever its fit stays off by more than the noise for several frames
+running (a bias, not noise), and solves again. Frames with weight 0
 (lost or outlying) are filled by the smoother's curve between their neighbours; before the first and
 after the last tracked frame the nearest tracked frame is held.
 """
@@ -71,4 +74,31 @@ def smooth(series: np.ndarray, weights: np.ndarray, lam: float) -> np.ndarray:
     out[span] = solveh_banded(_banded_system(weights[span].astype(np.float64), max(lam, 1e-9)),
                               weights[span, None] * y, check_finite=False)
     out[:first], out[last + 1:] = out[first], out[last]
+    return out
+
+
+#: `follow_fast_moves`: frames a joint's residual is pooled over, rounds, and the largest data weight
+BIAS_WINDOW = 5
+BIAS_ROUNDS = 2
+MAX_WEIGHT = 1e4
+BIAS_SIGMAS = 2.0  # a residual this many times the noise, held over the window, is a bias
+
+
+def follow_fast_moves(series: np.ndarray, weights: np.ndarray, lam: float, sigma: float, group: int = 3
+                      ) -> np.ndarray:
+    """(T, K) `smooth` with each group of ``group`` coordinates (a joint's x, y, z) weighted up where its
+    residual, averaged over `BIAS_WINDOW` frames, exceeds the noise ``sigma`` (weight (residual / sigma)^2)."""
+    out = smooth(series, weights, lam)
+    if sigma <= 0:
+        return out
+    used = weights > 0
+    kernel = np.ones(BIAS_WINDOW) / BIAS_WINDOW
+    boost = np.ones((len(series), series.shape[1] // group))
+    for _ in range(BIAS_ROUNDS):  # a weight once raised stays (else the next round, fitting well, drops it again)
+        squared = ((out - series) ** 2 * used[:, None]).reshape(len(series), -1, group).mean(-1)  # (T, joints)
+        local = np.stack([np.convolve(column, kernel, mode="same") for column in squared.T], axis=1)
+        boost = np.clip(boost * np.maximum(local / (BIAS_SIGMAS * sigma) ** 2, 1.0), 1.0, MAX_WEIGHT)
+        for joint in range(boost.shape[1]):
+            columns = slice(joint * group, (joint + 1) * group)
+            out[:, columns] = smooth(series[:, columns], weights * boost[:, joint], lam)
     return out
