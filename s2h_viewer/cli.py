@@ -263,7 +263,9 @@ def _cmd_view(args: argparse.Namespace) -> int:
         setup.targets = [load_hand_file(t, _rig_options(args)) for t in args.target]
     if args.methods:
         setup.methods = args.methods.split(",")
-    return run(setup)
+    if setup.motion.fit is not None:
+        print(f"{args.motion}: {setup.motion.fit.describe()}")
+    return run(setup, _rig_options(args))
 
 
 def _add_rig_options(parser: argparse.ArgumentParser) -> None:

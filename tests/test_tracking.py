@@ -120,6 +120,8 @@ def test_keypoint_arrays_need_their_frame_rate_or_assume_30(tmp_path, sample_han
     assert from_npy.fps == 30.0 and any("assumed" in n for n in from_npy.notes)
     assert read_recording(tmp_path / "k.npy", fps=24.0).fps == 24.0
     assert read_recording(tmp_path / "k.npz").fps == 60.0
+    with pytest.raises(InputFileError, match="--fps is 0"):
+        read_recording(tmp_path / "k.npy", fps=0.0)
     assert np.array_equal(read_recording(tmp_path / "k.npz").valid, recording.valid)
 
 

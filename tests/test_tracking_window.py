@@ -91,3 +91,14 @@ def test_open_motion_takes_a_mediapipe_recording_with_lost_frames(window, qtbot,
     window.timeline.set_frame(kept)
     qtbot.waitUntil(lambda: window.compare.view.frame == kept)
     assert window.compare.view._hands[0].keypoints.actor.visibility
+    assert "filled" in window.statusBar().currentMessage()  # the fit's report, as the CLI prints it
+    window.fit_residual.trigger()
+    assert np.array_equal(window.compare.curve.missing, comparison.motion.fit.filled)  # shaded, not "0 mm"
+
+
+def test_the_recording_items_are_offered_only_for_a_recording(window, qtbot):
+    assert window.keypoint_dots.isEnabled() and window.fit_residual.isEnabled()
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.load_motion(str(ASSETS_DIR / "motions" / "counting.npz"))
+    assert not window.keypoint_dots.isEnabled() and not window.fit_residual.isEnabled()
+    assert window.compare.view._hands[0].keypoints is None

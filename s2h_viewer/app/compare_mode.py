@@ -427,7 +427,7 @@ class CompareMode(QWidget):
         if self.show_fit_residual and fit is not None:
             self.curve.set_curve(fit.residual_mm, f"{self.comparison.source.name}",
                                  "tracking fit residual per frame, mm",
-                                 f"{int(fit.filled.sum())} frames filled (drawn at 0). ")
+                                 f"{int(fit.filled.sum())} frames filled (grey). ")
         else:
             self.curve.set_curve(result.frame_error, label(result))
         self.heatmap.set_title(f"ASM error, {label(result)}")

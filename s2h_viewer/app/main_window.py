@@ -41,8 +41,10 @@ class MainWindow(QMainWindow):
     comparison_ready = Signal()
     annotation_ready = Signal()
 
-    def __init__(self, setup: CompareSetup, settings: QSettings | None = None):
+    def __init__(self, setup: CompareSetup, settings: QSettings | None = None, open_options=None):
         super().__init__()
+        from s2h_viewer.io.files import RigOptions
+        self.open_options = open_options or RigOptions()  # `s2h view`'s --side, --fps ...: for every file opened
         self.setWindowTitle("s2h-viewer[*]")
         self.settings = settings or QSettings("s2h-viewer", "s2h-viewer")
         self.runner = TaskRunner(self, self.error, self.statusBar().showMessage)
@@ -52,6 +54,7 @@ class MainWindow(QMainWindow):
         self.annotate = AnnotateMode(self.runner, self.error, lambda text: self.statusBar().showMessage(text, 5000),
                                      self)
         self.compare.comparison_ready.connect(self._remember_shown)
+        self.compare.comparison_ready.connect(self._tracking_actions)
         self.compare.comparison_ready.connect(self.comparison_ready)
         self.compare.state_changed.connect(self._state_changed)
         self.annotate.annotation_ready.connect(self.annotation_ready)
@@ -404,6 +407,16 @@ class MainWindow(QMainWindow):
             self.statusBar().showMessage(f"wrote {sidecar}: {Path(path).name} opens with this joint map", 5000)
         return hand
 
+    def _tracking_actions(self) -> None:
+        """The recording-only View items are offered while the source is a tracked recording, whose fit's
+        report (as `s2h retarget` prints it) the status bar then shows."""
+        tracked = self.comparison is not None and self.comparison.motion.fit is not None
+        self.keypoint_dots.setEnabled(tracked)
+        self.fit_residual.setEnabled(tracked)
+        if tracked:
+            self.statusBar().showMessage(f"{self.comparison.motion.name}: {self.comparison.motion.fit.describe()}",
+                                         60000)
+
     def _remember_shown(self) -> None:
         """Loads the grid now shows become recent files; loads it does not show (cancelled, failed) wait: a
         Redo may bring a cancelled target back, and it is recent then."""
@@ -423,7 +436,7 @@ class MainWindow(QMainWindow):
         from s2h_viewer.io.files import load_motion_file
         from s2h_viewer.samples import load_sample_hand
         try:
-            motion, rig = load_motion_file(path)
+            motion, rig = load_motion_file(path, options=self.open_options)
             source = rig or load_sample_hand(motion.hand_name)
         except (S2HError, KeyError) as exc:
             self.error(str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc))
@@ -650,14 +663,14 @@ class MainWindow(QMainWindow):
         super().closeEvent(event)
 
 
-def run(setup: CompareSetup | None = None) -> int:
+def run(setup: CompareSetup | None = None, open_options=None) -> int:
     """Start the application (``s2h view``)."""
     import sys
 
     from PySide6.QtWidgets import QApplication
     app = QApplication.instance() or QApplication(sys.argv)
     app.setApplicationName("s2h-viewer")
-    window = MainWindow(setup or default_setup())
+    window = MainWindow(setup or default_setup(), open_options=open_options)
     window.show()
     window.activateWindow()  # without a window manager nobody else gives it the keyboard
     window.start_comparison()

@@ -82,7 +82,8 @@ def read_keypoint_array(path: Path, fps: float | None = None, side: str | None =
     if not finite.all(axis=(1, 2)).any():
         raise InputFileError(path, f"all {len(positions)} frames are NaN: the hand was never tracked")
     positions[~finite.all(axis=(1, 2))] = np.nan
-    rate = frame_rate(path, file_fps if fps is None else None, fps) if (fps or file_fps is not None) else 30.0
+    given = fps is not None or file_fps is not None
+    rate = frame_rate(path, file_fps if fps is None else None, fps) if given else 30.0
     recording = KeypointRecording(positions=positions, fps=rate, side="right", name=path.stem,
                                   format="keypoint-array")
     if fps is None and file_fps is None:

@@ -42,9 +42,11 @@ def read_recording(path: str | Path, side: str | None = None, fps: float | None 
             from s2h_viewer.io.mediapipe_hand import read_mediapipe_hand
             recording = read_mediapipe_hand(path, document, side)
         else:
-            raise InputFileError(path, f'"format" is {document.get("format")!r}: expected one of '
-                                       f'{", ".join(JSON_FORMATS)}')
+            said = f'"format" is {document["format"]!r}' if "format" in document else 'has no "format"'
+            raise InputFileError(path, f'{said}: expected one of {", ".join(JSON_FORMATS)} (a tracking '
+                                       f'recording)')
         if fps is not None:
             from s2h_viewer.io.tracking_json import frame_rate
+            recording.notes.append(f"fps: {fps:g} (--fps; the file says {recording.fps:g})")
             recording.fps = frame_rate(path, None, fps)
         return recording

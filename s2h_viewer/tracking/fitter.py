@@ -57,8 +57,9 @@ class TrackingFit:
     def describe(self) -> str:
         """One line for a report: how the fit went."""
         s = self.summary
-        return (f"fitted to {self.motion.n_frames} tracked frames: residual {s['residual_mm_mean']} mm mean, "
-                f"{s['residual_mm_max']} mm max; {s['filled_frames']} frames filled ({s['lost_frames']} lost); "
+        return (f"fitted to a {self.motion.n_frames}-frame recording ({self.motion.n_frames - s['lost_frames']} "
+                f"tracked): residual {s['residual_mm_mean']} mm mean, {s['residual_mm_max']} mm max; "
+                f"{s['filled_frames']} frames filled ({s['lost_frames']} lost, the rest outliers); "
                 + "; ".join(self.notes))
 
     @property
@@ -202,8 +203,9 @@ def fit_recording(recording: KeypointRecording, mesh: bool = True) -> TrackingFi
     residual = np.full(len(positions), np.nan)
     residual[use] = np.linalg.norm(fitted[use, 1:] - hand_space[use, 1:], axis=-1).mean(1) * 1000.0
     filled = ~use
-    notes = list(recording.notes) + ["hinge rolls " + ", ".join("/".join(f"{r:.0f}" for r in finger)
-                                                                  for finger in rolls) + " deg",
+    notes = list(recording.notes) + ["hinge rolls (deg; thumb, index, middle, ring, pinky; each knuckle/middle/"
+                                     "end joint) " + ", ".join("/".join(f"{r:.0f}" for r in finger)
+                                                               for finger in rolls),
                                      f"noise {sigma * 1000:.2f} mm"]
     if recording.side == "left":
         notes.append("left hand: fitted as its mirror image (right-hand convention), as every left hand")

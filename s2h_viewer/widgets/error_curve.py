@@ -4,13 +4,14 @@ residual): a click jumps to that frame, the worst frames are marked, the current
 from __future__ import annotations
 
 import numpy as np
-from PySide6.QtCore import QPointF, Signal
+from PySide6.QtCore import QPointF, QRectF, Signal
 from PySide6.QtGui import QColor, QPainter, QPen, QPixmap, QPolygonF
 from PySide6.QtWidgets import QWidget
 
 WORST = 5  # frames marked
 #: for Help's list
 MOUSE = (("click the error curve", "jump to that frame"),)
+MISSING_COLOUR = QColor("#d9d9d9")
 MARGIN = 6  # pixels around the curve: a worst frame's ring (radius 3) at either end stays whole
 
 
@@ -36,6 +37,7 @@ class ErrorCurve(QWidget):
         self.setMinimumHeight(56)
         self.setMaximumHeight(70)
         self.error = np.zeros(1)
+        self.missing = np.zeros(1, dtype=bool)
         self.worst = np.zeros(0, dtype=int)
         self.frame = 0
         self.title = ""
@@ -44,8 +46,11 @@ class ErrorCurve(QWidget):
 
     def set_curve(self, error: np.ndarray, title: str, quantity: str = "ASM error per frame",
                   note: str = "") -> None:
-        """``error`` (T,); NaN frames (none measured there) are drawn at 0 and never marked worst."""
-        self.error, self.title, self.quantity = np.nan_to_num(np.asarray(error, dtype=float)), title, quantity
+        """``error`` (T,); NaN frames (none measured there: a recording's filled frames) are shaded grey, drawn
+        at 0 and never marked worst."""
+        values = np.asarray(error, dtype=float)
+        self.missing = ~np.isfinite(values)
+        self.error, self.title, self.quantity = np.nan_to_num(values), title, quantity
         self.worst = worst_frames(self.error)
         self._curve = None
         self.setToolTip(f"{title}: {quantity}; worst frames (red): "
@@ -83,6 +88,10 @@ class ErrorCurve(QWidget):
         pixmap.fill(QColor("white"))
         painter = QPainter(pixmap)
         painter.setRenderHint(QPainter.RenderHint.Antialiasing)
+        if self.missing.any():  # frames with nothing measured: a grey band, not a low stretch of the curve
+            width = max(1.0, (self.width() - 2 * MARGIN) / max(1, len(self.error) - 1))
+            for frame in np.flatnonzero(self.missing):
+                painter.fillRect(QRectF(self._x(frame) - width / 2, 0, width, self.height()), MISSING_COLOUR)
         step = max(1, len(self.error) // max(1, self.width()))  # at most one point per pixel
         points = [QPointF(self._x(f), self._y(self.error[f])) for f in range(0, len(self.error), step)]
         painter.setPen(QPen(QColor("#3b4cc0"), 1.5))
