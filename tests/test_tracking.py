@@ -145,6 +145,10 @@ def _bad_files(tmp_path, recording) -> dict[str, tuple[str, str]]:
         out[name] = (str(path), says)
     np.save(tmp_path / "shape.npy", np.zeros((4, 20, 3)))
     out["array shape"] = (str(tmp_path / "shape.npy"), "expected (frames, 21, 3)")
+    np.save(tmp_path / "long.npy", recording.positions[:10])
+    with open(tmp_path / "long.npy", "ab") as stream:  # bytes after the data its header declares
+        stream.write(b"\0" * 100)
+    out["array bytes"] = (str(tmp_path / "long.npy"), "the file holds")
     return out
 
 
