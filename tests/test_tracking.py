@@ -138,6 +138,8 @@ def _bad_files(tmp_path, recording) -> dict[str, tuple[str, str]]:
                                                          if f]), "not a hand in metres"),
              "webxr joints missing": ({"format": "webxr-hand", "fps": 30, "joints": list(WEBXR_JOINTS[:24]),
                                        "frames": [[0.0] * 16 * 24]}, "lacks pinky-finger-tip")}
+    webxr = json.loads(save_webxr_hand(tmp_path / "webxr.json", recording).read_text())
+    files["handedness against the axes"] = (dict(webxr, handedness="left"), "joint axes form a right hand")
     out = {}
     for name, (content, says) in files.items():
         path = tmp_path / (name.replace(" ", "_") + ".json")
