@@ -146,7 +146,8 @@ def _cmd_rig(args: argparse.Namespace) -> int:
     """`s2h rig FILE`: what was recognised; an editable joint-map template where recognition fails."""
     from s2h_viewer.errors import TooFewBonesError, UnrecognisedRigError
     from s2h_viewer.hand import topology as topo
-    from s2h_viewer.io.files import joint_map_template, list_animations, recognise_file, save_joint_map
+    from s2h_viewer.io.files import (GLTF_FAMILY, joint_map_sidecar, joint_map_template, joint_map_template_path,
+                                     list_animations, recognise_file, save_joint_map)
 
     path = Path(args.file)
     try:
@@ -154,10 +155,12 @@ def _cmd_rig(args: argparse.Namespace) -> int:
     except TooFewBonesError:
         raise  # no joint map can make it a hand: no template
     except UnrecognisedRigError as exc:
-        template = save_joint_map(path, joint_map_template(path, args.side), args.template)
+        template = save_joint_map(path, joint_map_template(path, args.side),
+                                  args.template or joint_map_template_path(path))
         print(f"s2h: error: {exc}", file=sys.stderr)
-        print(f"wrote {template}: fill in the empty joints (bone names of {path.name}); it is picked up "
-              f"beside the file, or pass it with --joint-map")
+        print(f"wrote {template}: fill in the empty joints (bone names of {path.name}), then save it as "
+              f"{joint_map_sidecar(path).name} beside the file (picked up there) or pass it with --joint-map; "
+              f"nothing reads the template itself")
         return 2
     print(f"{path}: {mapping.scheme} scheme, {mapping.side} hand (side from {mapping.side_from}), "
           f"confidence {mapping.confidence:.2f}")
@@ -169,7 +172,7 @@ def _cmd_rig(args: argparse.Namespace) -> int:
         print(f"  palm bones (their skin moves with the wrist): {', '.join(mapping.palm_bones)}")
     for note in mapping.notes:
         print(f"  note: {note}")
-    if path.suffix.lower() in (".glb", ".gltf", ".fbx", ".bvh"):
+    if path.suffix.lower() in (*GLTF_FAMILY, ".fbx", ".bvh"):
         clips = list_animations(path)
         print(f"  animations: {', '.join(f'[{i}] {c}' for i, c in enumerate(clips)) if clips else 'none'}")
     return 0
@@ -403,8 +406,8 @@ def build_parser() -> argparse.ArgumentParser:
     rg = sub.add_parser("rig", help="what s2h recognises in a rig file (scheme, side, joints, animations); "
                                     "writes an editable joint-map template when it cannot")
     rg.add_argument("file", help="rig file (.glb .gltf .fbx .bvh)")
-    rg.add_argument("--template", help="where to write the joint-map template (default: <stem>.joints.json beside "
-                                       "the file)")
+    rg.add_argument("--template", help="where to write the joint-map template (default: "
+                                       "<stem>.joints.template.json beside the file, which nothing loads)")
     _add_rig_options(rg)
     rg.set_defaults(func=_cmd_rig)
 

@@ -28,8 +28,8 @@ __all__ = ["CompareSetup", "MainWindow", "default_setup", "run"]
 RECENT_FILES = 8
 STATUS_MS_CANCELLED = 15_000  # a cancelled export says so this long in the status bar
 #: hand files a target can be (a BVH holds a motion on a skeleton, no mesh to colour: not offered)
-TARGET_HAND_FILTER = "Hands (*.glb *.gltf *.fbx *.npz)"
-RIG_FILTER = "Rigs (*.glb *.gltf *.fbx)"  # hand files with bones to map
+TARGET_HAND_FILTER = "Hands (*.glb *.gltf *.vrm *.fbx *.npz)"
+RIG_FILTER = "Rigs (*.glb *.gltf *.vrm *.fbx)"  # hand files with bones to map
 #: Help's mouse sections, (heading, (gesture, what it does)...), each list kept by the widget the mouse acts on
 #: (the keys are read from the menus' own actions, `MainWindow.shortcut_lines`)
 MOUSE_SECTIONS = (("Mouse, in the 3D views of both tabs", vtk_widget.MOUSE),
@@ -428,7 +428,7 @@ class MainWindow(QMainWindow):
         self._loading = [entry for entry in self._loading if id(entry[2]) not in shown]
 
     def open_motion(self) -> None:
-        self._ask_to_open("Open motion", "Motions and tracking recordings (*.npz *.bvh *.glb *.gltf *.fbx *.json "
+        self._ask_to_open("Open motion", "Motions and tracking recordings (*.npz *.bvh *.glb *.gltf *.vrm *.fbx *.json "
                           "*.npy)", self.load_motion,
                           self._start_dir("files/motion_dir", "motions"))
 
@@ -615,7 +615,8 @@ class MainWindow(QMainWindow):
         from s2h_viewer.io.files import MOTION_SUFFIXES
         for url in event.mimeData().urls():
             path = url.toLocalFile()
-            if Path(path).suffix.lower() in (".glb", ".gltf", ".fbx") or self.tabs.currentWidget() is self.annotate.view:
+            rig = Path(path).suffix.lower() in (".glb", ".gltf", ".vrm", ".fbx")
+            if rig or self.tabs.currentWidget() is self.annotate.view:
                 self.annotate_file(path)
             elif Path(path).suffix.lower() in MOTION_SUFFIXES:
                 self.load_motion(path)

@@ -19,12 +19,22 @@ from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.hand.rig_mapping import load_user_mapping
 
-HAND_SUFFIXES = (".npz", ".glb", ".gltf", ".fbx", ".bvh")
-MOTION_SUFFIXES = (".npz", ".bvh", ".glb", ".gltf", ".fbx", ".json", ".npy")
+HAND_SUFFIXES = (".npz", ".glb", ".gltf", ".vrm", ".fbx", ".bvh")
+MOTION_SUFFIXES = (".npz", ".bvh", ".glb", ".gltf", ".vrm", ".fbx", ".json", ".npy")
+GLTF_FAMILY = (".glb", ".gltf", ".vrm")  # a .vrm is a GLB with a VRM extension
 EXPORT_SUFFIXES = (".npz", ".bvh", ".glb")
 
 
 JOINT_MAP_SUFFIX = ".joints.json"
+#: a joint-map template `s2h rig` writes for the user to fill: named so that nothing loads it until it is
+#: filled in and saved as the sidecar (or passed with --joint-map)
+JOINT_MAP_TEMPLATE_SUFFIX = ".joints.template.json"
+
+
+def joint_map_template_path(hand_file: str | Path) -> Path:
+    """``<stem>.joints.template.json`` beside a hand file: where `s2h rig` writes a template to fill."""
+    hand_file = Path(hand_file)
+    return hand_file.with_name(f"{hand_file.stem}{JOINT_MAP_TEMPLATE_SUFFIX}")
 
 
 def joint_map_sidecar(hand_file: str | Path) -> Path:
@@ -88,7 +98,7 @@ def _load_hand(path: Path, suffix: str, options: RigOptions) -> HandModel:
     if suffix == ".npz":
         from s2h_viewer.io.npz import load_hand
         return load_hand(path)
-    if suffix in (".glb", ".gltf"):
+    if suffix in GLTF_FAMILY:
         from s2h_viewer.io.gltf import load_gltf_hand
         return load_gltf_hand(path, options.side, options.scheme, options.mapping(path))
     if suffix == ".fbx":
@@ -125,7 +135,7 @@ def _load_motion(path: Path, suffix: str, hand: HandModel | None, options: RigOp
         rig, motion = load_bvh(path, options.side, options.scheme, options.mapping(path))
         return motion, rig
     rig = hand or _load_hand(path, suffix, options)
-    if suffix in (".glb", ".gltf"):
+    if suffix in GLTF_FAMILY:
         from s2h_viewer.io.gltf import load_gltf_motion
         return load_gltf_motion(path, rig, options.animation), rig
     from s2h_viewer.io.fbx import load_fbx_motion
@@ -137,7 +147,7 @@ def list_animations(path: str | Path) -> list[str]:
     recordings."""
     path = Path(path)
     suffix = _suffix(path, MOTION_SUFFIXES, "motion")
-    if suffix in (".glb", ".gltf"):
+    if suffix in GLTF_FAMILY:
         from s2h_viewer.io.gltf import list_gltf_animations
         return [f"{name} ({seconds:.2f} s)" for name, seconds in list_gltf_animations(path)]
     if suffix == ".fbx":
@@ -174,9 +184,9 @@ def export_sidecar(path: str | Path) -> Path | None:
 def read_rig_skeleton(path: str | Path):
     """The `RigSkeleton` (names, rest world matrices, parents) of a glTF, FBX or BVH rig file."""
     path = Path(path)
-    suffix = _suffix(path, (".glb", ".gltf", ".fbx", ".bvh"), "rig")
+    suffix = _suffix(path, (*GLTF_FAMILY, ".fbx", ".bvh"), "rig")
     from s2h_viewer.io.rig import RigSkeleton
-    if suffix in (".glb", ".gltf"):
+    if suffix in GLTF_FAMILY:
         from s2h_viewer.io.gltf import _Document
         doc = _Document(path)
         return RigSkeleton(doc.names, doc.world, doc.parents)
@@ -191,7 +201,7 @@ def recognise_file(path: str | Path, options: RigOptions = RigOptions()):
     """The `RigMapping` of a rig file's hand (what `s2h rig` reports), without building the hand."""
     path = Path(path)
     from s2h_viewer.io.rig import recognise
-    if path.suffix.lower() in (".glb", ".gltf"):
+    if path.suffix.lower() in GLTF_FAMILY:
         from s2h_viewer.io.gltf import _Document, _recognise
         return _recognise(_Document(path), options.side, options.scheme, options.mapping(path))
     skeleton = read_rig_skeleton(path)

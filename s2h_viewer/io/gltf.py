@@ -29,7 +29,8 @@ from s2h_viewer.io.rig import (RigMesh, RigSkeleton, bone_indices, build_hand, m
 
 _DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
 _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}
-GLTF_SUFFIXES = (".glb", ".gltf")
+GLTF_SUFFIXES = (".glb", ".gltf", ".vrm")
+BINARY_SUFFIXES = (".glb", ".vrm")  # binary glTF (a VRM avatar is one, with a VRM extension)
 _VRM_FINGER = {"thumb": "Thumb", "index": "Index", "middle": "Middle", "ring": "Ring", "pinky": "Little"}
 #: VRM humanoid bone suffixes of the three articulated levels: (fingers, thumb)
 VRM0_LEVELS = (("Proximal", "Intermediate", "Distal"), ("Proximal", "Intermediate", "Distal"))
@@ -67,16 +68,38 @@ GLB_HEADER_BYTES = 12
 
 
 def _check_glb_header(path: Path) -> None:
-    """Refuse, in words a user can act on, a GLB that is not one or is shorter than its header says."""
+    """Refuse, in words a user can act on, a GLB that is not one, whose size is not what its header says
+    (shorter: cut off; longer: changed after it was written, as a text-mode transfer does), or whose chunks
+    do not fit in it or hold no JSON."""
     size = path.stat().st_size
     with open(path, "rb") as f:
         header = f.read(GLB_HEADER_BYTES)
-    if len(header) < GLB_HEADER_BYTES or header[:4] != b"glTF":
-        raise InputFileError(path, f"not a GLB file: it does not start with a GLB header ({size} bytes)")
-    declared = int.from_bytes(header[8:12], "little")
-    if size < declared:
-        raise InputFileError(path, f"truncated GLB: its header declares {declared} bytes, the file has {size} "
-                                   f"(an interrupted download or copy?)")
+        if len(header) < GLB_HEADER_BYTES or header[:4] != b"glTF":
+            raise InputFileError(path, f"not a GLB file: it does not start with a GLB header ({size} bytes)")
+        declared = int.from_bytes(header[8:12], "little")
+        if size < declared:
+            raise InputFileError(path, f"truncated GLB: its header declares {declared} bytes, the file has {size} "
+                                       f"(an interrupted download or copy?)")
+        if size > declared:
+            raise InputFileError(path, f"damaged GLB: its header declares {declared} bytes, the file has {size} "
+                                       f"(changed after it was written: a text-mode transfer or a line-ending "
+                                       f"conversion does this)")
+        chunk = f.read(8)
+        length = int.from_bytes(chunk[:4], "little") if len(chunk) == 8 else -1
+        if len(chunk) < 8 or chunk[4:8] != b"JSON":
+            raise InputFileError(path, "damaged GLB: its first chunk is not the JSON chunk")
+        if GLB_HEADER_BYTES + 8 + length > size:
+            raise InputFileError(path, f"damaged GLB: its JSON chunk declares {length} bytes, past the end of the "
+                                       f"file ({size} bytes)")
+        text = f.read(length)
+    try:
+        json.loads(text.decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        raise InputFileError(path, f"damaged GLB: its JSON chunk is not UTF-8 text (byte {exc.start} of "
+                                   f"{length})") from None
+    except json.JSONDecodeError as exc:
+        raise InputFileError(path, f"damaged GLB: its JSON chunk is not valid JSON (at character {exc.pos}: "
+                                   f"{exc.msg})") from None
 
 
 class _Document:
@@ -84,10 +107,11 @@ class _Document:
 
     def __init__(self, path: Path):
         self.path = require_readable_file(path)
-        if self.path.suffix.lower() == ".glb":
+        binary = self.path.suffix.lower() in BINARY_SUFFIXES
+        if binary:
             _check_glb_header(self.path)
         try:
-            self.gltf = pygltflib.GLTF2().load(str(path))
+            self.gltf = pygltflib.GLTF2().load_binary(str(path)) if binary else pygltflib.GLTF2().load(str(path))
             if self.gltf is None:
                 raise ValueError("empty file")
             self.gltf.convert_buffers(pygltflib.BufferFormat.BINARYBLOB)

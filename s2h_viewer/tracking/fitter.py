@@ -4,7 +4,8 @@ Steps (DESIGN.md section 9): outlying frames (bones far from their lengths, keyp
 back) set aside with the lost ones; keypoints smoothed as their noise asks and gaps filled (`smoothing`);
 the palm as a rigid template aligned to every frame (the wrist's path and turn taken out: motions here are
 the fingers'); bone lengths as medians; each finger's hinge roll from how it bends; the hand built in its
-canonical pose (`skeleton`); TBS angles by IK (`ik`). The residual is the mean distance (mm) from the fitted joints to the recorded keypoints.
+canonical pose (`skeleton`); TBS angles by IK (`ik`). The residual is the mean distance (mm) from the fitted
+joints to the recorded keypoints.
 """
 
 from __future__ import annotations
@@ -215,7 +216,8 @@ def fit_recording(recording: KeypointRecording, mesh: bool = True) -> TrackingFi
     if mesh:
         from s2h_viewer.hand.hand_mesh import build_hand_mesh
         hand.mesh = build_hand_mesh(hand)
-    fit = TrackingFit(hand=hand, motion=motion, keypoints=hand_space, palm_rotation=rotation, wrist=wrist, residual_mm=residual, filled=filled,
+    fit = TrackingFit(hand=hand, motion=motion, keypoints=hand_space, palm_rotation=rotation, wrist=wrist,
+                      residual_mm=residual, filled=filled,
                       lost=lost, noise_mm=sigma * 1000.0, notes=notes)
     motion.meta["tracked"] |= fit.summary
     motion.fit = fit

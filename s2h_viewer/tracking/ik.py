@@ -104,7 +104,8 @@ def refine_chains(hand: HandModel, positions: np.ndarray, angles: np.ndarray, fi
             jacobian = np.stack([(_chain_points(hand, f, params + _STEP * np.eye(4)[k]).reshape(-1, 9) - base)
                                  * weights / _STEP for k in range(4)], -1)  # (T, 9, 4)
             normal = np.einsum("tik,til->tkl", jacobian, jacobian)
-            normal = normal + damping[:, None, None] * np.eye(4) * (1e-12 + np.trace(normal, axis1=1, axis2=2))[:, None, None]
+            scale = 1e-12 + np.trace(normal, axis1=1, axis2=2)  # damping relative to the system's size
+            normal = normal + (damping * scale)[:, None, None] * np.eye(4)
             step = np.linalg.solve(normal, np.einsum("tik,ti->tk", jacobian, residual)[..., None])[..., 0]
             trial = np.clip(params - step, lower, upper)
             trial_residual = (_chain_points(hand, f, trial).reshape(-1, 9) - target) * weights
