@@ -558,7 +558,7 @@ def test_open_hand_with_joint_map_edits_the_saved_map(window, qtbot, renamed_han
     filters: list[str] = []
     answer((QFileDialog, lambda dialog: (filters.extend(dialog.nameFilters()), dialog.reject())))
     entry.trigger()  # Annotate > Open hand with joint map...: a rig file to choose (the dialog cancelled)
-    assert filters == ["Rigs (*.glb *.gltf *.fbx)"] and window.annotation is None
+    assert filters == ["Rigs (*.glb *.gltf *.vrm *.fbx)"] and window.annotation is None
     seen: dict = {}
     answer(map_the_index(joint_map, seen))
     window.annotate_file(str(path), map_joints=True)  # the file chosen

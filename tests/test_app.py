@@ -177,7 +177,7 @@ def test_shortcut_help_lists_every_shortcut_the_menus_define(window, qtbot):
     assert "Mouse, in Compare" in mouse and "Mouse, in Annotate" in mouse
 
 
-def test_add_target_offers_only_hand_files_and_each_kind_loads_as_a_hand(window, qtbot):
+def test_add_target_offers_only_hand_files_and_each_kind_loads_as_a_hand(window, qtbot, tmp_path):
     from PySide6.QtWidgets import QFileDialog
 
     from s2h_viewer.io.files import load_hand_file
@@ -188,7 +188,9 @@ def test_add_target_offers_only_hand_files_and_each_kind_loads_as_a_hand(window,
     assert len(filters) == 1 and "bvh" not in filters[0]
     patterns = filters[0].split("(")[1].rstrip(")").split()
     examples = {"*.glb": "webxr/generic-hand-right.glb", "*.gltf": "real/godot_hand_r.gltf",
-                "*.fbx": "fbx/mixamo_right_hand.fbx", "*.npz": "iris.npz"}
+                "*.fbx": "fbx/mixamo_right_hand.fbx", "*.npz": "iris.npz", "*.vrm": str(tmp_path / "skinned.vrm")}
+    # the shipped VRM (debug_robot.vrm) is rigid, unskinned: a VRM's skin is a GLB's, read by the same reader
+    (tmp_path / "skinned.vrm").write_bytes((ASSETS_DIR / "hands" / "webxr" / "generic-hand-right.glb").read_bytes())
     assert sorted(patterns) == sorted(examples)
     for pattern in patterns:  # every kind offered is a hand with a skin to colour
         hand = load_hand_file(ASSETS_DIR / "hands" / examples[pattern])
