@@ -20,14 +20,14 @@ from s2h_viewer.hand.canonical import canonical_turns
 
 
 def palm_axes(positions: np.ndarray) -> np.ndarray:
-    """(3, 3) palm axes of a right hand's (21, 3) joint positions (wrist at the origin): x to the middle
-    knuckle, z out of the back of the hand, y = z x x (toward the thumb)."""
-    x = positions[topo.joint_index("middle_mcp")]
-    z = np.cross(positions[topo.joint_index("pinky_mcp")], positions[topo.joint_index("index_mcp")])
-    x = x / np.linalg.norm(x)
-    z = z - x * (z @ x)
-    z = z / np.linalg.norm(z)
-    return np.stack([x, np.cross(z, x), z], axis=1)
+    """(..., 3, 3) palm axes (columns) of a right hand's (..., 21, 3) joint positions (wrist at the origin): x to
+    the middle knuckle, z out of the back of the hand, y = z x x (toward the thumb)."""
+    x = positions[..., topo.joint_index("middle_mcp"), :]
+    z = np.cross(positions[..., topo.joint_index("pinky_mcp"), :], positions[..., topo.joint_index("index_mcp"), :])
+    x = x / np.linalg.norm(x, axis=-1, keepdims=True)
+    z = z - x * (z * x).sum(-1, keepdims=True)
+    z = z / np.linalg.norm(z, axis=-1, keepdims=True)
+    return np.stack([x, np.cross(z, x), z], axis=-1)
 
 
 @dataclass(eq=False)

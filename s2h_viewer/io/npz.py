@@ -186,7 +186,7 @@ def _read(archive: zipfile.ZipFile, member: str, dtype=None, convert=None) -> np
 def _meta(path: Path, arrays: dict[str, np.ndarray]) -> dict:
     """``meta_json`` as a dict (an object in JSON), at most `MAX_JSON_DEPTH` deep."""
     text = str(arrays.get("meta_json", "{}"))
-    if _bracket_depth(text) > MAX_JSON_DEPTH:
+    if bracket_depth(text) > MAX_JSON_DEPTH:
         raise InputFileError(path, f"meta_json is nested deeper than {MAX_JSON_DEPTH} levels")
     try:
         meta = json.loads(text)
@@ -197,7 +197,7 @@ def _meta(path: Path, arrays: dict[str, np.ndarray]) -> dict:
     return meta
 
 
-def _bracket_depth(text: str) -> int:
+def bracket_depth(text: str) -> int:
     """Deepest bracket nesting in ``text`` (strings included: only an upper bound, cheap and recursion-free)."""
     depth = deepest = 0
     for char in text:

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from s2h_viewer.errors import InputFileError
+from s2h_viewer.io.npz import bracket_depth
 
 #: deepest nesting a tracking document needs (frames of joints of coordinates, with room to spare)
 MAX_DEPTH = 8
@@ -21,7 +22,7 @@ def parse_document(path: Path) -> dict:
         text = raw.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
         raise InputFileError(path, f"is not UTF-8 text (byte {exc.start}): not a tracking JSON file") from None
-    depth = max_depth(text)
+    depth = bracket_depth(text)
     if depth > MAX_DEPTH:
         raise InputFileError(path, f"JSON is nested {depth} levels deep, more than a tracking file's {MAX_DEPTH}")
     try:
@@ -33,28 +34,6 @@ def parse_document(path: Path) -> dict:
     if not isinstance(document, dict):
         raise InputFileError(path, "holds JSON that is not an object with a \"format\"")
     return document
-
-
-def max_depth(text: str) -> int:
-    """How deeply brackets nest in JSON ``text`` (strings skipped), without parsing it."""
-    depth = deepest = 0
-    in_string = escaped = False
-    for char in text:
-        if in_string:
-            if escaped:
-                escaped = False
-            elif char == "\\":
-                escaped = True
-            elif char == '"':
-                in_string = False
-        elif char == '"':
-            in_string = True
-        elif char in "[{":
-            depth += 1
-            deepest = max(deepest, depth)
-        elif char in "]}":
-            depth -= 1
-    return deepest
 
 
 def frame_rate(path: Path, fps: object, given: float | None = None) -> float:

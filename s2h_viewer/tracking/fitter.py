@@ -80,13 +80,13 @@ def _outliers(hand_space: np.ndarray, valid: np.ndarray, sigma: float) -> np.nda
     x = hand_space[idx]
     lengths = np.linalg.norm(x - x[:, np.maximum(topo.PARENTS, 0)], axis=-1)[:, 1:]
     median = np.median(lengths, axis=0)
-    bad_bone = (np.abs(lengths - median) > BONE_TOLERANCE * median + 6.0 * sigma).any(1)
+    outlying = (np.abs(lengths - median) > BONE_TOLERANCE * median + 6.0 * sigma).any(1)
     if len(idx) >= 3:  # a keypoint far off the line between its neighbours, and further than they are off theirs
         off = np.linalg.norm(x[1:-1] - 0.5 * (x[:-2] + x[2:]), axis=-1)  # (n - 2, 21)
         padded = np.pad(off, ((1, 1), (0, 0)))
         peak = (off > padded[:-2]) & (off > padded[2:]) & (np.diff(idx, 2) == 0)[:, None]  # no gap between
-        bad_bone[1:-1] |= (peak & (off > max(SPIKE_DISTANCE, SPIKE_SIGMAS * sigma))).any(1)
-    out[idx[bad_bone]] = True
+        outlying[1:-1] |= (peak & (off > max(SPIKE_DISTANCE, SPIKE_SIGMAS * sigma))).any(1)
+    out[idx[outlying]] = True
     return out
 
 
@@ -160,7 +160,8 @@ def _keep_recorded_contacts(hand: HandModel, q: np.ndarray, keypoints: np.ndarra
     points = torch.as_tensor(keypoints, dtype=torch.float32)
     recorded = contact_gaps(hand, HandPose(points, torch.zeros(*points.shape, 3)))[:, PAD_PAIRS].numpy()
     recorded = recorded / hand.hand_length
-    recorded[~use] = pad_gaps(hand, q[~use]) if (~use).any() else recorded[~use]  # filled frames: as fitted
+    if not use.all():  # filled frames: the keypoints there are not recorded ones, the fit stands as it is
+        recorded[~use] = pad_gaps(hand, q[~use])
     return fit_contacts_to_gaps(recorded, hand, q)
 
 

@@ -26,22 +26,43 @@ from s2h_viewer.semantics.anatomy import BEND_HIGH, BEND_LOW, SPLAY_LIMIT
 BEND_MARGIN = math.radians(1.0)
 
 
+class _FingerWalk:
+    """Down one finger from its fixed knuckle, what `solve` and `_chain_points` share: each joint placed by its
+    solved parent (``F = G_parent C_parent^T C_joint``), then turned and its bone laid along the turned twist
+    axis from where the chain has got to."""
+
+    def __init__(self, hand: HandModel, finger: int, n_frames: int):
+        self.canonical = hand.canonical_frames
+        self.lengths = np.linalg.norm(hand.offsets, axis=-1)
+        self.finger = finger
+        self.parent_global = np.broadcast_to(np.eye(3), (n_frames, 3, 3))
+        self.parent_canonical = np.eye(3)
+        self.at = np.broadcast_to(hand.rest_positions[1 + 4 * finger], (n_frames, 3))  # the joint reached
+
+    def placed(self, level: int) -> np.ndarray:
+        """(T, 3, 3) the joint at ``level``'s frame as its parent places it, before its own turn."""
+        return self.parent_global @ (self.parent_canonical.T @ self.canonical[3 * self.finger + level])
+
+    def turn(self, level: int, placed: np.ndarray, bend: np.ndarray, splay: np.ndarray) -> np.ndarray:
+        """Turn the placed joint by ``Ry(bend) Rz(splay)``; (T, 3) where its child joint lands."""
+        self.parent_global = placed @ _bend_splay_matrix(bend, splay)
+        self.parent_canonical = self.canonical[3 * self.finger + level]
+        self.at = self.at + self.lengths[2 + 4 * self.finger + level] * self.parent_global[:, :, 0]
+        return self.at
+
+
 def solve(hand: HandModel, positions: np.ndarray, hinges: bool = True) -> np.ndarray:
     """(T, 15, 3) radians for (T, 21, 3) keypoints in ``hand``'s space (see the module docstring);
     ``hinges=False`` leaves the hinges their sideways bend (to measure how much of it the data has)."""
-    canonical = hand.canonical_frames
     n = len(positions)
     angles = np.zeros((n, topo.N_ARTICULATED, 3))
     low, high, splay_limit = BEND_LOW.numpy(), BEND_HIGH.numpy() - BEND_MARGIN, SPLAY_LIMIT.numpy()
-    lengths = np.linalg.norm(hand.offsets, axis=-1)
     for f in range(topo.N_FINGERS):
-        parent_global = np.broadcast_to(np.eye(3), (n, 3, 3))
-        parent_canonical = np.eye(3)
-        at = np.broadcast_to(hand.rest_positions[1 + 4 * f], (n, 3))  # where the solved chain has got to
+        walk = _FingerWalk(hand, f, n)
         for level in range(3):
             a, joint = 3 * f + level, 1 + 4 * f + level
-            placed = parent_global @ (parent_canonical.T @ canonical[a])
-            bone = positions[:, joint + 1] - at
+            placed = walk.placed(level)
+            bone = positions[:, joint + 1] - walk.at
             bone = bone / np.linalg.norm(bone, axis=-1, keepdims=True).clip(1e-12)
             v = np.einsum("tca,tc->ta", placed, bone)
             splay = np.arcsin(np.clip(v[:, 1], -1.0, 1.0))
@@ -51,9 +72,7 @@ def solve(hand: HandModel, positions: np.ndarray, hinges: bool = True) -> np.nda
             elif hinges:
                 splay = np.zeros(n)
             angles[:, a, 1], angles[:, a, 2] = np.clip(bend, low[a], high[a]), splay
-            turn = _bend_splay_matrix(angles[:, a, 1], angles[:, a, 2])
-            parent_global, parent_canonical = placed @ turn, canonical[a]
-            at = at + lengths[joint + 1] * parent_global[:, :, 0]  # the bone runs along the twist axis
+            walk.turn(level, placed, angles[:, a, 1], angles[:, a, 2])
     return angles
 
 
@@ -67,19 +86,11 @@ _STEP = 1e-5
 def _chain_points(hand: HandModel, f: int, params: np.ndarray) -> np.ndarray:
     """(T, 3, 3) finger ``f``'s three child joints for ``params`` (T, 4): knuckle bend and splay, the two
     hinges' bends (no twist, no hinge splay), from its fixed knuckle."""
-    canonical = hand.canonical_frames
-    lengths = np.linalg.norm(hand.offsets, axis=-1)
-    n = len(params)
-    parent_global, parent_canonical = np.broadcast_to(np.eye(3), (n, 3, 3)), np.eye(3)
-    at = np.broadcast_to(hand.rest_positions[1 + 4 * f], (n, 3))
-    zero = np.zeros(n)
-    points = np.empty((n, 3, 3))
-    for level, (bend, splay) in enumerate(((params[:, 0], params[:, 1]), (params[:, 2], zero), (params[:, 3], zero))):
-        a, joint = 3 * f + level, 1 + 4 * f + level
-        placed = parent_global @ (parent_canonical.T @ canonical[a])
-        parent_global, parent_canonical = placed @ _bend_splay_matrix(bend, splay), canonical[a]
-        at = points[:, level] = at + lengths[joint + 1] * parent_global[:, :, 0]
-    return points
+    walk = _FingerWalk(hand, f, len(params))
+    zero = np.zeros(len(params))
+    turns = ((params[:, 0], params[:, 1]), (params[:, 2], zero), (params[:, 3], zero))
+    return np.stack([walk.turn(level, walk.placed(level), bend, splay) for level, (bend, splay) in enumerate(turns)],
+                    axis=1)
 
 
 def refine_chains(hand: HandModel, positions: np.ndarray, angles: np.ndarray, fingers=range(topo.N_FINGERS)

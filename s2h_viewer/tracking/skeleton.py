@@ -14,7 +14,7 @@ import numpy as np
 
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.canonical import palm_normal
-from s2h_viewer.hand.model import HandModel
+from s2h_viewer.hand.model import HandModel, palm_axes
 
 #: the thumb's canonical direction: this far from the fingers' direction, toward the thumb, in the palm plane
 THUMB_ANGLE_DEG = 35.0
@@ -29,20 +29,10 @@ _REFERENCE_RADII = np.concatenate([[0.015], [0.0135, 0.0115, 0.0105, 0.0090], *(
 _REFERENCE_LENGTH = 0.18
 
 
-def palm_frames(positions: np.ndarray) -> np.ndarray:
-    """(T, 3, 3) each frame's palm axes (columns: to the middle knuckle, toward the thumb, out of the back)."""
-    v = positions - positions[:, :1]
-    x = v[:, topo.joint_index("middle_mcp")]
-    z = np.cross(v[:, topo.joint_index("pinky_mcp")], v[:, topo.joint_index("index_mcp")])
-    x = x / np.linalg.norm(x, axis=-1, keepdims=True)
-    z = z - x * np.einsum("tc,tc->t", z, x)[:, None]
-    z = z / np.linalg.norm(z, axis=-1, keepdims=True)
-    return np.stack([x, np.cross(z, x), z], axis=-1)
-
-
 def palm_template(positions: np.ndarray) -> np.ndarray:
     """(6, 3) wrist and knuckles in the palm's own axes: per coordinate, the median over the frames given."""
-    local = np.einsum("tca,tjc->tja", palm_frames(positions), positions[:, PALM_JOINTS] - positions[:, :1])
+    from_wrist = positions - positions[:, :1]
+    local = np.einsum("tca,tjc->tja", palm_axes(from_wrist), from_wrist[:, PALM_JOINTS])
     return np.median(local, axis=0)
 
 
