@@ -20,8 +20,9 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
 
     hands = {h.name: h for h in samples.load_sample_hands("all")}
     motions = samples.load_sample_motions() if not args.motion else []
+    performer = load_hand_file(args.rig, _rig_options(args)) if args.rig else None
     for path in args.motion or []:  # a motion file on its own rig (a recording: on the hand fitted to it)
-        motion, rig = load_motion_file(path, options=_rig_options(args))
+        motion, rig = load_motion_file(path, performer, options=_rig_options(args))
         if rig is not None:
             hands[motion.hand_name] = rig
         motions.append(motion)
@@ -226,6 +227,46 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_check(args: argparse.Namespace) -> int:
+    """`s2h check FILE`: how far each animation's fingers bend sideways (`semantics.flexion`), on its own rig."""
+    import numpy as np
+    import torch
+
+    from s2h_viewer.hand.kinematics import forward_kinematics
+    from s2h_viewer.io.files import RigOptions, list_animations, load_motion_file
+    from s2h_viewer.semantics.flexion import finger_peaks, sideways_peak
+
+    options = _rig_options(args)
+    from s2h_viewer.errors import InputFileError
+
+    names = list_animations(args.file) if args.animation is None else [str(args.animation)]
+    if not names:
+        raise InputFileError(args.file, "has no animations to check (s2h check reads the animations of a file)")
+    rig = None
+    worst = float("nan")
+    for index, label in enumerate(names):
+        chosen = RigOptions(options.side, options.scheme, options.joint_map,
+                            index if args.animation is None else args.animation, options.fps)
+        motion, rig = load_motion_file(args.file, rig, chosen)
+        if rig is None:
+            from s2h_viewer.samples import load_sample_hand
+            rig = load_sample_hand(motion.hand_name)
+        with torch.no_grad():
+            positions = forward_kinematics(rig, torch.as_tensor(motion.q_tbs, dtype=torch.float64)).positions.numpy()
+        peak = sideways_peak(positions)
+        worst = np.nanmax([worst, peak.degrees]) if not np.isnan(peak.degrees) else worst
+        print(f"{label}: {motion.n_frames} frames; {peak.describe()}")
+        if args.joints:
+            for joint, p in finger_peaks(positions).items():
+                print(f"    {joint:10s} " + ("does not curl" if np.isnan(p.degrees) else
+                                             f"{p.degrees:4.0f} deg sideways at frame {p.frame}"))
+    side = rig.meta.get("side", "right") if rig is not None else "right"
+    print(f"{args.file}: {side} hand, {len(names)} animation(s); worst sideways flexion at the tightest curls: "
+          + ("none (no finger curls)" if np.isnan(worst) else f"{worst:.0f} deg") +
+          " (0 = a clean curl toward the palm; authored clips of real avatars reach 8-22)")
+    return 0
+
+
 def _cmd_batch(args: argparse.Namespace) -> int:
     from s2h_viewer.batch.plan import BatchUsageError, TaskOptions
     from s2h_viewer.batch.runner import BatchConfig, run_batch
@@ -280,7 +321,8 @@ def _add_rig_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--joint-map", help='JSON file {"wrist": "<bone>", "index_mcp": "<bone>", ...} (default: '
                                             "<stem>.joints.json beside each hand file, if there)")
     parser.add_argument("--animation", help="which animation (glTF) or take (FBX) of a motion file: name or index "
-                                            "(default: the first; `s2h rig FILE` lists them)")
+                                            "(default: the first; `s2h rig FILE` lists them), or `all`: every one in turn, "
+                                            "one clip labelled by animation (a pose library)")
     parser.add_argument("--fps", type=float, help="frame rate of a tracking recording that does not say it "
                                                   "(keypoint .npy/.npz; default 30), or to override its own")
 
@@ -310,6 +352,8 @@ def build_parser() -> argparse.ArgumentParser:
                     "recording .json .npy; default: the shipped samples); repeatable")
     ev.add_argument("--target", action="append", help="target sample hand name or hand file (default: the test "
                                                       "split); repeatable")
+    ev.add_argument("--rig", help="the rig the --motion files are performed on, where it is not in them (a file "
+                    "of poses without a mesh, and the skinned rig they were authored on); default: each file's own")
     ev.add_argument("--out", default="results", help="folder for evaluation.csv and evaluation.md")
     ev.add_argument("--quiet", action="store_true", help="no progress bar")
     _add_rig_options(ev)
@@ -410,6 +454,13 @@ def build_parser() -> argparse.ArgumentParser:
                                        "<stem>.joints.template.json beside the file, which nothing loads)")
     _add_rig_options(rg)
     rg.set_defaults(func=_cmd_rig)
+
+    ck = sub.add_parser("check", help="how far the fingers of a motion file's animations bend sideways (any rig: "
+                                      "glTF/VRM, FBX, BVH, npz, recordings), each on its own rig")
+    ck.add_argument("file", help="an animated avatar or motion file")
+    ck.add_argument("--joints", action="store_true", help="also each PIP/DIP joint's worst frame")
+    _add_rig_options(ck)
+    ck.set_defaults(func=_cmd_check)
 
     gs = sub.add_parser("gestures", help="list the gesture library with its contact labels")
     gs.set_defaults(func=_cmd_gestures)

@@ -43,6 +43,13 @@ FULL_CURL_DEGREES = 20.0
 AGREE_DEGREES = 20.0
 #: a finger whose fit follows the palm plane is that sure of it without other evidence
 PALM_EVIDENCE = 0.6
+#: rays decide a finger's bend axes only this sure (all its joints), and, but for the thumb, within
+#: `AGREE_DEGREES` of the palm plane or of the rig's own bone axis: on nearly round sections the rays'
+#: minimum wanders 60-90 deg from the true hinge while still scoring well (issue 26)
+TRUST_RAYS = 0.8
+#: a rig's own bone axis nearest the palm-plane bend axis (the rays' for the thumb) counts as the hinge
+#: the rig was authored with when it is this close for every joint of the finger
+RIG_AXIS_DEGREES = 25.0
 
 
 @dataclass
@@ -56,6 +63,8 @@ class TbsSolution:
     width: np.ndarray  # (15,) side-to-side half width (bend rays), metres
     fallback: np.ndarray  # (15,) bool: no candidate hit, the frame comes from the palm plane
     diagnostics: list[str] = field(default_factory=list)
+    #: (15,) what decided each bend axis: "rays", "rig bone axis" (the rays could not tell), "palm plane"
+    basis: list[str] = field(default_factory=lambda: ["rays"] * topo.N_ARTICULATED)
 
     @property
     def needs_review(self) -> np.ndarray:
@@ -153,13 +162,18 @@ def _curl_bend_axes(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return axes, strength
 
 
-def solve_tbs_frames(hand: HandModel, n_angles: int = N_ANGLES) -> TbsSolution:
+def solve_tbs_frames(hand: HandModel, n_angles: int = N_ANGLES, bone_axes: np.ndarray | None = None
+                     ) -> TbsSolution:
     """TBS rest frames for ``hand`` found from its mesh (``hand.rest_frames`` is not read).
 
     Per joint, a ray loss over the splay angle; per finger, one common bend direction fitted to the sum
     of its joints' losses (anatomy: a finger's joints bend about nearly parallel axes, as the official
     code's one bend axis per finger), each joint then corrected within ``MAX_CORRECTION_DEGREES`` of it.
     Where rays cannot tell (round sections), the finger's own curl plane and the palm plane decide.
+    Then, per finger, rays that are unsure or far from both the palm plane and the rig's own bone axes
+    give way to the rig's axes or the palm plane (`_overrule_unsure_rays`). ``bone_axes`` (15, 3, 3) are
+    the rig's rest bone frames in hand space; by default a hand read from a rig file's
+    (``hand.rig_frames``), none for a procedural hand, whose rig axes carry a deliberate roll.
     """
     if hand.mesh is None:
         raise InvalidHandError(f"hand {hand.name!r}: has no mesh; the TBS solver casts rays at the mesh")
@@ -218,7 +232,74 @@ def solve_tbs_frames(hand: HandModel, n_angles: int = N_ANGLES) -> TbsSolution:
                 if confidence[j] < LOW_CONFIDENCE:
                     diagnostics.append(f"{name}: low confidence {confidence[j]:.2f} ({note}); review the frame")
             frames[j] = np.stack([twist[j], np.cross(z, twist[j]), z], axis=1)
-    return TbsSolution(frames, confidence, hit.mean(axis=1), thickness, width, fallback, diagnostics)
+    if bone_axes is None and "rig_scheme" in hand.meta:
+        bone_axes = hand.rig_frames[1:]
+    basis = ["palm plane" if fallback[j] else "rays" for j in range(n_joints)]
+    across = palm_axes(positions)[:, 1]  # toward the thumb: a finger's bend axis when it curls toward the palm
+    palm_bend = across - twist * (twist @ across)[:, None]
+    palm_bend /= np.linalg.norm(palm_bend, axis=1, keepdims=True)
+    _overrule_unsure_rays(frames, confidence, basis, diagnostics, palm_bend, guess[:, :, 2], bone_axes, fallback)
+    return TbsSolution(frames, confidence, hit.mean(axis=1), thickness, width, fallback, diagnostics, basis)
+
+
+def _angle_between_lines(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Degrees between the lines of unit vectors ``a`` and ``b`` (..., 3): 0-90, the sign ignored."""
+    return np.degrees(np.arccos(np.clip(np.abs((a * b).sum(-1)), 0.0, 1.0)))
+
+
+def _nearest_bone_axis(bone_frame: np.ndarray, reference: np.ndarray, twist: np.ndarray) -> np.ndarray:
+    """The column of ``bone_frame`` (3, 3) nearest the line of ``reference``, made normal to ``twist``."""
+    axis = bone_frame[:, int(np.argmax(np.abs(bone_frame.T @ reference)))]
+    axis = axis - twist * (axis @ twist)
+    return axis / np.linalg.norm(axis)
+
+
+def _overrule_unsure_rays(frames: np.ndarray, confidence: np.ndarray, basis: list[str], diagnostics: list[str],
+                          palm_bend: np.ndarray, back: np.ndarray, bone_axes: np.ndarray | None,
+                          fallback: np.ndarray) -> None:
+    """Per finger, in place: the rays' bend axes stay where all its joints are `TRUST_RAYS` sure and (but for
+    the thumb, which the palm plane does not predict) within `AGREE_DEGREES` of the palm plane's; else the
+    rig's own bone axes where they lie within `RIG_AXIS_DEGREES` of the palm plane's (the thumb: of the
+    rays'), the hinge an authored rig bends about; else the palm plane (the thumb keeps its rays). Sure rays
+    come first so that a rig with re-rolled bones cannot mislead a hand whose sections the rays can read.
+    A frame the rays did not decide gets confidence `PALM_EVIDENCE` at most and a line saying why."""
+    for f in range(topo.N_FINGERS):
+        members = [3 * f + level for level in range(3)]
+        if fallback[members].all():
+            continue
+        twist = frames[members][:, :, 0]
+        rays = frames[members][:, :, 1]
+        reference = rays if f == 0 else palm_bend[members]
+        rig = None
+        if bone_axes is not None:
+            # which of the bone's axes is its hinge: the one nearest the rays' (they are 90 deg apart, so even
+            # unsure rays pick right), accepted where it agrees with the palm plane (the thumb: the rays)
+            rig = np.stack([_nearest_bone_axis(bone_axes[j], rays[k], twist[k]) for k, j in enumerate(members)])
+            if not (_angle_between_lines(rig, reference) <= RIG_AXIS_DEGREES).all():
+                rig = None
+        sure = bool((confidence[members] >= TRUST_RAYS).all())
+        near = f == 0 or bool((_angle_between_lines(rays, palm_bend[members]) <= AGREE_DEGREES).all())
+        if sure and near:
+            continue
+        if rig is not None:
+            chosen, label = rig, "rig bone axis"
+        elif f == 0:
+            continue  # the palm plane does not predict the thumb's hinge: its rays stay
+        else:
+            chosen, label = palm_bend[members], "palm plane"
+        why = "the rays could not tell its bend axis" if not sure else "its rays point away from the palm plane"
+        diagnostics.append(f"{topo.FINGERS[f]}: {why} (rays' confidence {confidence[members].min():.2f}); "
+                           f"bend axes taken from the {label}")
+        previous = back[members[0]]
+        for k, j in enumerate(members):
+            z = np.cross(twist[k], chosen[k])
+            z /= np.linalg.norm(z)
+            if z @ previous < 0:  # out of the back of the hand at the base, then each joint as its parent
+                z = -z
+            previous = z
+            frames[j] = np.stack([twist[k], np.cross(z, twist[k]), z], axis=1)
+            basis[j] = label
+            confidence[j] = min(confidence[j], PALM_EVIDENCE)
 
 
 def _fit_finger(f: int, loss: np.ndarray, u: np.ndarray, v: np.ndarray, twist: np.ndarray, guess: np.ndarray,

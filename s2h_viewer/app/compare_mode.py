@@ -15,12 +15,15 @@ the results they had, nothing recomputed."""
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from PySide6.QtCore import Signal
 from PySide6.QtGui import QUndoCommand, QUndoStack
-from PySide6.QtWidgets import QComboBox, QMenu, QSplitter, QVBoxLayout, QWidget
+from PySide6.QtWidgets import QComboBox, QLabel, QMenu, QSplitter, QVBoxLayout, QWidget
 
 from s2h_viewer.app.progress_dialog import JobProgressDialog
 from s2h_viewer.app.retarget_queue import RetargetQueue
@@ -29,6 +32,8 @@ from s2h_viewer.hand.motion import Motion
 from s2h_viewer.retarget.compare_state import CompareState, ResultKey
 from s2h_viewer.retarget.comparison import Comparison, MethodResult
 from s2h_viewer.retarget.methods import METHODS
+from s2h_viewer.semantics.flexion import SidewaysPeak
+from s2h_viewer.semantics.signature import SIDEWAYS_LIMIT
 from s2h_viewer.widgets.asm_heatmap import AsmHeatmap
 from s2h_viewer.widgets.compare_view import CompareView
 from s2h_viewer.widgets.error_curve import ErrorCurve
@@ -56,6 +61,17 @@ def default_setup() -> CompareSetup:
     motion = next(m for m in samples.load_sample_motions() if m.name == "gestures")
     return CompareSetup(motion, samples.load_sample_hand(motion.hand_name),
                         [samples.load_sample_hand("iris"), samples.load_sample_hand("laurel")])
+
+
+def sideways_text(scores) -> str:
+    """"ring DIP bends 40 deg sideways at frame 212 (source: 11)", in red past the sideways limit."""
+    if math.isnan(scores.sideways_deg):
+        return "Sideways flexion: no finger curls"
+    joint, _, frame = scores.sideways_at.partition("@")
+    text = (f"Worst sideways flexion: {SidewaysPeak(scores.sideways_deg, joint, int(frame)).describe()} "
+            f"(the source: {scores.source_sideways_deg:.0f})")
+    broken = scores.sideways_deg > max(SIDEWAYS_LIMIT, np.nan_to_num(scores.source_sideways_deg) + 5.0)
+    return f"<span style='color:#c62828'>{text}</span>" if broken else text
 
 
 def label(result: MethodResult) -> str:
@@ -150,6 +166,8 @@ class CompareMode(QWidget):
         self.heatmap_choice.setToolTip("the retarget the heatmap, the error curve, the scores' highlight and "
                                        "exports follow")
         self.scores = ScoresTable()
+        self.sideways_note = QLabel()  # the selected retarget's worst sideways bend, in words
+        self.sideways_note.setWordWrap(True)
         side = QWidget()
         side_layout = QVBoxLayout(side)
         side_layout.addWidget(self.heatmap_choice)
@@ -162,6 +180,7 @@ class CompareMode(QWidget):
         layout = QVBoxLayout(self)
         layout.addWidget(splitter, 1)
         layout.addWidget(self.timeline)
+        layout.addWidget(self.sideways_note)  # a line over the curve: the side panel keeps its height
         layout.addWidget(self.curve)
         self.timeline.frame_changed.connect(self.show_frame)
         self.view.drawn.connect(self.timeline.note_drawn)
@@ -431,6 +450,7 @@ class CompareMode(QWidget):
         else:
             self.curve.set_curve(result.frame_error, label(result))
         self.heatmap.set_title(f"ASM error, {label(result)}")
+        self.sideways_note.setText(sideways_text(result.scores))
 
     def set_fit_residual_shown(self, shown: bool) -> None:
         """The error curve shows the tracked source's fit residual (mm per frame) instead of the selected

@@ -82,9 +82,7 @@ def run_task(task: Task) -> dict:
 def _retarget_and_write(task: Task) -> dict:
     from s2h_viewer.io.files import save_motion_file
     from s2h_viewer.retarget import retarget
-    from s2h_viewer.semantics.flexion import sideways_peak
     from s2h_viewer.semantics.metrics import score_retarget_frames
-    from s2h_viewer.hand.kinematics import forward_kinematics
 
     motion, source = _load_motion(task)
     target = _load_target(task)
@@ -92,13 +90,11 @@ def _retarget_and_write(task: Task) -> dict:
     moved = retarget(motion, source, target, task.method)
     scores, frame_error = score_retarget_frames(source, motion.q_tbs, target, moved.q_tbs)
     worst = int(np.argmax(frame_error)) if len(frame_error) else 0
-    positions = forward_kinematics(target, moved.q_tbs).positions.numpy()
-    peak = sideways_peak(positions)
     save_motion_file(task.output, moved, target)
     row = {"frames": motion.n_frames, "s_palm": scores.s_palm, "s_finger": scores.s_finger,
            "contact_p": scores.contact_precision, "contact_r": scores.contact_recall,
            "palm_r": scores.palm_contact_recall, "violations": scores.violation_rate,
-           "sideways_deg": peak.degrees, "sideways_at": "" if np.isnan(peak.degrees) else f"{peak.joint}@{peak.frame}",
+           "sideways_deg": scores.sideways_deg, "sideways_at": scores.sideways_at,
            "worst_frame": worst, "worst_error": float(frame_error[worst]) if len(frame_error) else 0.0,
            "output": str(task.output), "warning": warning}
     if task.options.render:

@@ -23,6 +23,8 @@ HAND_SUFFIXES = (".npz", ".glb", ".gltf", ".vrm", ".fbx", ".bvh")
 MOTION_SUFFIXES = (".npz", ".bvh", ".glb", ".gltf", ".vrm", ".fbx", ".json", ".npy")
 GLTF_FAMILY = (".glb", ".gltf", ".vrm")  # a .vrm is a GLB with a VRM extension
 EXPORT_SUFFIXES = (".npz", ".bvh", ".glb")
+#: ``RigOptions.animation`` for every animation of a file in turn, as one clip labelled by animation
+ALL_ANIMATIONS = "all"
 
 
 JOINT_MAP_SUFFIX = ".joints.json"
@@ -135,11 +137,27 @@ def _load_motion(path: Path, suffix: str, hand: HandModel | None, options: RigOp
         rig, motion = load_bvh(path, options.side, options.scheme, options.mapping(path))
         return motion, rig
     rig = hand or _load_hand(path, suffix, options)
+    if options.animation == ALL_ANIMATIONS:
+        return _every_animation(path, suffix, rig), rig
     if suffix in GLTF_FAMILY:
         from s2h_viewer.io.gltf import load_gltf_motion
         return load_gltf_motion(path, rig, options.animation), rig
     from s2h_viewer.io.fbx import load_fbx_motion
     return load_fbx_motion(path, rig, options.animation), rig
+
+
+def _every_animation(path: Path, suffix: str, rig: HandModel) -> Motion:
+    """Every animation (take) of a glTF/FBX file in turn, one clip labelled by animation (`motions.pose_clip`)."""
+    from s2h_viewer.motions.pose_clip import concatenate_clips
+    if suffix in GLTF_FAMILY:
+        from s2h_viewer.io.gltf import list_gltf_animations, load_gltf_motion
+        clips = [load_gltf_motion(path, rig, k) for k in range(len(list_gltf_animations(path)))]
+    else:
+        from s2h_viewer.io.fbx import list_fbx_takes, load_fbx_motion
+        clips = [load_fbx_motion(path, rig, k) for k in range(len(list_fbx_takes(path)))]
+    if not clips:
+        raise InputFileError(path, "has no animations")
+    return concatenate_clips(clips, f"{path.stem} (every animation)")
 
 
 def list_animations(path: str | Path) -> list[str]:

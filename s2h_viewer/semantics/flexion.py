@@ -50,6 +50,11 @@ class SidewaysPeak:
     joint: str = ""
     frame: int = -1
 
+    @property
+    def where(self) -> str:
+        """``"ring_dip@212"``, empty when no finger curls."""
+        return "" if np.isnan(self.degrees) else f"{self.joint}@{self.frame}"
+
     def describe(self) -> str:
         if np.isnan(self.degrees):
             return "no finger curls"
@@ -67,3 +72,18 @@ def sideways_peak(positions: np.ndarray) -> SidewaysPeak:
     masked = np.where(tightest, sideways, -1.0)
     frame, joint = np.unravel_index(int(np.argmax(masked)), masked.shape)
     return SidewaysPeak(float(masked[frame, joint]), HINGE_JOINTS[joint][0], int(frame))
+
+
+def finger_peaks(positions: np.ndarray) -> dict[str, SidewaysPeak]:
+    """Per PIP/DIP joint, its worst sideways angle over its own tightest curls (NaN where it never flexes
+    past `MIN_FLEXION_DEG`): the per-joint lines of `s2h check`."""
+    flexion, sideways = flexion_and_sideways(positions)
+    out = {}
+    for j, (name, _) in enumerate(HINGE_JOINTS):
+        tightest = (flexion[:, j] >= TIGHTEST_SHARE * flexion[:, j].max()) & ~np.isnan(sideways[:, j])
+        if not tightest.any():
+            out[name] = SidewaysPeak(float("nan"))
+            continue
+        frame = int(np.argmax(np.where(tightest, sideways[:, j], -1.0)))
+        out[name] = SidewaysPeak(float(sideways[frame, j]), name, frame)
+    return out

@@ -14,6 +14,7 @@ from s2h_viewer.hand.model import HandModel
 from s2h_viewer.semantics.anatomy import violation_rate
 from s2h_viewer.semantics.asm import semantic_matrix
 from s2h_viewer.semantics.contacts import PAD_PAIRS, PALM_PAIRS, contact_precision_recall, detect_contacts
+from s2h_viewer.semantics.flexion import sideways_peak
 from s2h_viewer.semantics.similarity import masked_cosine
 
 #: frames whose ASMs are built at once when a whole clip is scored ((4096, 20, 29, 3) float64: 57 MiB)
@@ -66,6 +67,11 @@ class RetargetScores:
     violation_rate: float
     jitter: float
     mse: float | None = None
+    #: the retarget's worst sideways flexion at its tightest curls (`semantics.flexion`), degrees (NaN: no
+    #: finger curls), where it is ("ring_dip@212") and the source's own figure, for comparison
+    sideways_deg: float = float("nan")
+    sideways_at: str = ""
+    source_sideways_deg: float = float("nan")
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -95,10 +101,12 @@ def score_retarget_frames(source_hand: HandModel, source_q: np.ndarray | torch.T
         if reference_q is not None:
             ref = forward_kinematics(target_hand, torch.as_tensor(np.asarray(reference_q), dtype=torch.float64))
             mse = joint_position_mse(tgt_pose, ref, target_hand.hand_length)
+        peak = sideways_peak(tgt_pose.positions.numpy())
         scores = RetargetScores(s_palm=s_palm, s_finger=s_finger, s_finger_paper=s_finger_paper,
                                 contact_precision=precision, contact_recall=recall, palm_contact_recall=palm_recall,
                                 violation_rate=violation_rate(tgt_q), jitter=jitter(tgt_pose, target_hand.hand_length),
-                                mse=mse)
+                                mse=mse, sideways_deg=peak.degrees, sideways_at=peak.where,
+                                source_sideways_deg=sideways_peak(src_pose.positions.numpy()).degrees)
         return scores, frame_error
 
 

@@ -14,6 +14,7 @@ from PySide6.QtWidgets import QHeaderView, QTableWidget, QTableWidgetItem, QWidg
 
 from s2h_viewer.retarget.comparison import Comparison
 from s2h_viewer.retarget.methods import METHODS
+from s2h_viewer.semantics.flexion import SidewaysPeak
 
 #: (header, score key or None for a name column, header tooltip)
 COLUMNS = (("Method", None, "retargeting method"), ("Target", None, "target hand"),
@@ -22,12 +23,26 @@ COLUMNS = (("Method", None, "retargeting method"), ("Target", None, "target hand
            ("Contact\nP", "contact_precision", "contact precision: pad contacts made that the source makes"),
            ("Contact\nR", "contact_recall", "contact recall: pad contacts of the source that are kept"),
            ("Palm\nR", "palm_contact_recall", "fingertip-on-palm contacts of the source that are kept"),
-           ("Viol-\nations", "violation_rate", "share of joint angles over 5 deg outside the anatomical limits"))
+           ("Viol-\nations", "violation_rate", "share of joint angles over 5 deg outside the anatomical limits"),
+           ("Side-\nways", "sideways_deg", "the worst sideways bend of a PIP/DIP at its tightest curls, degrees "
+                                            "(0: a clean curl toward the palm; authored clips reach 8-22)"))
 NAME_WIDTH = 96  # pixels: widest a name column starts (drag the header edge for more)
 #: why a score is n/a (NaN), per score key
-UNDEFINED = {"contact_precision": "n/a: the retarget makes no pad contact, so no precision to measure",
+UNDEFINED = {"sideways_deg": "n/a: no finger curls", "contact_precision": "n/a: the retarget makes no pad contact, so no precision to measure",
              "contact_recall": "n/a: the source makes no pad contact, so no recall to measure",
              "palm_contact_recall": "n/a: the source puts no fingertip on the palm, so no recall to measure"}
+
+
+def _cell(key: str, values: dict) -> tuple[str, str | None]:
+    """A score's text and tooltip (None: the column's)."""
+    value = values[key]
+    if math.isnan(value):
+        return "n/a", UNDEFINED.get(key, "n/a")
+    if key == "sideways_deg":
+        joint, _, frame = values["sideways_at"].partition("@")
+        return f"{value:.0f}", SidewaysPeak(value, joint, int(frame)).describe() + f" (the source: " \
+            f"{values['source_sideways_deg']:.0f})"
+    return f"{value:.3f}", None
 
 
 class ScoresTable(QTableWidget):
@@ -58,8 +73,7 @@ class ScoresTable(QTableWidget):
         for row, result in enumerate(comparison.results):
             values = result.scores.as_dict()
             cells = [(METHODS[result.method].label,) * 2, (result.target.name,) * 2]
-            cells += [("n/a", UNDEFINED.get(key, "n/a")) if math.isnan(values[key]) else (f"{values[key]:.3f}", None)
-                      for _, key, _ in COLUMNS[2:]]
+            cells += [_cell(key, values) for _, key, _ in COLUMNS[2:]]
             for col, (text, tip) in enumerate(cells):
                 item = QTableWidgetItem(text)
                 if tip is not None:

@@ -19,8 +19,9 @@ from s2h_viewer.retarget.asrn.features import source_features, target_static
 from s2h_viewer.retarget.asrn.model import RetargetNet, apply_residual
 from s2h_viewer.retarget.asrn.training import TrainConfig, build_model, load_checkpoint, stored_config
 from s2h_viewer.retarget.contact_fit import fit_contacts
+from s2h_viewer.retarget.guard import guarded
 from s2h_viewer.retarget.methods import on_target, register
-from s2h_viewer.retarget.progress import stage
+from s2h_viewer.retarget.progress import report, stage
 from s2h_viewer.retarget.windows import stream_windows
 
 MODELS_DIR = Path(__file__).resolve().parents[3] / "assets" / "models"
@@ -79,10 +80,16 @@ def retarget_dm(motion: Motion, source_hand: HandModel, target_hand: HandModel) 
 
 
 @register("asrn", "ASRN", "the anatomy-based semantic retargeting network (trained, shipped), its fingertip "
-                          "contacts then fitted to the source's")
+                          "contacts then fitted to the source's, guarded frame by frame by TBS Copy")
 def retarget_asrn(motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
     with stage(0.0, 0.1, "network"):
-        q = network_retarget("asrn", motion.q_tbs, source_hand, target_hand)
-    with stage(0.1, 1.0, "contact fit"):
-        q = fit_contacts(motion.q_tbs, source_hand, target_hand, q)
+        network = network_retarget("asrn", motion.q_tbs, source_hand, target_hand)
+    with stage(0.1, 0.85, "contact fit"):
+        q = fit_contacts(motion.q_tbs, source_hand, target_hand, network.copy())
+    with stage(0.85, 1.0, "guard"):
+        # the fit may not invent a contact the network's frame did not make, and no frame may lose what
+        # TBS Copy (the source's own TBS rotations) keeps (`retarget.guard`)
+        q, _ = guarded(source_hand, motion.q_tbs, target_hand, q, network)
+        q, _ = guarded(source_hand, motion.q_tbs, target_hand, q, motion.q_tbs)
+        report(1.0)
     return on_target(motion, target_hand, q, "asrn")

@@ -1,0 +1,44 @@
+"""One clip from many: every animation of a file in turn (a pose library's one-key poses held), labelled
+with its name, so a set of authored poses is one evaluation clip (`s2h evaluate --animation all`)."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation, Slerp
+
+from s2h_viewer.hand import topology as topo
+from s2h_viewer.hand.motion import Motion
+
+#: frames a one-key pose is held for (windowed methods see it as a held pose, not a one-frame flash)
+HOLD_FRAMES = 12
+#: frames of slerp from one animation's last frame to the next one's first
+BLEND_FRAMES = 8
+
+
+def concatenate_clips(clips: list[Motion], name: str, hold: int = HOLD_FRAMES, blend: int = BLEND_FRAMES
+                      ) -> Motion:
+    """``clips`` (on one hand) one after another, each labelled with its name on its frames ("" on the
+    blends between them); a clip of one frame (a pose) is held ``hold`` frames."""
+    if not clips:
+        raise ValueError("no clips to concatenate")
+    parts, labels = [], []
+    for k, clip in enumerate(clips):
+        q = clip.q_tbs if clip.n_frames > 1 else np.repeat(clip.q_tbs, hold, axis=0)
+        if k:
+            parts.append(_blend(parts[-1][-1], q[0], blend))
+            labels.append(np.full(blend, "", dtype=object))
+        parts.append(q)
+        labels.append(np.full(len(q), clip.name, dtype=object))
+    first = clips[0]
+    return Motion(np.concatenate(parts), fps=first.fps, name=name, hand_name=first.hand_name,
+                  labels=np.concatenate(labels), meta={**first.meta, "clips": [c.name for c in clips]})
+
+
+def _blend(start: np.ndarray, end: np.ndarray, n: int) -> np.ndarray:
+    """(n, 15, 4) rotations strictly between ``start`` and ``end`` (15, 4), by slerp per joint."""
+    t = np.arange(1, n + 1) / (n + 1)
+    out = np.empty((n, topo.N_ARTICULATED, 4), dtype=np.float32)
+    for j in range(topo.N_ARTICULATED):
+        pair = Rotation.from_quat(np.stack([start[j], end[j]]).astype(np.float64), scalar_first=True)
+        out[:, j] = Slerp([0.0, 1.0], pair)(t).as_quat(scalar_first=True)
+    return out

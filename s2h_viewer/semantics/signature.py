@@ -1,0 +1,140 @@
+"""A pose's signature, what a viewer reads off a hand at a glance: each finger extended, bent or curled;
+which fingertips the thumb touches; no finger curling sideways. A retarget keeps a pose when its
+signature matches the source's (issue 26: scoring authored poses on real rigs)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import torch
+
+from s2h_viewer.hand import topology as topo
+from s2h_viewer.hand.kinematics import forward_kinematics
+from s2h_viewer.hand.model import HandModel
+from s2h_viewer.semantics.contacts import CONTACT_PAIRS, contact_gaps
+from s2h_viewer.semantics.flexion import flexion_and_sideways
+
+#: a finger's curl (its MCP, PIP and DIP flexion summed, degrees) below which it reads extended, above
+#: which curled; a curl within `CURL_MARGIN` of the source's is kept whatever the words
+EXTENDED_BELOW, CURLED_ABOVE, CURL_MARGIN = 70.0, 150.0, 45.0
+#: a PIP/DIP flexing at least `SIDEWAYS_FLEXION` and bending more than `SIDEWAYS_LIMIT` sideways reads as
+#: a broken finger, unless the source bends as far (+5); a joint flexed less reads its splay, not its hinge
+SIDEWAYS_LIMIT, SIDEWAYS_FLEXION = 25.0, 45.0
+#: the thumb's pad touches a fingertip's within this gap (hand lengths): looser than the contact metric's
+#: 1.5%, as authored touches on real rigs leave 2-4% (an OK sign on the Godot hand: 3.3%), and pinches
+#: around an object 7% and more
+THUMB_TOUCH = 0.05
+THUMB_PAIRS = tuple(i for i, pair in enumerate(CONTACT_PAIRS) if "thumb" in pair and "palm" not in pair)
+
+
+@dataclass(frozen=True)
+class PoseSignature:
+    """One frame's signature: curl (4,) degrees of index..pinky, thumb-tip contacts (4,) with index..pinky,
+    the worst sideways flexion (degrees, NaN if nothing curls)."""
+
+    curl: np.ndarray
+    thumb_contacts: np.ndarray
+    sideways: float
+
+    @property
+    def states(self) -> list[str]:
+        return ["extended" if c < EXTENDED_BELOW else "curled" if c > CURLED_ABOVE else "bent" for c in self.curl]
+
+
+def finger_curls(positions: np.ndarray) -> np.ndarray:
+    """(T, 4) curl in degrees of index..pinky: the angles between consecutive bones from the wrist-to-MCP
+    line to the tip, summed."""
+    out = np.zeros((len(positions), topo.N_FINGERS - 1))
+    for f in range(1, topo.N_FINGERS):
+        chain = positions[:, [0, *range(1 + 4 * f, 5 + 4 * f)]]
+        bones = np.diff(chain, axis=1)
+        bones /= np.maximum(np.linalg.norm(bones, axis=-1, keepdims=True), 1e-12)
+        cos = np.clip((bones[:, :-1] * bones[:, 1:]).sum(-1), -1.0, 1.0)
+        out[:, f - 1] = np.degrees(np.arccos(cos)).sum(-1)
+    return out
+
+
+def signatures(hand: HandModel, q_tbs: np.ndarray) -> list[PoseSignature]:
+    """The signature of every frame of ``q_tbs`` (T, 15, 4) on ``hand``."""
+    with torch.no_grad():
+        pose = forward_kinematics(hand, torch.as_tensor(np.asarray(q_tbs), dtype=torch.float64))
+    positions = pose.positions.numpy()
+    contacts = contact_gaps(hand, pose).numpy()[:, list(THUMB_PAIRS)] < THUMB_TOUCH * hand.hand_length
+    curls = finger_curls(positions)
+    flexion, sideways = flexion_and_sideways(positions)
+    sideways = np.where(flexion >= SIDEWAYS_FLEXION, sideways, np.nan)
+    worst = np.where(np.isnan(sideways).all(axis=1), np.nan, np.nanmax(np.nan_to_num(sideways, nan=-1.0), axis=1))
+    return [PoseSignature(curls[t], contacts[t], float(worst[t])) for t in range(len(positions))]
+
+
+def differences(source: PoseSignature, target: PoseSignature) -> list[str]:
+    """What the target loses of the source's signature, in words (empty: kept)."""
+    out = []
+    for f, (a, b, sa, sb) in enumerate(zip(source.curl, target.curl, source.states, target.states)):
+        if sa != sb and abs(a - b) > CURL_MARGIN:
+            out.append(f"{topo.FINGERS[f + 1]} {sb}, not {sa}")
+    for f, (a, b) in enumerate(zip(source.thumb_contacts, target.thumb_contacts)):
+        if a != b:
+            out.append(f"thumb-{topo.FINGERS[f + 1]} contact {'lost' if a else 'invented'}")
+    limit = max(SIDEWAYS_LIMIT, (0.0 if np.isnan(source.sideways) else source.sideways) + 5.0)
+    if target.sideways > limit:
+        out.append(f"a finger bends {target.sideways:.0f} deg sideways")
+    return out
+
+
+def held_poses(labels: np.ndarray) -> list[tuple[str, int]]:
+    """(label, middle frame) of each run of frames with one non-empty label: the poses a clip holds."""
+    out, start = [], 0
+    for t in range(1, len(labels) + 1):
+        if t == len(labels) or labels[t] != labels[start]:
+            if labels[start]:
+                out.append((str(labels[start]), (start + t - 1) // 2))
+            start = t
+    return out
+
+
+def pose_differences(source_hand: HandModel, source_q: np.ndarray, target_hand: HandModel, target_q: np.ndarray,
+                     labels: np.ndarray) -> dict[str, list[str]]:
+    """Per held pose of the clip (`held_poses`), what the retarget loses of its signature (empty: kept)."""
+    poses = held_poses(labels)
+    frames = [t for _, t in poses]
+    src = signatures(source_hand, np.asarray(source_q)[frames])
+    tgt = signatures(target_hand, np.asarray(target_q)[frames])
+    return {name: differences(a, b) for (name, _), a, b in zip(poses, src, tgt)}
+
+
+#: bits of `loss_masks`: finger states (index..pinky), thumb-tip touches (index..pinky), sideways, a pad
+#: contact (the metric's 1.5% tolerance) the source does not make
+STATE_BITS, TOUCH_BITS, SIDEWAYS_BIT, INVENTED_BIT = 0, 4, 8, 9
+
+
+def _frame_features(hand: HandModel, q_tbs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(T, 4) curls, (T, 4) thumb touches, (T,) worst sideways of the joints flexed past `SIDEWAYS_FLEXION`
+    (0 where none is), (T, 10) pad contacts at the metric's tolerance."""
+    from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, PAD_PAIRS
+    with torch.no_grad():
+        pose = forward_kinematics(hand, torch.as_tensor(np.asarray(q_tbs), dtype=torch.float64))
+        gaps = contact_gaps(hand, pose).numpy() / hand.hand_length
+    positions = pose.positions.numpy()
+    flexion, sideways = flexion_and_sideways(positions)
+    worst = np.where(flexion >= SIDEWAYS_FLEXION, np.nan_to_num(sideways), 0.0).max(axis=1)
+    return finger_curls(positions), gaps[:, list(THUMB_PAIRS)] < THUMB_TOUCH, worst, gaps[:, PAD_PAIRS] < CONTACT_TOLERANCE
+
+
+def loss_masks(source_hand: HandModel, source_q: np.ndarray, target_hand: HandModel, target_q: np.ndarray
+               ) -> np.ndarray:
+    """(T,) int: per frame, a bit for each part of the source's signature the target loses (`differences`,
+    frame by frame), and `INVENTED_BIT` for a pad contact the source does not make."""
+    src_curl, src_touch, src_side, src_pads = _frame_features(source_hand, source_q)
+    tgt_curl, tgt_touch, tgt_side, tgt_pads = _frame_features(target_hand, target_q)
+
+    def states(curl: np.ndarray) -> np.ndarray:
+        return np.where(curl < EXTENDED_BELOW, 0, np.where(curl > CURLED_ABOVE, 2, 1))
+
+    state_lost = (states(src_curl) != states(tgt_curl)) & (np.abs(src_curl - tgt_curl) > CURL_MARGIN)
+    mask = (state_lost * (1 << (STATE_BITS + np.arange(4)))).sum(-1)
+    mask += ((src_touch != tgt_touch) * (1 << (TOUCH_BITS + np.arange(4)))).sum(-1)
+    mask += (tgt_side > np.maximum(SIDEWAYS_LIMIT, src_side + 5.0)) * (1 << SIDEWAYS_BIT)
+    mask += (tgt_pads & ~src_pads).any(-1) * (1 << INVENTED_BIT)
+    return mask.astype(int)

@@ -1,0 +1,64 @@
+"""Issue 26's tables: every method onto every real rig, on the authored poses of assets/motions/real
+(held one by one, `s2h evaluate --animation all`) and on the shipped gestures clip: poses whose signature
+is kept, contact precision, violations, the worst sideways flexion at the tightest curls.
+
+    python scripts/real_rig_evaluation.py [--methods tbs_copy,dm,asrn] [--shared ../shared]
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from s2h_viewer import samples
+from s2h_viewer.io.files import RigOptions, load_hand_file, load_motion_file
+from s2h_viewer.retarget.evaluation import evaluate
+
+ROOT = Path(__file__).resolve().parents[1]
+#: (file under real-rigs/ or assets/hands/, side or None for a lone hand)
+RIGS = (("real/godot_hand_r.gltf", None), ("real/godot_hand_l.gltf", None), ("real/human-female.glb", "right"),
+        ("real/human-female.glb", "left"), ("RPM_Template_Mesh_XR.glb", "right"), ("RPM_Template_Mesh_XR.glb", "left"),
+        ("r_hand_skeletal_lowres.fbx", None), ("l_hand_skeletal_lowres.fbx", None),
+        ("webxr/generic-hand-right.glb", None), ("webxr/generic-hand-left.glb", None))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--methods", default="tbs_copy,dm,asrn")
+    parser.add_argument("--shared", default=str(ROOT.parent / "shared"))
+    args = parser.parse_args()
+    shared = Path(args.shared)
+    methods = args.methods.split(",")
+    poses, performer = load_motion_file(ROOT / "assets/motions/real/godot_hand_poses_r.gltf",
+                                        load_hand_file(ROOT / "assets/motions/real/godot_hand_r_posed_rig.gltf"),
+                                        RigOptions(animation="all"))
+    gestures = next(m for m in samples.load_sample_motions() if m.name.startswith("gestures"))
+    hands = {performer.name: performer, gestures.hand_name: samples.load_sample_hand(gestures.hand_name)}
+    labels = []
+    for file, side in RIGS:
+        path = ROOT / "assets/hands" / file if (ROOT / "assets/hands" / file).exists() else shared / "real-rigs" / file
+        if not path.exists():
+            continue
+        label = f"{Path(file).name}" + (f" ({side})" if side else "")
+        hand = load_hand_file(path, RigOptions(side=side))
+        hand.name = label
+        hands[label] = hand
+        labels.append(label)
+    print("| rig | method | poses kept (of 35) | contact P (poses) | violations (poses) | sideways max, poses "
+          "| sideways max, gestures | S_finger, gestures |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|")
+    pose_rows = evaluate([poses], hands, labels, methods)
+    gesture_rows = evaluate([gestures], hands, labels, methods)
+    for p, g in zip(pose_rows, gesture_rows):
+        kept = sum(not lost for lost in p.poses.values())
+        print(f"| {p.target} | {p.method} | {kept} | {p.scores.contact_precision:.2f} | {p.scores.violation_rate:.3f} "
+              f"| {p.scores.sideways_deg:.0f} | {g.scores.sideways_deg:.0f} ({g.scores.sideways_at}) "
+              f"| {g.scores.s_finger:.3f} |", flush=True)
+    print()
+    for p in pose_rows:
+        lost = {name: what for name, what in p.poses.items() if what}
+        print(f"- {p.target}, {p.method}: " + ("; ".join(f"{n}: {', '.join(w)}" for n, w in lost.items()) or "all kept"))
+
+
+if __name__ == "__main__":
+    main()
