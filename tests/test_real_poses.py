@@ -64,6 +64,8 @@ def test_every_animation_of_a_pose_library_is_one_labelled_clip(poses):
     names = [name for name, _ in held_poses(motion.labels)]
     assert len(names) == 35 and names[0] == "Cup" and "Horns" in names and "OK" in names
     assert len(set(names)) == 35
+    assert motion.n_frames == 35 * 12 + 34 * 8  # each one-key pose held 12 frames, 8 of slerp between
+    assert (motion.labels == "OK").sum() == 12
     assert rig.name == "godot_hand_r_posed_rig" and rig.mesh is not None
 
 
@@ -109,7 +111,7 @@ def test_the_guard_never_adds_a_loss(poses):
 
 def test_evaluate_reports_sideways_flexion_and_poses_kept(poses, sample_hands):
     motion, rig = poses
-    short = motion  # 342 frames, 35 poses
+    short = motion  # 692 frames, 35 poses
     hands = {rig.name: rig, "iris": sample_hands["iris"]}
     rows = evaluate([short], hands, ["iris"], ["tbs_copy"])
     table = format_markdown(summarise(rows))

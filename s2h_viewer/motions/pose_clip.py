@@ -18,12 +18,12 @@ BLEND_FRAMES = 8
 def concatenate_clips(clips: list[Motion], name: str, hold: int = HOLD_FRAMES, blend: int = BLEND_FRAMES
                       ) -> Motion:
     """``clips`` (on one hand) one after another, each labelled with its name on its frames ("" on the
-    blends between them); a clip of one frame (a pose) is held ``hold`` frames."""
+    blends between them); a pose (`is_pose`) is held ``hold`` frames."""
     if not clips:
         raise ValueError("no clips to concatenate")
     parts, labels = [], []
     for k, clip in enumerate(clips):
-        q = clip.q_tbs if clip.n_frames > 1 else np.repeat(clip.q_tbs, hold, axis=0)
+        q = np.repeat(clip.q_tbs[:1], hold, axis=0) if is_pose(clip) else clip.q_tbs
         if k:
             parts.append(_blend(parts[-1][-1], q[0], blend))
             labels.append(np.full(blend, "", dtype=object))
@@ -32,6 +32,11 @@ def concatenate_clips(clips: list[Motion], name: str, hold: int = HOLD_FRAMES, b
     first = clips[0]
     return Motion(np.concatenate(parts), fps=first.fps, name=name, hand_name=first.hand_name,
                   labels=np.concatenate(labels), meta={**first.meta, "clips": [c.name for c in clips]})
+
+
+def is_pose(clip: Motion) -> bool:
+    """A clip that holds one pose: a single key (a glTF key at 0 s and 1/30 s reads as 2 equal frames)."""
+    return bool(np.abs(clip.q_tbs - clip.q_tbs[:1]).max() < 1e-6)
 
 
 def _blend(start: np.ndarray, end: np.ndarray, n: int) -> np.ndarray:
