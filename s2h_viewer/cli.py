@@ -255,13 +255,15 @@ def _cmd_check(args: argparse.Namespace) -> int:
             positions = forward_kinematics(rig, torch.as_tensor(motion.q_tbs, dtype=torch.float64)).positions.numpy()
         peak = sideways_peak(positions)
         worst = np.nanmax([worst, peak.degrees]) if not np.isnan(peak.degrees) else worst
-        print(f"{label}: {motion.n_frames} frames; {peak.describe()}")
+        pose = motion.labels[peak.frame] if peak.frame >= 0 else ""
+        print(f"{label}: {motion.n_frames} frames; {peak.describe()}" + (f" (pose {pose!r})" if pose else ""))
         if args.joints:
             for joint, p in finger_peaks(positions).items():
                 print(f"    {joint:10s} " + ("does not curl" if np.isnan(p.degrees) else
                                              f"{p.degrees:4.0f} deg sideways at frame {p.frame}"))
     side = rig.meta.get("side", "right") if rig is not None else "right"
-    print(f"{args.file}: {side} hand, {len(names)} animation(s); worst sideways flexion at the tightest curls: "
+    what = f"{len(names)} animation(s)" if args.animation != "all" else "every animation as one clip"
+    print(f"{args.file}: {side} hand, {what}; worst sideways flexion at the tightest curls: "
           + ("none (no finger curls)" if np.isnan(worst) else f"{worst:.0f} deg") +
           " (0 = a clean curl toward the palm; authored clips of real avatars reach 8-22)")
     return 0

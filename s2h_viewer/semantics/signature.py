@@ -13,7 +13,7 @@ from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.kinematics import forward_kinematics
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.semantics.contacts import CONTACT_PAIRS, contact_gaps
-from s2h_viewer.semantics.flexion import flexion_and_sideways
+from s2h_viewer.semantics.flexion import HINGE_JOINTS, flexion_and_sideways
 
 #: a finger's curl (its MCP, PIP and DIP flexion summed, degrees) below which it reads extended, above
 #: which curled; a curl within `CURL_MARGIN` of the source's is kept whatever the words
@@ -36,6 +36,7 @@ class PoseSignature:
     curl: np.ndarray
     thumb_contacts: np.ndarray
     sideways: float
+    sideways_joint: str = ""  # the PIP/DIP bending the most sideways ("ring_dip"), "" if none flexes enough
 
     @property
     def states(self) -> list[str]:
@@ -64,8 +65,11 @@ def signatures(hand: HandModel, q_tbs: np.ndarray) -> list[PoseSignature]:
     curls = finger_curls(positions)
     flexion, sideways = flexion_and_sideways(positions)
     sideways = np.where(flexion >= SIDEWAYS_FLEXION, sideways, np.nan)
-    worst = np.where(np.isnan(sideways).all(axis=1), np.nan, np.nanmax(np.nan_to_num(sideways, nan=-1.0), axis=1))
-    return [PoseSignature(curls[t], contacts[t], float(worst[t])) for t in range(len(positions))]
+    none = np.isnan(sideways).all(axis=1)
+    which = np.argmax(np.nan_to_num(sideways, nan=-1.0), axis=1)
+    worst = np.where(none, np.nan, np.nan_to_num(sideways, nan=-1.0)[np.arange(len(which)), which])
+    return [PoseSignature(curls[t], contacts[t], float(worst[t]), "" if none[t] else HINGE_JOINTS[which[t]][0])
+            for t in range(len(positions))]
 
 
 def differences(source: PoseSignature, target: PoseSignature) -> list[str]:
@@ -79,7 +83,9 @@ def differences(source: PoseSignature, target: PoseSignature) -> list[str]:
             out.append(f"thumb-{topo.FINGERS[f + 1]} contact {'lost' if a else 'invented'}")
     limit = max(SIDEWAYS_LIMIT, (0.0 if np.isnan(source.sideways) else source.sideways) + 5.0)
     if target.sideways > limit:
-        out.append(f"a finger bends {target.sideways:.0f} deg sideways")
+        joint = target.sideways_joint.replace("_", " ").replace("pip", "PIP").replace("dip", "DIP")
+        source_deg = "no joint flexed enough" if np.isnan(source.sideways) else f"{source.sideways:.0f}"
+        out.append(f"{joint} bends {target.sideways:.0f} deg sideways (the source: {source_deg})")
     return out
 
 
