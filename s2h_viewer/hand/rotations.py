@@ -1,7 +1,7 @@
 """Rotation conversions on torch tensors, quaternions as (w, x, y, z) (DESIGN.md section 2).
 
 roma does the work (it uses (x, y, z, w)); these wrappers fix the project's scalar-first
-convention and ``w >= 0`` on output in one place.
+convention and ``w >= 0`` on output in one place. `slerp` works on numpy arrays of whole clips.
 
 TBS Euler angles, the official code's order (DESIGN.md section 2): intrinsic twist (x), then bend (y),
 then splay (z), i.e. ``R = Rx(twist) @ Ry(bend) @ Rz(splay)``, angles ordered (twist, bend, splay); a
@@ -10,8 +10,10 @@ positive bend about the bend axis (y) flexes the finger toward its pad side (-z)
 
 from __future__ import annotations
 
+import numpy as np
 import roma
 import torch
+from scipy.spatial.transform import Rotation
 
 _WXYZ_TO_XYZW = [1, 2, 3, 0]
 _XYZW_TO_WXYZ = [3, 0, 1, 2]
@@ -93,3 +95,11 @@ def tbs_euler_to_quat(angles: torch.Tensor) -> torch.Tensor:
 def quat_to_tbs_euler(q: torch.Tensor) -> torch.Tensor:
     """(..., 4) quaternions (w, x, y, z) -> (..., 3) angles (twist, bend, splay) in radians."""
     return matrix_to_tbs_euler(quat_to_matrix(q))
+
+
+def slerp(a: np.ndarray, b: np.ndarray, weight: np.ndarray) -> np.ndarray:
+    """(T, J, 4) per-joint slerp from ``a`` to ``b`` (T, J, 4; w, x, y, z) by ``weight`` (T,), float32."""
+    start = Rotation.from_quat(a.reshape(-1, 4).astype(np.float64), scalar_first=True)
+    end = Rotation.from_quat(b.reshape(-1, 4).astype(np.float64), scalar_first=True)
+    step = (start.inv() * end).as_rotvec() * np.repeat(weight, a.shape[-2])[:, None]
+    return (start * Rotation.from_rotvec(step)).as_quat(scalar_first=True).reshape(a.shape).astype(np.float32)

@@ -4,10 +4,9 @@ with its name, so a set of authored poses is one evaluation clip (`s2h evaluate 
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation, Slerp
 
-from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.motion import Motion
+from s2h_viewer.hand.rotations import slerp
 
 #: frames a one-key pose is held for (windowed methods see it as a held pose, not a one-frame flash)
 HOLD_FRAMES = 12
@@ -42,8 +41,4 @@ def is_pose(clip: Motion) -> bool:
 def _blend(start: np.ndarray, end: np.ndarray, n: int) -> np.ndarray:
     """(n, 15, 4) rotations strictly between ``start`` and ``end`` (15, 4), by slerp per joint."""
     t = np.arange(1, n + 1) / (n + 1)
-    out = np.empty((n, topo.N_ARTICULATED, 4), dtype=np.float32)
-    for j in range(topo.N_ARTICULATED):
-        pair = Rotation.from_quat(np.stack([start[j], end[j]]).astype(np.float64), scalar_first=True)
-        out[:, j] = Slerp([0.0, 1.0], pair)(t).as_quat(scalar_first=True)
-    return out
+    return slerp(np.broadcast_to(start, (n, *start.shape)), np.broadcast_to(end, (n, *end.shape)), t)

@@ -13,10 +13,9 @@ the method can check itself against at run time, frame by frame, with the signat
 from __future__ import annotations
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
-from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
+from s2h_viewer.hand.rotations import slerp
 from s2h_viewer.semantics.signature import loss_masks
 
 #: frames either side of a guarded frame over which the blend fades in and out
@@ -56,11 +55,3 @@ def fade(frames: np.ndarray, reach: int) -> np.ndarray:
         before = (nearest - 1).clip(0)
         distance = np.minimum(np.abs(index - hits[nearest]), np.abs(index - hits[before]))
     return np.clip(1.0 - distance / (reach + 1), 0.0, 1.0)
-
-
-def slerp(a: np.ndarray, b: np.ndarray, weight: np.ndarray) -> np.ndarray:
-    """(T, 15, 4) per-joint slerp from ``a`` to ``b`` (T, 15, 4; w, x, y, z) by ``weight`` (T,)."""
-    start = Rotation.from_quat(a.reshape(-1, 4).astype(np.float64), scalar_first=True)
-    end = Rotation.from_quat(b.reshape(-1, 4).astype(np.float64), scalar_first=True)
-    step = (start.inv() * end).as_rotvec() * np.repeat(weight, topo.N_ARTICULATED)[:, None]
-    return (start * Rotation.from_rotvec(step)).as_quat(scalar_first=True).reshape(a.shape).astype(np.float32)
