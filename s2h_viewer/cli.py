@@ -25,6 +25,8 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
         motion, rig = load_motion_file(path, performer, options=_rig_options(args))
         if rig is not None:
             hands[motion.hand_name] = rig
+        elif motion.hand_name not in hands:
+            hands[motion.hand_name] = samples.sample_performer(motion, path)  # names the file where it is none
         motions.append(motion)
 
     targets = args.target or samples.hand_names("test")
@@ -80,7 +82,7 @@ def _render_comparison(args: argparse.Namespace) -> int:
                        f"one --frame")
     else:
         frames = frame_range(motion.n_frames, args.frame or 0, args.frame or 0, clip=args.motion)  # the one frame
-    source = rig or samples.load_sample_hand(motion.hand_name)
+    source = rig or samples.sample_performer(motion, args.motion)
     targets = [load_hand_file(t, _rig_options(args)) for t in (args.target or ["iris", "laurel"])]
     methods = (args.methods or "tbs_copy,asrn").split(",")
     with _progress_bar("retarget", len(targets) * len(methods), "retarget", disable=args.quiet):
@@ -140,7 +142,8 @@ def _rig_options(args: argparse.Namespace):
     from s2h_viewer.io.files import RigOptions
 
     return RigOptions(side=args.side, scheme=args.scheme, joint_map=args.joint_map,
-                      animation=getattr(args, "animation", None), fps=getattr(args, "fps", None))
+                      animation=getattr(args, "animation", None), fps=getattr(args, "fps", None),
+                      unit=getattr(args, "unit", None))
 
 
 def _cmd_rig(args: argparse.Namespace) -> int:
@@ -148,7 +151,8 @@ def _cmd_rig(args: argparse.Namespace) -> int:
     from s2h_viewer.errors import TooFewBonesError, UnrecognisedRigError
     from s2h_viewer.hand import topology as topo
     from s2h_viewer.io.files import (GLTF_FAMILY, joint_map_sidecar, joint_map_template, joint_map_template_path,
-                                     list_animations, recognise_file, save_joint_map)
+                                     list_animations, recognise_file, rig_unit, save_joint_map)
+    from s2h_viewer.io.units import UNIT_NAMES
 
     path = Path(args.file)
     try:
@@ -156,12 +160,13 @@ def _cmd_rig(args: argparse.Namespace) -> int:
     except TooFewBonesError:
         raise  # no joint map can make it a hand: no template
     except UnrecognisedRigError as exc:
-        template = save_joint_map(path, joint_map_template(path, args.side),
+        side = args.side or "right"
+        template = save_joint_map(path, joint_map_template(path, args.side), side,
                                   args.template or joint_map_template_path(path))
         print(f"s2h: error: {exc}", file=sys.stderr)
         print(f"wrote {template}: fill in the empty joints (bone names of {path.name}), then save it as "
-              f"{joint_map_sidecar(path).name} beside the file (picked up there) or pass it with --joint-map; "
-              f"nothing reads the template itself")
+              f"{joint_map_sidecar(path, side).name} beside the file (the {side} hand's map, picked up there) or "
+              f"pass it with --joint-map; nothing reads the template itself")
         return 2
     print(f"{path}: {mapping.scheme} scheme, {mapping.side} hand (side from {mapping.side_from}), "
           f"confidence {mapping.confidence:.2f}")
@@ -169,6 +174,9 @@ def _cmd_rig(args: argparse.Namespace) -> int:
         bones = [mapping.joints.get(f"{f}_{lv}", "(extrapolated)") for lv in topo.FINGER_LEVELS[f]]
         print(f"  {f:6s} {' > '.join(bones)}")
     print(f"  wrist  {mapping.joints['wrist']}")
+    unit = rig_unit(path, mapping, _rig_options(args))
+    print(f"  unit   {UNIT_NAMES[unit.unit]} (from {unit.decided_by}"
+          + (", unsure: check it or pass --unit)" if not unit.sure else ")"))
     if mapping.palm_bones:
         print(f"  palm bones (their skin moves with the wrist): {', '.join(mapping.palm_bones)}")
     for note in mapping.notes:
@@ -185,7 +193,7 @@ def _cmd_annotate(args: argparse.Namespace) -> int:
     from s2h_viewer import samples
     from s2h_viewer.annotate.report import annotation_report
     from s2h_viewer.annotate.solver import solve_tbs_frames
-    from s2h_viewer.io.annotation import Annotation, save_annotation
+    from s2h_viewer.io.annotation import Annotation, hand_side, save_annotation
     from s2h_viewer.io.files import load_hand_file
 
     names = args.hands or samples.hand_names("test")
@@ -198,7 +206,7 @@ def _cmd_annotate(args: argparse.Namespace) -> int:
         if args.save:
             path = samples.ASSETS_DIR / "hands" / f"{name}.npz" if Path(name).suffix == "" else Path(name)
             written = save_annotation(Annotation(solution.frames, ["solver"] * len(solution.frames),
-                                                 solution.confidence, solution.diagnostics), path)
+                                                 solution.confidence, solution.diagnostics), path, hand_side(hand))
             print(f"wrote {written}")
     print(annotation_report(results, against_truth=args.report))
     return 0
@@ -212,16 +220,19 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
     motion, rig = load_motion_file(args.motion, options=options)
     source = load_hand_file(args.source, options) if args.source else rig
     if source is None:
-        from s2h_viewer.samples import load_sample_hand
-        source = load_sample_hand(motion.hand_name)
+        from s2h_viewer.samples import sample_performer
+        source = sample_performer(motion, args.motion)
     target = load_hand_file(args.target, options)
+    for hand, path in ((source, args.source or args.motion), (target, args.target)):
+        if hand.meta.get("unit_note"):
+            print(f"{path}: {hand.meta['unit_note']}")
     if motion.fit is not None:
         print(f"{args.motion}: {motion.fit.describe()}")
     with _progress_bar(f"retarget ({args.method})", motion.n_frames, "frame",
                        disable=args.quiet or None):  # None: no bar when not on a terminal
         retargeted = retarget(motion, source, target, args.method)
     path = save_motion_file(args.out, retargeted, target)
-    sidecar = export_sidecar(path)
+    sidecar = export_sidecar(path, target)
     print(f"{motion.name}: {motion.n_frames} frames, {source.name} -> {target.name} ({args.method}) -> {path}"
           + (f" (TBS frames: {sidecar})" if sidecar else ""))
     return 0
@@ -233,7 +244,9 @@ def _cmd_check(args: argparse.Namespace) -> int:
     import torch
 
     from s2h_viewer.hand.kinematics import forward_kinematics
-    from s2h_viewer.io.files import RigOptions, list_animations, load_motion_file
+    from dataclasses import replace
+
+    from s2h_viewer.io.files import list_animations, load_motion_file
     from s2h_viewer.semantics.flexion import finger_peaks, sideways_peak
 
     options = _rig_options(args)
@@ -245,12 +258,11 @@ def _cmd_check(args: argparse.Namespace) -> int:
     rig = None
     worst = float("nan")
     for index, label in enumerate(names):
-        chosen = RigOptions(options.side, options.scheme, options.joint_map,
-                            index if args.animation is None else args.animation, options.fps)
+        chosen = replace(options, animation=index if args.animation is None else args.animation)
         motion, rig = load_motion_file(args.file, rig, chosen)
         if rig is None:
-            from s2h_viewer.samples import load_sample_hand
-            rig = load_sample_hand(motion.hand_name)
+            from s2h_viewer.samples import sample_performer
+            rig = sample_performer(motion, args.file)
         with torch.no_grad():
             positions = forward_kinematics(rig, torch.as_tensor(motion.q_tbs, dtype=torch.float64)).positions.numpy()
         peak = sideways_peak(positions)
@@ -277,7 +289,7 @@ def _cmd_batch(args: argparse.Namespace) -> int:
         raise BatchUsageError(f"--workers {args.workers}: at least one worker is needed")
 
     config = BatchConfig(args.motions, args.targets, [m for m in args.methods.split(",") if m], args.out,
-                         TaskOptions(format=args.format, side=args.side, render=args.pictures),
+                         TaskOptions(format=args.format, side=args.side, render=args.pictures, unit=args.unit),
                          scheduler=args.scheduler, workers=args.workers)
     result = run_batch(config, show_progress=False if args.quiet else None)
     ok = sum(r["status"] == "ok" for r in result.rows)
@@ -299,12 +311,12 @@ def _cmd_batch(args: argparse.Namespace) -> int:
 def _cmd_view(args: argparse.Namespace) -> int:
     from s2h_viewer.app.main_window import CompareSetup, default_setup, run
     from s2h_viewer.io.files import load_hand_file, load_motion_file
-    from s2h_viewer.samples import load_sample_hand
+    from s2h_viewer.samples import sample_performer
 
     setup = default_setup()
     if args.motion:
         motion, rig = load_motion_file(args.motion, options=_rig_options(args))
-        setup = CompareSetup(motion, rig or load_sample_hand(motion.hand_name), setup.targets)
+        setup = CompareSetup(motion, rig or sample_performer(motion, args.motion), setup.targets)
     if args.target:
         setup.targets = [load_hand_file(t, _rig_options(args)) for t in args.target]
     if args.methods:
@@ -316,17 +328,21 @@ def _cmd_view(args: argparse.Namespace) -> int:
 
 def _add_rig_options(parser: argparse.ArgumentParser) -> None:
     from s2h_viewer.hand.rig_mapping import SCHEMES, SIDES
+    from s2h_viewer.io.units import UNITS
 
     parser.add_argument("--side", choices=SIDES, help="which hand of a character, or override the side a lone "
                                                        "hand's names or geometry give (default: detect)")
     parser.add_argument("--scheme", choices=list(SCHEMES), help="joint naming scheme (default: detect)")
     parser.add_argument("--joint-map", help='JSON file {"wrist": "<bone>", "index_mcp": "<bone>", ...} (default: '
-                                            "<stem>.joints.json beside each hand file, if there)")
+                                            "<stem>.<side>.joints.json beside each hand file, if there)")
     parser.add_argument("--animation", help="which animation (glTF) or take (FBX) of a motion file: name or index "
                                             "(default: the first; `s2h rig FILE` lists them), or `all`: every one in turn, "
                                             "one clip labelled by animation (a pose library)")
     parser.add_argument("--fps", type=float, help="frame rate of a tracking recording that does not say it "
                                                   "(keypoint .npy/.npz; default 30), or to override its own")
+    parser.add_argument("--unit", choices=list(UNITS), help="length unit of the rig and motion files (default: "
+                                                            "the format's where the hand's size fits it, else "
+                                                            "guessed from the size, and said)")
 
 
 def _cmd_gestures(args: argparse.Namespace) -> int:
@@ -344,6 +360,8 @@ def _add_debug(parser: argparse.ArgumentParser, default=False) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from s2h_viewer.io.units import UNITS
+
     parser = argparse.ArgumentParser(prog="s2h", description="Transfer hand motion semantics between avatars.")
     _add_debug(parser)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -395,7 +413,7 @@ def build_parser() -> argparse.ArgumentParser:
     an.add_argument("hands", nargs="*", help="hand files (.glb .gltf .fbx .npz) or sample names (default: test split)")
     an.add_argument("--report", action="store_true", help="compare with the ground-truth frames of procedural "
                                                            "hands: mean/max angle error per finger")
-    an.add_argument("--save", action="store_true", help="write each hand's annotation sidecar (<stem>.tbs.json)")
+    an.add_argument("--save", action="store_true", help="write each hand's annotation sidecar (<stem>.<side>.tbs.json)")
     _add_rig_options(an)
     an.set_defaults(func=_cmd_annotate)
 
@@ -429,6 +447,8 @@ def build_parser() -> argparse.ArgumentParser:
     bt.add_argument("--no-pictures", dest="pictures", action="store_false",
                     help="skip the worst frame's picture of each task (faster; the report has none)")
     bt.add_argument("--side", choices=["right", "left"], help="which hand of full-body characters (default: detect)")
+    bt.add_argument("--unit", choices=list(UNITS), help="length unit of every rig and motion file (default: the "
+                                                        "format's, else guessed from the hand's size)")
     bt.add_argument("--quiet", action="store_true", help="no progress bar")
     bt.set_defaults(func=_cmd_batch)
 

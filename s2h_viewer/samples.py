@@ -36,6 +36,16 @@ def load_sample_hand(name: str) -> HandModel:
     raise KeyError(f"no sample hand {name!r}; have {', '.join(hand_names())}")
 
 
+def sample_performer(motion: Motion, motion_file: str | Path) -> HandModel:
+    """The shipped sample hand a motion without a rig of its own (an npz) is posed on, by its ``hand_name``; an
+    `InputFileError` naming ``motion_file`` where no sample hand has that name."""
+    try:
+        return load_sample_hand(motion.hand_name)
+    except KeyError:
+        raise InputFileError(motion_file, f"is posed on the hand {motion.hand_name!r}, not a shipped sample hand "
+                                          f"({', '.join(hand_names())}): name its hand with --source") from None
+
+
 def load_sample_hands(split: str = "all") -> list[HandModel]:
     return [load_sample_hand(n) for n in hand_names(split)]
 

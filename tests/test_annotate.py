@@ -71,10 +71,10 @@ def test_sidecar_round_trip_is_loaded_with_the_hand_and_pinned_to_its_file(tmp_p
     frames[j] = (np.eye(3) + np.sin(angle) * k + (1 - np.cos(angle)) * k @ k) @ frames[j]
     set_by = ["solver"] * topo.N_ARTICULATED
     set_by[j] = "manual"
-    path = save_annotation(Annotation(frames, set_by, np.ones(topo.N_ARTICULATED)), glb)
-    assert path == sidecar_path(glb) and path.name == "hand.tbs.json"
+    path = save_annotation(Annotation(frames, set_by, np.ones(topo.N_ARTICULATED)), glb, "right")
+    assert path == sidecar_path(glb, "right") and path.name == "hand.right.tbs.json"
     document = json.loads(path.read_text())
-    assert document["schema"] == "s2h-tbs-annotation" and document["version"] == 1
+    assert document["schema"] == "s2h-tbs-annotation" and document["version"] == 2 and document["side"] == "right"
     assert document["joints"]["index_mcp"]["set_by"] == "manual"
     annotated = load_gltf_hand(glb)
     assert annotated.meta["annotation"] == "sidecar"
@@ -83,8 +83,8 @@ def test_sidecar_round_trip_is_loaded_with_the_hand_and_pinned_to_its_file(tmp_p
     data = bytearray(glb.read_bytes())
     data[-1] ^= 0xFF
     glb.write_bytes(bytes(data))
-    with pytest.raises(InputFileError, match=r"hand\.tbs\.json: was made for a different version of hand\.glb"):
-        load_annotation(glb)
+    with pytest.raises(InputFileError, match=r"hand\.right\.tbs\.json: was made for a different version of hand\.glb"):
+        load_annotation(glb, "right")
 
 
 @pytest.mark.parametrize("edit,message", [
@@ -97,15 +97,15 @@ def test_damaged_sidecars_give_clear_errors(sample_hands, tmp_path, edit, messag
     hand_file = tmp_path / "h.npz"
     hand_file.write_bytes(b"hand")
     hand = sample_hands["iris"]
-    path = save_annotation(Annotation(hand.rest_frames, ["solver"] * 15, np.ones(15)), hand_file)
+    path = save_annotation(Annotation(hand.rest_frames, ["solver"] * 15, np.ones(15)), hand_file, "right")
     document = json.loads(path.read_text())
     edit(document)
     path.write_text(json.dumps(document))
     with pytest.raises(InputFileError, match=message):
-        load_annotation(hand_file)
+        load_annotation(hand_file, "right")
     path.write_text("{not json")
-    with pytest.raises(InputFileError, match=r"h\.tbs\.json: not valid JSON"):
-        load_annotation(hand_file)
+    with pytest.raises(InputFileError, match=r"h\.right\.tbs\.json: not valid JSON"):
+        load_annotation(hand_file, "right")
 
 
 def test_a_session_opens_with_the_sidecars_set_by_and_confidence_and_keeps_manual_frames_on_request(tmp_path):
@@ -118,8 +118,8 @@ def test_a_session_opens_with_the_sidecars_set_by_and_confidence_and_keeps_manua
     fresh.frames[2] = rotate_about_twist(fresh.frames[2], 35.0)
     fresh.set_by[2] = "manual"
     fresh.confidence[5] = np.nan  # a frame nobody scored is written as null and read back as NaN
-    save_annotation(fresh.annotation(), glb)
-    assert json.loads(sidecar_path(glb).read_text())["joints"][topo.ARTICULATED_NAMES[5]]["confidence"] is None
+    save_annotation(fresh.annotation(), glb, "right")
+    assert json.loads(sidecar_path(glb, "right").read_text())["joints"][topo.ARTICULATED_NAMES[5]]["confidence"] is None
 
     reopened = AnnotationSession.open(load_gltf_hand(glb), glb)
     assert reopened.frames_from == "sidecar" and reopened.set_by == fresh.set_by

@@ -196,7 +196,7 @@ def test_second_hand_replaces_the_first_and_a_sidecar_brings_back_who_set_each_f
     window.annotate_view.select(6)
     window.annotate_view.turn_selected(25)
     saved_frames = first.frames.copy()
-    assert window.save_annotation().name == "hand.tbs.json"
+    assert window.save_annotation().name == "hand.right.tbs.json"
 
     iris = ASSETS_DIR / "hands" / "iris.npz"
     window.annotate_file(str(iris))  # saved: no question; the list is iris's now
@@ -263,7 +263,7 @@ def edit_a_frame(window, joint: int = 5, degrees: int = -20) -> np.ndarray:
 def test_unsaved_edits_are_asked_about_before_another_hand_or_quitting(window, qtbot, hand_file, tmp_path):
     window.annotate_file(str(hand_file))
     edited = edit_a_frame(window)
-    sidecar = tmp_path / "hand.tbs.json"
+    sidecar = tmp_path / "hand.right.tbs.json"
     buttons: list[str] = []
     asked = answer((QMessageBox, lambda box: (buttons.extend(b.text() for b in box.buttons()),
                                               click("Cancel")[1](box))))
@@ -300,15 +300,15 @@ def test_save_as_writes_where_the_user_chooses(window, qtbot, hand_file, tmp_pat
                       if a.text() == "Save annotation as...")
     offered = answer(choose_file(None))  # Annotate > Save annotation as..., the file dialog cancelled
     menu_entry.trigger()
-    assert offered == [str(tmp_path / "hand.tbs.json")]  # in the sidecar's folder, the sidecar's name
+    assert offered == [str(tmp_path / "hand.right.tbs.json")]  # in the sidecar's folder, the sidecar's name
     assert window.isWindowModified() and sorted(p.name for p in tmp_path.iterdir()) == ["hand.glb", "settings.ini"]
 
     chosen = tmp_path / "elsewhere" / "mine.tbs.json"
     chosen.parent.mkdir()
     asked = answer(click("Save As..."), choose_file(chosen))
     assert window.close() and not window.isVisible()  # saved, then quit
-    assert len(asked) == 2 and asked[1] == str(tmp_path / "hand.tbs.json")
-    assert not (tmp_path / "hand.tbs.json").exists()
+    assert len(asked) == 2 and asked[1] == str(tmp_path / "hand.right.tbs.json")
+    assert not (tmp_path / "hand.right.tbs.json").exists()
     document = json.loads(chosen.read_text())
     assert document["hand_file"] == "hand.glb" and document["joints"][topo.ARTICULATED_NAMES[5]]["set_by"] == "manual"
     np.testing.assert_allclose(document["joints"][topo.ARTICULATED_NAMES[5]]["frame"], edited, atol=1e-7)
@@ -319,22 +319,23 @@ def test_a_save_that_fails_says_where_and_why_and_loses_nothing(window, qtbot, h
     edited = edit_a_frame(window)
     not_a_folder = tmp_path / "notes.txt"
     not_a_folder.write_text("a file, not a folder")
-    inside = not_a_folder / "hand.tbs.json"
+    inside = not_a_folder / "hand.right.tbs.json"
     asked = answer(click("Save As..."), choose_file(inside), click("OK"))
     assert not window.close() and window.isVisible()
     assert len(asked) == 3 and asked[2].startswith(f"{inside}: could not save the annotation")
     assert f"Not a directory: {not_a_folder}" in asked[2]
 
-    (tmp_path / "hand.tbs.json").mkdir()  # where Save writes is a folder
+    (tmp_path / "hand.right.tbs.json").mkdir()  # where Save writes is a folder
     answer(click("Save"), click("OK"), shown=asked)
     window.annotate_file(IRIS)
-    assert len(asked) == 5 and asked[4].startswith(f"{tmp_path / 'hand.tbs.json'}: could not save the annotation")
+    assert len(asked) == 5 and asked[4].startswith(f"{tmp_path / 'hand.right.tbs.json'}: could not save the annotation")
     assert "Is a directory" in asked[4]
     # nothing lost: the hand, its edit and the undo history are there, no file (or half a file) was written
     assert window.annotation.hand.name == "hand" and window.isWindowModified() and window.undo_stack.count() == 1
     np.testing.assert_allclose(window.annotation.frames[5], edited)
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["hand.glb", "hand.tbs.json", "notes.txt", "settings.ini"]
-    assert not any((tmp_path / "hand.tbs.json").iterdir()) and not_a_folder.read_text() == "a file, not a folder"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["hand.glb", "hand.right.tbs.json", "notes.txt",
+                                                          "settings.ini"]
+    assert not any((tmp_path / "hand.right.tbs.json").iterdir()) and not_a_folder.read_text() == "a file, not a folder"
 
 
 def test_shortcuts_work_again_once_a_dialog_closes(window, qtbot, hand_file):
@@ -514,7 +515,7 @@ def test_an_unrecognised_hand_is_mapped_in_the_dialog_opened_and_its_map_saved(w
     seen: dict = {}
     asked = answer(click("Map the bones..."), map_the_index(joint_map, seen))
     window.annotate_file(str(path))
-    assert "renamed.glb: s2h does not recognise its hand" in asked[0] and "renamed.joints.json" in asked[0]
+    assert "renamed.glb: s2h does not recognise its hand" in asked[0] and "renamed.right.joints.json" in asked[0]
     assert "--joint-map" not in asked[0] and asked[1] == "Map the bones of renamed.glb"
     # prefilled with what the names give: all but the index finger; OK only once the index is mapped
     assert seen["prefilled"] == {j: b for j, b in joint_map.items() if not j.startswith("index")}
@@ -524,7 +525,7 @@ def test_an_unrecognised_hand_is_mapped_in_the_dialog_opened_and_its_map_saved(w
     hand = window.annotation.hand
     assert hand.name == "renamed" and hand.meta["rig_scheme"] == "user"
     np.testing.assert_allclose(hand.rest_positions, load_hand_file(WEBXR).rest_positions, atol=1e-9)
-    assert json.loads(path.with_name("renamed.joints.json").read_text()) == joint_map
+    assert json.loads(path.with_name("renamed.right.joints.json").read_text()) == joint_map
     window.annotate_file(str(path))  # opened again: the saved map, no question (one would block here)
     assert len(asked) == 2 and window.annotation.hand.meta["rig_scheme"] == "user"
 
@@ -551,8 +552,8 @@ def test_a_four_finger_hand_is_refused_without_offering_a_joint_map(window, qtbo
 
 def test_open_hand_with_joint_map_edits_the_saved_map(window, qtbot, renamed_hand):
     path, joint_map = renamed_hand
-    path.with_name("renamed.joints.json").write_text(json.dumps({**joint_map, "index_pip": "pointer-phalanx-distal",
-                                                                 "index_dip": "pointer-phalanx-intermediate"}))
+    swapped = {**joint_map, "index_pip": "pointer-phalanx-distal", "index_dip": "pointer-phalanx-intermediate"}
+    path.with_name("renamed.right.joints.json").write_text(json.dumps(swapped))
     entry = next(a for m in window.menuBar().actions() if m.text() == "&Annotate" for a in m.menu().actions()
                  if a.text() == "Open hand with joint map...")
     filters: list[str] = []
@@ -563,5 +564,5 @@ def test_open_hand_with_joint_map_edits_the_saved_map(window, qtbot, renamed_han
     answer(map_the_index(joint_map, seen))
     window.annotate_file(str(path), map_joints=True)  # the file chosen
     assert seen["prefilled"]["index_pip"] == "pointer-phalanx-distal" and seen["ok_at_first"]  # the saved map
-    assert json.loads(path.with_name("renamed.joints.json").read_text()) == joint_map
+    assert json.loads(path.with_name("renamed.right.joints.json").read_text()) == joint_map
     np.testing.assert_allclose(window.annotation.hand.rest_positions, load_hand_file(WEBXR).rest_positions, atol=1e-9)

@@ -58,7 +58,8 @@ def test_export_retargeted_motion_and_a_bad_file_gives_a_dialog(window, tmp_path
     out = window.export_motion(str(tmp_path / "on_iris.bvh"))
     assert out.exists() and out.read_text().startswith("HIERARCHY")
     message = window.statusBar().currentMessage()  # the status names both files the export wrote
-    assert message == f"wrote {out} and its TBS frames on_iris.bvh.tbs.json" and (tmp_path / "on_iris.bvh.tbs.json").is_file()
+    assert message == f"wrote {out} and its TBS frames on_iris.bvh.right.tbs.json"
+    assert (tmp_path / "on_iris.bvh.right.tbs.json").is_file()
     window.export_motion(str(tmp_path / "on_iris.npz"))
     assert window.statusBar().currentMessage() == f"wrote {tmp_path / 'on_iris.npz'}"
     shown = []
@@ -102,7 +103,7 @@ def test_add_target_with_unrecognised_bones_maps_them_in_the_dialog(window, qtbo
     assert prefilled == [{}]
     assert [t.name for t in window.setup.targets] == ["iris", "anon"]
     assert {r.target.name for r in window.comparison.results} == {"iris", "anon"}
-    assert json.loads((tmp_path / "anon.joints.json").read_text()) == joint_map
+    assert json.loads((tmp_path / "anon.right.joints.json").read_text()) == joint_map
 
 
 def test_annotation_mode_solve_turn_undo_save(window, qtbot, tmp_path):
@@ -132,8 +133,8 @@ def test_annotation_mode_solve_turn_undo_save(window, qtbot, tmp_path):
     assert session.set_by[4] == "solver"
     window.undo_stack.redo()
     path = window.save_annotation()
-    saved = load_annotation(glb)
-    assert path.name == "hand.tbs.json" and saved.set_by[4] == "manual"
+    saved = load_annotation(glb, "right")
+    assert path.name == "hand.right.tbs.json" and saved.set_by[4] == "manual"
     np.testing.assert_allclose(saved.frames[4], session.frames[4], atol=1e-7)
 
 

@@ -241,7 +241,10 @@ def test_ctrl_c_stops_the_cluster_keeps_what_finished_and_leaves_no_partial_file
 
 def test_a_rig_recognised_with_low_confidence_is_flagged_in_its_row(tmp_path):
     from s2h_viewer.batch.task import run_task
-    oculus = str(ASSETS_DIR / "hands" / "real" / "r_hand_skeletal_lowres.fbx")  # names read by topology alone
+    from wild_rigs import meta_hand_skeleton, write_gltf_skeleton
+    names, parents, positions = meta_hand_skeleton(ASSETS_DIR / "hands" / "real" / "r_hand_skeletal_lowres.fbx")
+    anonymous = [n if n.endswith("_marker") else f"Bone{i:03d}" for i, n in enumerate(names)]  # by topology alone
+    oculus = str(write_gltf_skeleton(tmp_path / "anonymous_hand.gltf", anonymous, parents, positions))
     low, good = (run_task(task) for task in plan_batch([COUNTING], [oculus, "iris"], ["tbs_copy"], tmp_path,
                                                       TaskOptions(format="npz", render=False), tuple(METHODS)))
     assert low["status"] == "ok" and good["status"] == "ok" and good["warning"] == ""

@@ -57,7 +57,7 @@ def originals(tmp_path_factory) -> dict[str, Path]:
     hand_copy.write_bytes(WEBXR.read_bytes())
     solution = solve_tbs_frames(webxr)
     sidecar = save_annotation(Annotation(solution.frames, ["solver"] * 15, solution.confidence, ["a note"]),
-                              hand_copy)
+                              hand_copy, "right")
     valid_sidecar = folder / "valid.tbs.json"
     valid_sidecar.write_bytes(sidecar.read_bytes())
     recording = synthetic_recording(samples.load_sample_hand("iris"), short, noise_mm=2.0, lost=0.1, seed=1)
@@ -98,7 +98,7 @@ def _fuzz_readers(originals: dict[str, Path], folder: Path, seed: int, scale: in
             if reader == "sidecar":
                 what, data = mutate_json(source, rng)
                 hand_file = originals["annotated hand"]
-                damaged = sidecar_path(hand_file)
+                damaged = sidecar_path(hand_file, "right")
                 damaged.write_bytes(data)
                 outcome, detail = classify(lambda: load_hand_file(hand_file), damaged)
             elif reader == "joint map":

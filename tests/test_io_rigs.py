@@ -21,7 +21,7 @@ from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.hand.kinematics import forward_kinematics
 from s2h_viewer.hand.rig_mapping import SCHEMES, map_rig
-from s2h_viewer.io.annotation import Annotation, save_annotation, sidecar_path
+from s2h_viewer.io.annotation import Annotation, hand_side, save_annotation, sidecar_path
 from s2h_viewer.io.bvh import load_bvh, save_bvh
 from s2h_viewer.io.fbx import load_fbx_hand, load_fbx_motion
 from s2h_viewer.io.files import EXPORT_SUFFIXES, export_sidecar, load_hand_file, load_motion_file, save_motion_file
@@ -144,7 +144,9 @@ def _hand_with_frames_of_its_own(target: str, sample_hands, folder) -> HandModel
     folder.mkdir()
     shutil.copy(ASSETS_DIR / "hands" / target, rig)
     turn = Rotation.from_euler("x", 5.0, degrees=True).as_matrix()
-    save_annotation(Annotation(load_hand_file(rig).rest_frames @ turn, ["manual"] * 15, np.full(15, np.nan)), rig)
+    solved = load_hand_file(rig)
+    save_annotation(Annotation(solved.rest_frames @ turn, ["manual"] * 15, np.full(15, np.nan)), rig,
+                    hand_side(solved))
     hand = load_hand_file(rig)
     assert hand.meta["annotation"] == "sidecar"
     return hand
@@ -172,10 +174,10 @@ def test_export_sidecar_names_the_frames_file_each_export_writes(suffix, sample_
     from s2h_viewer.io.annotation import load_annotation
     path = save_motion_file(tmp_path / f"clip{suffix}", gestures, sample_hands[gestures.hand_name])
     written = sorted(p.name for p in tmp_path.iterdir() if p != path)
-    sidecar = export_sidecar(path)
+    sidecar = export_sidecar(path, sample_hands[gestures.hand_name])
     assert written == ([] if sidecar is None else [sidecar.name])
     if sidecar is not None:
-        assert load_annotation(path) is not None  # pinned to the file just written
+        assert load_annotation(path, "right") is not None  # pinned to the file just written
 
 
 def test_an_export_over_the_rigs_own_file_keeps_its_hand_set_frames_marked(sample_hands, gestures, tmp_path):
@@ -184,15 +186,15 @@ def test_an_export_over_the_rigs_own_file_keeps_its_hand_set_frames_marked(sampl
     from s2h_viewer.io.annotation import load_annotation
     hand = _hand_with_frames_of_its_own("webxr/generic-hand-right.glb", sample_hands, tmp_path / "rig")
     rig = tmp_path / "rig" / "generic-hand-right.glb"
-    before = load_annotation(rig)
+    before = load_annotation(rig, "right")
     motion = retarget(gestures, sample_hands[gestures.hand_name], hand, "tbs_copy")
     save_motion_file(rig, motion, hand)
-    after = load_annotation(rig)  # the hash of the new file: it was rewritten
+    after = load_annotation(rig, "right")  # the hash of the new file: it was rewritten
     assert after.set_by == ["manual"] * 15
     np.testing.assert_allclose(after.frames, before.frames, atol=1e-6)
     hand.rest_frames[3] = hand.rest_frames[3] @ Rotation.from_euler("x", 10.0, degrees=True).as_matrix()
     save_motion_file(rig, motion, hand)
-    assert load_annotation(rig).set_by == ["manual"] * 3 + ["solver"] + ["manual"] * 11
+    assert load_annotation(rig, "right").set_by == ["manual"] * 3 + ["solver"] + ["manual"] * 11
 
 
 @pytest.mark.parametrize("suffix", [".bvh", ".glb"])
@@ -213,28 +215,29 @@ def test_a_round_trip_retargets_onto_iris_as_the_direct_path(suffix, sample_hand
 
 def test_bvh_and_glb_exports_of_one_stem_keep_their_own_frames(sample_hands, gestures, tmp_path):
     """The viewer names both exports of a retarget alike (clip_target_method): the BVH's frames go to
-    ``<name>.bvh.tbs.json``, the GLB's to ``<stem>.tbs.json``, so both open, each with its frames."""
+    ``<name>.bvh.<side>.tbs.json``, the GLB's to ``<stem>.<side>.tbs.json``, so both open, each with its frames."""
     iris = sample_hands["iris"]
     motion = retarget(gestures, sample_hands[gestures.hand_name], iris, "tbs_copy")
     glb = save_gltf_motion(tmp_path / "gestures_iris_tbs_copy.glb", motion, iris)
     bvh = save_bvh(tmp_path / "gestures_iris_tbs_copy.bvh", motion, iris)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["gestures_iris_tbs_copy.bvh",
-                                                          "gestures_iris_tbs_copy.bvh.tbs.json",
+                                                          "gestures_iris_tbs_copy.bvh.right.tbs.json",
                                                           "gestures_iris_tbs_copy.glb",
-                                                          "gestures_iris_tbs_copy.tbs.json"]
+                                                          "gestures_iris_tbs_copy.right.tbs.json"]
     assert load_gltf_hand(glb).meta["annotation"] == "sidecar"
     assert load_bvh(bvh)[0].meta["annotation"] == "sidecar"
 
 
 def test_a_motion_export_never_overwrites_the_sidecar_of_another_file(sample_hands, gestures, tmp_path):
     """A GLB exported under the stem of the rig it was made for (``mixamo_right_hand.glb`` beside
-    ``mixamo_right_hand.fbx``) would take the rig's hand-made ``mixamo_right_hand.tbs.json``: refused,
+    ``mixamo_right_hand.fbx``) would take the rig's hand-made ``mixamo_right_hand.right.tbs.json``: refused,
     nothing written; a second export under its own earlier name replaces its own sidecar."""
     hand = _hand_with_frames_of_its_own("fbx/mixamo_right_hand.fbx", sample_hands, tmp_path / "rig")
-    sidecar = sidecar_path(hand.source)
+    sidecar = sidecar_path(hand.source, "right")
     kept = sidecar.read_bytes()
     motion = retarget(gestures, sample_hands[gestures.hand_name], hand, "tbs_copy")
-    with pytest.raises(InputFileError, match=r"mixamo_right_hand\.glb: would overwrite mixamo_right_hand\.tbs\.json, "
+    with pytest.raises(InputFileError, match=r"mixamo_right_hand\.glb: would overwrite "
+                                             r"mixamo_right_hand\.right\.tbs\.json, "
                                              r"the TBS frames of mixamo_right_hand\.fbx"):
         save_motion_file(tmp_path / "rig" / "mixamo_right_hand.glb", motion, hand)
     assert sidecar.read_bytes() == kept and not (tmp_path / "rig" / "mixamo_right_hand.glb").exists()
@@ -420,7 +423,7 @@ def test_cli_retarget_exports_onto_the_webxr_rig(tmp_path):
                            str(ASSETS_DIR / "motions" / "counting.npz"), "--target", str(tmp_path / "hand.glb"),
                            "--method", "tbs_copy", "--out", str(out)], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
-    assert done.stdout.strip().endswith(f"(TBS frames: {tmp_path / 'counting_on_webxr.tbs.json'})")
+    assert done.stdout.strip().endswith(f"(TBS frames: {tmp_path / 'counting_on_webxr.right.tbs.json'})")
     hand = load_gltf_hand(tmp_path / "hand.glb")
     motion = load_gltf_motion(out, hand)
     assert motion.n_frames == load_motion(ASSETS_DIR / "motions" / "counting.npz").n_frames

@@ -197,13 +197,14 @@ def test_a_joint_map_given_as_a_dict_loads_the_hand_the_names_give(renamed_webxr
 def test_a_saved_joint_map_is_the_sidecar_used_when_the_hand_is_opened_again(renamed_webxr):
     path, good = renamed_webxr
     stale = {**good, "index_mcp": "gone"}
-    assert save_joint_map(path, stale) == path.with_name("hand.joints.json")
+    assert save_joint_map(path, stale, "right") == path.with_name("hand.right.joints.json")
     suggested = suggested_joint_map(path)  # what the app's dialog starts from: the sidecar where it fits the rig
     assert suggested["index_mcp"] == "" and {j: b for j, b in suggested.items() if j != "index_mcp"} == {
         j: b for j, b in good.items() if j != "index_mcp"}
-    assert save_joint_map(path, good) == path.with_name("hand.joints.json")  # replaced whole, nothing left beside
-    assert json.loads(path.with_name("hand.joints.json").read_text()) == good
-    assert sorted(p.name for p in path.parent.iterdir()) == ["hand.glb", "hand.joints.json"]
+    # replaced whole, nothing left beside
+    assert save_joint_map(path, good, "right") == path.with_name("hand.right.joints.json")
+    assert json.loads(path.with_name("hand.right.joints.json").read_text()) == good
+    assert sorted(p.name for p in path.parent.iterdir()) == ["hand.glb", "hand.right.joints.json"]
     reopened = load_hand_file(path)
     assert reopened.meta["rig_scheme"] == "user"
     np.testing.assert_allclose(reopened.rest_positions, load_hand_file(WEBXR / "generic-hand-right.glb").rest_positions,

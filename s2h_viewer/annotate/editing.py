@@ -13,7 +13,7 @@ from scipy.spatial.transform import Rotation
 from s2h_viewer.annotate.solver import LOW_CONFIDENCE, TbsSolution, solve_tbs_frames
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
-from s2h_viewer.io.annotation import Annotation, load_annotation
+from s2h_viewer.io.annotation import Annotation, hand_side, load_annotation
 
 #: what a session's frames came from, per ``hand.meta["annotation"]`` (a hand file without it carries its frames)
 FROM_FILE = "the hand file"
@@ -79,7 +79,7 @@ class AnnotationSession:
         took the sidecar; the solver's confidence when the loader solved; else the file's own frames, unscored."""
         how = hand.meta.get("annotation")
         session = cls(hand, hand_file, frames_from=how or FROM_FILE)
-        saved = load_annotation(hand_file) if how == "sidecar" and hand_file is not None else None
+        saved = load_annotation(hand_file, hand_side(hand)) if how == "sidecar" and hand_file is not None else None
         if saved is not None:
             session.frames = saved.frames.copy()
             session.set_by = list(saved.set_by)
@@ -122,4 +122,5 @@ class AnnotationSession:
         self.frames_from = frames_from
 
     def annotation(self) -> Annotation:
-        return Annotation(self.frames.copy(), list(self.set_by), self.confidence.copy(), list(self.diagnostics))
+        return Annotation(self.frames.copy(), list(self.set_by), self.confidence.copy(), list(self.diagnostics),
+                          hand_side(self.hand))

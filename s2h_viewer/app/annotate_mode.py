@@ -17,7 +17,7 @@ from s2h_viewer.annotate.solver import TbsSolution, solve_tbs_frames
 from s2h_viewer.app.tasks import TaskRunner
 from s2h_viewer.errors import S2HError
 from s2h_viewer.hand import topology as topo
-from s2h_viewer.io.annotation import Annotation, save_annotation, sidecar_path
+from s2h_viewer.io.annotation import Annotation, hand_side, save_annotation, sidecar_path
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.retarget.progress import report
 from s2h_viewer.widgets.annotation_view import AnnotationView
@@ -136,10 +136,11 @@ class AnnotateMode(QObject):
         self.status(f"{hand.name}: frames from {session.frames_from}, {review} joint(s) to review")
 
     def sidecar(self) -> Path | None:
-        """Where Save writes: the sidecar beside the hand file, found there when the hand is opened again
-        (None for a sample hand opened by name: no file to put it beside)."""
+        """Where Save writes: the sidecar of this hand (its side) beside the hand file, found there when the
+        hand is opened again (None for a sample hand opened by name: no file to put it beside)."""
         hand_file = self.session.hand_file if self.session is not None else None
-        return sidecar_path(hand_file) if hand_file is not None and hand_file.suffix else None
+        return (sidecar_path(hand_file, hand_side(self.session.hand)) if hand_file is not None and hand_file.suffix
+                else None)
 
     def confirm_discard(self, doing: str) -> bool:
         """True when nothing unsaved would be lost by ``doing`` (e.g. "opening another hand"), or the user
@@ -221,7 +222,8 @@ class AnnotateMode(QObject):
             self.error("Open a hand file to annotate first; sample hands by name have no file to annotate.")
             return None
         try:
-            path = save_annotation(self.session.annotation(), self.session.hand_file, target)
+            session = self.session
+            path = save_annotation(session.annotation(), session.hand_file, hand_side(session.hand), target)
         except OSError as exc:
             self.error(f"{target}: could not save the annotation ({os_problem(exc, target)})")
             return None

@@ -377,7 +377,8 @@ class MainWindow(QMainWindow):
                      [("Map the bones...", QMessageBox.ButtonRole.AcceptRole),
                       ("Cancel", QMessageBox.ButtonRole.RejectRole)],
                      f"{finding}.\n\nMap the bones to the hand's joints yourself? The map is saved beside the file "
-                     f"({joint_map_sidecar(path).name}) and used whenever the hand is opened again.")
+                     f"({joint_map_sidecar(path, 'right').name}, or .left. for a left hand) and used whenever the "
+                     f"hand is opened again.")
         if choice != 0:
             self.statusBar().showMessage(f"{Path(path).name}: not opened (its bones not mapped)", 5000)
             return None
@@ -386,6 +387,7 @@ class MainWindow(QMainWindow):
     def _map_and_load(self, path: str, finding: str = "") -> HandModel | None:
         """The hand in ``path`` with the joint map the user makes in the dialog (prefilled with the file's saved
         map and what its names say), the map then saved beside the file; None if cancelled or failed (shown)."""
+        from s2h_viewer.io.annotation import hand_side
         from s2h_viewer.io.files import (RigOptions, joint_map_sidecar, load_hand_file, read_rig_skeleton,
                                          save_joint_map, suggested_joint_map)
         from s2h_viewer.widgets.joint_map_dialog import JointMapDialog
@@ -397,9 +399,10 @@ class MainWindow(QMainWindow):
             return None
         mapping = dialog.mapping()
         hand = load_hand_file(path, RigOptions(joint_map=mapping))
-        sidecar = joint_map_sidecar(path)
+        side = hand_side(hand)
+        sidecar = joint_map_sidecar(path, side)
         try:
-            save_joint_map(path, mapping)
+            save_joint_map(path, mapping, side)
         except OSError as exc:
             self.error(f"{sidecar}: could not save the joint map ({os_problem(exc, sidecar)}); the hand is open, "
                        f"but opening it again will ask for its bones again")
@@ -574,7 +577,7 @@ class MainWindow(QMainWindow):
         except S2HError as exc:
             self.error(str(exc))
             return None
-        sidecar = export_sidecar(written)
+        sidecar = export_sidecar(written, result.target)
         return self._wrote(written, f" and its TBS frames {sidecar.name}" if sidecar else "")
 
     # --- annotate mode's entry points ---

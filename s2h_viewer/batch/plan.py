@@ -49,6 +49,7 @@ class TaskOptions:
     format: str = "glb"
     side: str | None = None
     render: bool = True  # the worst frame's picture
+    unit: str | None = None  # every rig's length unit (None: the format's, else guessed)
 
 
 @dataclass(frozen=True)

@@ -21,6 +21,7 @@ from s2h_viewer.batch.plan import Task, TaskOptions, plan_batch
 from s2h_viewer.batch.report import write_report
 from s2h_viewer.batch.summary import write_summary
 from s2h_viewer.batch.task import base_row
+from s2h_viewer.io.annotation import SIDES, sidecar_path
 from s2h_viewer.io.atomic import remove_stale_temps
 
 
@@ -116,6 +117,7 @@ def run_batch(config: BatchConfig, show_progress: bool | None = None) -> BatchRe
 
 def _remove_partial_files(task: Task) -> None:
     """The temporary files a write killed by Ctrl+C left behind (their process is gone by now)."""
-    for path in (task.output, task.picture, task.row_file, task.output.with_name(f"{task.method}.tbs.json")):
+    sidecars = [sidecar_path(task.output, side) for side in SIDES]
+    for path in (task.output, task.picture, task.row_file, *sidecars):
         if path.parent.exists():
             remove_stale_temps(path)

@@ -37,21 +37,28 @@ def _cached(key: tuple, load):
 
 def _load_motion(task: Task):
     """The motion and the hand it is performed on (its own rig, else its sample hand)."""
-    from s2h_viewer.io.files import RigOptions, load_motion_file
-    from s2h_viewer.samples import load_sample_hand
+    from s2h_viewer.io.files import load_motion_file
+    from s2h_viewer.samples import sample_performer
 
     def load():
-        motion, rig = load_motion_file(task.motion.path, options=RigOptions(side=task.options.side))
-        return motion, rig or load_sample_hand(motion.hand_name)
+        motion, rig = load_motion_file(task.motion.path, options=_rig_options(task))
+        return motion, rig or sample_performer(motion, task.motion.path)
 
-    return _cached(("motion", task.motion.path, repr(task.motion.fingerprint()), task.options.side), load)
+    return _cached(("motion", task.motion.path, repr(task.motion.fingerprint()), task.options.side,
+                    task.options.unit), load)
 
 
 def _load_target(task: Task):
-    from s2h_viewer.io.files import RigOptions, load_hand_file
+    from s2h_viewer.io.files import load_hand_file
 
-    return _cached(("hand", task.target.path, repr(task.target.fingerprint()), task.options.side),
-                   lambda: load_hand_file(task.target.path, RigOptions(side=task.options.side)))
+    return _cached(("hand", task.target.path, repr(task.target.fingerprint()), task.options.side,
+                    task.options.unit), lambda: load_hand_file(task.target.path, _rig_options(task)))
+
+
+def _rig_options(task: Task):
+    """The `io.files.RigOptions` every file of the task is read with."""
+    from s2h_viewer.io.files import RigOptions
+    return RigOptions(side=task.options.side, unit=task.options.unit)
 
 
 def base_row(task: Task) -> dict:

@@ -1,7 +1,8 @@
 """Joint-name mapping: which bones of a real rig are the wrist and the 20 finger joints (DESIGN.md section 1).
 
 Built-in schemes (compared case-, separator- and namespace-insensitively, with the side read off the
-name first: ``_R``/``.L`` suffixes, ``Right``/``Left`` prefixes, ``r_``/``l_`` prefixes):
+name first: ``_R``/``.L`` suffixes, ``Right``/``Left`` prefixes, ``r_``/``l_`` and Meta's ``b_r_``/``b_l_``
+prefixes):
 
 - ``s2h``: the project's own names; ``webxr``: ``index-finger-phalanx-proximal``;
 - ``openxr``: ``XR_HAND_JOINT_INDEX_PROXIMAL_EXT`` and Title_Case ``Index_Proximal_R`` (``Little`` = pinky);
@@ -10,7 +11,9 @@ name first: ``_R``/``.L`` suffixes, ``Right``/``Left`` prefixes, ``r_``/``l_`` p
 - ``unreal``: the Unreal mannequin ``hand_r``, ``index_01_r``..``index_03_r``, ``index_04_leaf_r`` tips,
   ``index_metacarpal_r`` palm bones (UE5);
 - ``rigify``: Blender Rigify ``f_index.01.R`` with ``DEF-`` (preferred) or ``ORG-`` prefixes;
-- ``mano``: MANO's 16 joints ``index1..3`` with optional ``index4`` tips.
+- ``mano``: MANO's 16 joints ``index1..3`` with optional ``index4`` tips;
+- ``meta``: Meta / Oculus hand-tracking hands ``b_r_wrist`` (or ``b_r_hand``), ``b_r_thumb1..3`` (``thumb0``, the
+  trapezium, and ``pinky0`` are palm bones), ``b_r_index1..3``, ``b_r_index_null`` (or ``_ignore``) tips.
 
 A user JSON map ``{"wrist": "...", "index_mcp": "...", ...}`` overrides names. Tips may be absent: the
 loader extrapolates them. What names cannot settle, `rig_recognition` settles from topology and geometry.
@@ -28,9 +31,11 @@ from s2h_viewer.hand import topology as topo
 
 SIDES = ("right", "left")
 MAX_JOINT_MAP_BYTES = 1024 ** 2
-_PREFIX_SIDE = re.compile(r"^(?:(?i:(right|left))(?=[A-Z0-9_.\- ]|$)|(?i:(r|l))[_.\- ])")
+_PREFIX_SIDE = re.compile(r"^(?:(?i:(right|left))(?=[A-Z0-9_.\- ]|$)|(?i:(r|l))[_.\- ]|(?i:b_(r|l))_)")
 _SUFFIX_SIDE = re.compile(r"(?:[_.\- ](r|l)|[_.\- ]?(right|left))$", re.IGNORECASE)
 _RIGIFY_PREFIXES = ("def", "", "org")  # deform bones first: they carry the skin
+#: a per-DOF mocap joint's degree-of-freedom suffix (``INDEX_MCP_FE``, ``THUMB_CMC_AA``), normalised
+_DOF_SUFFIX = re.compile(r"(?<=[a-z0-9])(fe|aa|flex|abd)$")
 
 
 def normalise_name(name: str) -> str:
@@ -51,7 +56,7 @@ def split_side(name: str) -> tuple[str, str | None]:
     else:
         match = _PREFIX_SIDE.search(name)
         if match and len(name) > len(match.group(0)):
-            side = "right" if (match.group(1) or match.group(2)).lower().startswith("r") else "left"
+            side = "right" if (match.group(1) or match.group(2) or match.group(3)).lower().startswith("r") else "left"
             name = name[match.end():]
     return normalise_name(name), side
 
@@ -120,13 +125,18 @@ def _mano() -> tuple[dict[str, list[str]], list[str]]:
     return {"wrist": ["wrist"], **_levels(names)}, []
 
 
+def _meta() -> tuple[dict[str, list[str]], list[str]]:
+    names = {f: (f"{f}1", f"{f}2", f"{f}3", f"{f}_null|{f}_ignore|{f}_tip") for f in topo.FINGERS}
+    return {"wrist": ["wrist", "hand"], **_levels(names)}, ["thumb0", "pinky0", "forearmstub", "handignore", "grip"]
+
+
 def _project() -> tuple[dict[str, list[str]], list[str]]:
     return {name: [normalise_name(name)] for name in topo.JOINT_NAMES}, []
 
 
 #: scheme name -> function() -> (canonical joint -> candidate normalised names, palm bones' normalised names)
 SCHEMES = {"s2h": _project, "webxr": _webxr, "openxr": _openxr, "mixamo": _mixamo, "unity": _unity,
-           "unreal": _unreal, "rigify": _rigify, "mano": _mano}
+           "unreal": _unreal, "rigify": _rigify, "mano": _mano, "meta": _meta}
 
 
 @dataclass
@@ -171,6 +181,8 @@ def _match(scheme: str, rig_names: list[str], side: str | None) -> RigMapping:
         elif name_side is None:
             sideless.setdefault(base, name)
     by_base = {**sideless, **side_specific}
+    for base, name in list(by_base.items()):  # per-DOF mocap: INDEX_MCP_FE answers to INDEX_MCP too
+        by_base.setdefault(_DOF_SUFFIX.sub("", base), name)
     joints = {}
     for joint, options in candidates.items():
         found = next((by_base[o] for o in options if o in by_base), None)
@@ -223,33 +235,36 @@ def load_user_mapping(path: str | Path) -> dict[str, str]:
     return document
 
 
-def check_user_mapping(mapping: dict[str, str], bones: list[str], source: str | Path) -> dict[str, str]:
+def check_user_mapping(mapping: dict[str, str], bones: list[str], source: str | Path, what: str = "joint map"
+                       ) -> dict[str, str]:
     """``mapping`` if it maps every joint but the tips (extrapolated when left out) to its own bone of ``bones``;
-    else an `InputFileError` naming ``source``, the joints and the bones at fault."""
+    else an `InputFileError` naming ``source``, the joints and the bones at fault, and ``what`` the map is (the
+    user's joint map, a file's humanoid map)."""
     problem = _joint_map_problem(mapping)
     if problem:
         raise InputFileError(source, problem)
     present = set(bones)
     absent = [f"{bone} ({joint})" for joint, bone in mapping.items() if bone not in present]
     if absent:
-        raise InputFileError(source, f"joint map names bones the rig does not have: {', '.join(absent)}")
+        raise InputFileError(source, f"{what} names bones the rig does not have: {', '.join(absent)}")
     joints_of: dict[str, list[str]] = {}
     for joint, bone in mapping.items():
         joints_of.setdefault(bone, []).append(joint)
     shared = [f"{' and '.join(joints)} both use {bone!r}" for bone, joints in joints_of.items() if len(joints) > 1]
     if shared:
-        raise InputFileError(source, f"joint map gives one bone to several joints: {'; '.join(shared)}; each joint "
+        raise InputFileError(source, f"{what} gives one bone to several joints: {'; '.join(shared)}; each joint "
                                      f"needs its own bone")
     missing = RigMapping("user", mapping).missing
     if missing:
-        raise InputFileError(source, f"the joint map does not name {', '.join(missing)}")
+        raise InputFileError(source, f"the {what.removeprefix('the ')} does not name {', '.join(missing)}")
     return mapping
 
 
-def map_user(rig_names: list[str], source: str | Path, user_map: dict[str, str], side: str) -> RigMapping:
-    """The mapping a user's joint map gives; an `InputFileError` (`check_user_mapping`) if it does not fit the
-    rig."""
-    check_user_mapping(user_map, rig_names, source)
+def map_user(rig_names: list[str], source: str | Path, user_map: dict[str, str], side: str,
+             what: str = "joint map") -> RigMapping:
+    """The mapping a user's joint map (or ``what`` else) gives; an `InputFileError` (`check_user_mapping`) if it
+    does not fit the rig."""
+    check_user_mapping(user_map, rig_names, source, what)
     return RigMapping("user", dict(user_map), [], side, "user")
 
 

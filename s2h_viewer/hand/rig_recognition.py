@@ -19,10 +19,12 @@ import numpy as np
 from s2h_viewer.errors import TooFewBonesError, UnrecognisedRigError
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.rig_mapping import (SCHEMES, SIDES, RigMapping, best_name_match, describe_missing, map_user,
-                                         sides_named, split_side)
+                                         normalise_name, sides_named, split_side)
 
 #: a side or thumb call below this confidence is reported as a guess to check
 SURE = 0.5
+#: normalised name endings of helper nodes (`is_helper`)
+HELPER_SUFFIXES = ("marker",)
 TEMPLATE_HINT = "write a joint map (`s2h rig FILE` writes an editable template) and pass it with --joint-map"
 
 
@@ -35,11 +37,18 @@ class Skeleton:
     positions: np.ndarray  # (N, 3)
 
     def children(self) -> list[list[int]]:
+        """Each bone's children, helper nodes left out (`is_helper`: they would branch a finger's chain)."""
         out: list[list[int]] = [[] for _ in self.names]
         for i, p in enumerate(self.parents):
-            if p >= 0:
+            if p >= 0 and not is_helper(self.names[i]):
                 out[p].append(i)
         return out
+
+
+def is_helper(name: str) -> bool:
+    """A node that marks a point on the hand and is no bone: Meta's ``r_index_finger_pad_marker`` and its kind,
+    hung beside a finger's next bone."""
+    return normalise_name(name).endswith(HELPER_SUFFIXES)
 
 
 @dataclass
@@ -176,6 +185,57 @@ def _hand_like(skeleton: Skeleton, found: FingerChains) -> bool:
     return float(similarity[np.ix_(fingers, fingers)].mean()) > 0.5
 
 
+def complete_humanoid_map(skeleton: Skeleton, joints: dict[str, str], side: str, source: str | Path
+                          ) -> tuple[dict[str, str], list[str]]:
+    """A file's humanoid map of one hand with the joints it leaves out (VRM 0.x maps often name no thumb and no
+    index distal) taken from the finger chains under its wrist: a chain holding a named bone is that finger, its
+    other bones the finger's other levels; the chain no name claims is the finger no name claims. Returns the
+    completed map and a note of what was added; an `UnrecognisedRigError` speaking of the file's humanoid map
+    where the chains cannot complete it."""
+    missing = RigMapping("vrm", joints).missing
+    if not missing:
+        return dict(joints), []
+    lookup = {n: i for i, n in enumerate(skeleton.names)}
+    found = finger_chains(skeleton, lookup[joints["wrist"]])
+    levels = {f: [f"{f}_{lv}" for lv in topo.FINGER_LEVELS[f]] for f in topo.FINGERS}
+    finger_of: dict[int, str] = {}  # chain -> finger, from the bones the map names
+    for c, chain in enumerate(found.chains):
+        named = {f for f in topo.FINGERS for j in levels[f] if joints.get(j) in {skeleton.names[b] for b in chain}}
+        if len(named) == 1:
+            finger_of[c] = named.pop()
+    unclaimed = [c for c in range(len(found.chains)) if c not in finger_of]
+    unnamed = [f for f in topo.FINGERS if f not in finger_of.values()]
+    if len(found.chains) == 5 and len(unclaimed) == len(unnamed) == 1:
+        finger_of[unclaimed[0]] = unnamed[0]
+    elif len(found.chains) == 5 and unclaimed:  # several fingers unnamed: topology orders them, if it agrees
+        ordered = order_fingers(skeleton, found)[0]
+        by_topology = {c: f for f, joints_of in zip(topo.FINGERS, ordered) for c, chain in enumerate(found.chains)
+                       if _chain_joints(chain)[0] == joints_of}
+        if all(by_topology.get(c) == f for c, f in finger_of.items()):
+            finger_of.update({c: by_topology[c] for c in unclaimed})
+    completed = dict(joints)
+    for c, finger in finger_of.items():
+        bones = [skeleton.names[b] for b in _chain_joints(found.chains[c])[0]]
+        anchor = next((k for k, j in enumerate(levels[finger]) if j in joints), None)
+        if anchor is None:  # the one unnamed finger: its chain from the top
+            placed = dict(zip(levels[finger], bones))
+        else:  # the named bone fixes where the chain's levels sit
+            named_bone = joints[levels[finger][anchor]]
+            start = bones.index(named_bone) - anchor if named_bone in bones else 0
+            placed = {j: bones[start + k] for k, j in enumerate(levels[finger]) if 0 <= start + k < len(bones)}
+        for joint, bone in placed.items():
+            completed.setdefault(joint, bone)
+    still = RigMapping("vrm", completed).missing
+    if still:
+        raise UnrecognisedRigError(source, f"the file's humanoid map of the {side} hand names no "
+                                           f"{', '.join(missing)}, and the bones under its wrist "
+                                           f"{joints['wrist']!r} do not give {', '.join(still)} "
+                                           f"({_describe_chains(skeleton, found)}); {TEMPLATE_HINT}")
+    added = ", ".join(f"{j} = {completed[j]!r}" for j in missing)
+    return completed, [f"the file's humanoid map names no {', '.join(missing)}: taken from the finger chains under "
+                       f"{joints['wrist']!r} ({added})"]
+
+
 def _add_leaf_tips(skeleton: Skeleton, mapping: RigMapping) -> None:
     """A humanoid map names no tips: a distal bone's only child, a leaf, is its finger's tip."""
     children = skeleton.children()
@@ -227,8 +287,9 @@ def recognise_rig(skeleton: Skeleton, source: str | Path, side: str | None = Non
         if chosen not in humanoid:
             raise UnrecognisedRigError(source, f"the file's humanoid map has no {chosen} hand; use --side "
                                                f"{next(iter(humanoid))}")
-        mapping = map_user(names, source, humanoid[chosen], chosen)
-        mapping.scheme, mapping.side_from = "vrm", "humanoid map"
+        joints, notes = complete_humanoid_map(skeleton, humanoid[chosen], chosen, source)
+        mapping = map_user(names, source, joints, chosen, "the file's humanoid map")
+        mapping.scheme, mapping.side_from, mapping.notes = "vrm", "humanoid map", notes
         _add_leaf_tips(skeleton, mapping)
         return mapping
     chosen = side or ("right" if "right" in named or not named else "left")

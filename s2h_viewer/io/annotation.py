@@ -1,9 +1,10 @@
-"""The TBS annotation sidecar: ``<hand file stem>.tbs.json`` beside the hand file, loaded with it
-(``<name>.bvh.tbs.json`` beside a BVH); motion exports write their hand's frames as one (`save_hand_frames`).
+"""The TBS annotation sidecar: one per hand, ``<hand file stem>.<side>.tbs.json`` beside the hand file, loaded
+with it (``<name>.bvh.<side>.tbs.json`` beside a BVH); motion exports write their hand's frames as one
+(`save_hand_frames`). A full-body character has two hands, each annotated on its own.
 
-Schema (version 1)::
+Schema (version 2; version 1, ``<stem>.tbs.json`` without a side, is still read, see `load_annotation`)::
 
-    {"schema": "s2h-tbs-annotation", "version": 1,
+    {"schema": "s2h-tbs-annotation", "version": 2, "side": "right" | "left",
      "hand_file": "right.glb", "hand_sha256": "<hex digest of the hand file>",
      "joints": {"thumb_cmc": {"frame": [[...], [...], [...]], "set_by": "solver" | "manual",
                               "confidence": 0.9 | null (not scored)}, ... 15 joints},
@@ -29,7 +30,10 @@ from s2h_viewer.hand.model import HandModel
 from s2h_viewer.io.atomic import atomic_path
 
 SCHEMA = "s2h-tbs-annotation"
-VERSION = 1
+VERSION = 2
+#: version 1 sidecars (before the side was recorded) are read as side-less
+READ_VERSIONS = (1, 2)
+SIDES = ("right", "left")
 SET_BY = ("solver", "manual")
 MAX_SIDECAR_BYTES = 16 * 1024 ** 2
 
@@ -42,14 +46,32 @@ class Annotation:
     set_by: list[str]
     confidence: np.ndarray  # (15,)
     diagnostics: list[str] = field(default_factory=list)
+    side: str | None = None  # the hand it was made for; None: a version 1 sidecar, which did not say
 
 
-def sidecar_path(hand_file: str | Path) -> Path:
-    """``<stem>.tbs.json``; a BVH's keeps its suffix, so that the GLB export of the same motion under the
-    same stem, or the rig file it was exported from, keeps its own."""
+def hand_side(hand: HandModel) -> str:
+    """The side a hand was read as (a hand without one, procedural or npz, is a right hand)."""
+    return hand.meta.get("side") or "right"
+
+
+def _stem(hand_file: Path) -> str:
+    """A BVH's sidecar keeps its suffix, so that the GLB export of the same motion under the same stem, or the
+    rig file it was exported from, keeps its own."""
+    return hand_file.name if hand_file.suffix.lower() == ".bvh" else hand_file.stem
+
+
+def sidecar_path(hand_file: str | Path, side: str) -> Path:
+    """``<stem>.<side>.tbs.json``: the sidecar of one hand of ``hand_file``."""
+    if side not in SIDES:
+        raise ValueError(f"side must be one of {SIDES}, not {side!r}")
     hand_file = Path(hand_file)
-    stem = hand_file.name if hand_file.suffix.lower() == ".bvh" else hand_file.stem
-    return hand_file.with_name(f"{stem}.tbs.json")
+    return hand_file.with_name(f"{_stem(hand_file)}.{side}.tbs.json")
+
+
+def legacy_sidecar_path(hand_file: str | Path) -> Path:
+    """``<stem>.tbs.json``: where s2h before version 2 wrote the one sidecar of a file, for whichever hand."""
+    hand_file = Path(hand_file)
+    return hand_file.with_name(f"{_stem(hand_file)}.tbs.json")
 
 
 def file_sha256(path: str | Path) -> str:
@@ -61,26 +83,28 @@ def _confidence_json(confidence: float) -> float | None:
     return round(float(confidence), 4) if np.isfinite(confidence) else None
 
 
-def save_annotation(annotation: Annotation, hand_file: str | Path, path: str | Path | None = None) -> Path:
-    """Write the annotation of ``hand_file`` atomically to ``path`` (default: its sidecar, where loading looks
-    for it); returns the path written. An `OSError` leaves no file, and an existing one as it was."""
+def save_annotation(annotation: Annotation, hand_file: str | Path, side: str, path: str | Path | None = None
+                    ) -> Path:
+    """Write the annotation of ``hand_file``'s ``side`` hand atomically to ``path`` (default: that hand's
+    sidecar, where loading looks for it); returns the path written. An `OSError` leaves no file, and an
+    existing one as it was."""
     hand_file = Path(hand_file)
     joints = {name: {"frame": np.round(annotation.frames[a], 8).tolist(), "set_by": annotation.set_by[a],
                      "confidence": _confidence_json(annotation.confidence[a])}
               for a, name in enumerate(topo.ARTICULATED_NAMES)}
-    document = {"schema": SCHEMA, "version": VERSION, "hand_file": hand_file.name,
+    document = {"schema": SCHEMA, "version": VERSION, "side": side, "hand_file": hand_file.name,
                 "hand_sha256": file_sha256(hand_file), "joints": joints, "diagnostics": annotation.diagnostics}
-    path = sidecar_path(hand_file) if path is None else Path(path)
+    path = sidecar_path(hand_file, side) if path is None else Path(path)
     with atomic_path(path) as tmp:
         tmp.write_text(json.dumps(document, indent=1) + "\n")
     return path
 
 
-def refuse_foreign_sidecar(motion_file: Path) -> None:
-    """Before a motion export to ``motion_file``: an `InputFileError` if its sidecar name holds another
-    file's frames (the hand-made ones of ``<stem>.fbx`` beside an export ``<stem>.glb``, say), which
-    `save_hand_frames` would overwrite; an earlier export's own sidecar may go."""
-    sidecar = sidecar_path(motion_file)
+def refuse_foreign_sidecar(motion_file: Path, side: str) -> None:
+    """Before a motion export of a ``side`` hand to ``motion_file``: an `InputFileError` if its sidecar name
+    holds another file's frames (the hand-made ones of ``<stem>.fbx`` beside an export ``<stem>.glb``, say),
+    which `save_hand_frames` would overwrite; an earlier export's own sidecar may go."""
+    sidecar = sidecar_path(motion_file, side)
     if not sidecar.exists() and not sidecar.is_symlink():
         return
     owner = _sidecar_owner(sidecar)
@@ -132,9 +156,11 @@ def save_hand_frames(motion_file: Path, hand: HandModel, to_file: np.ndarray) ->
     written with; unscored unless the sidecar there already holds the same frames (`_marks_kept`). Returns
     ``motion_file``."""
     frames = to_file @ hand.rest_frames
-    set_by, confidence = _marks_kept(sidecar_path(motion_file), motion_file.name, frames)
+    side = hand_side(hand)
+    set_by, confidence = _marks_kept(sidecar_path(motion_file, side), motion_file.name, frames)
     save_annotation(Annotation(frames, set_by, confidence,
-                               [f"TBS frames of {hand.name}, written with {motion_file.name}"]), motion_file)
+                               [f"TBS frames of {hand.name}, written with {motion_file.name}"], side),
+                    motion_file, side)
     return motion_file
 
 
@@ -158,14 +184,20 @@ def _joint_entry(path: Path, name: str, entry) -> tuple[np.ndarray, str, float]:
     return np.array(frame, dtype=np.float64), set_by, float(confidence)
 
 
-def load_annotation(hand_file: str | Path) -> Annotation | None:
-    """The sidecar of ``hand_file``, None if there is none; an `InputFileError` naming the sidecar if it
-    is damaged, of another schema or version, or made for a different version of the hand file."""
-    path = sidecar_path(hand_file)
-    if not path.exists():
-        return None
-    with reading(path, "a TBS annotation sidecar"):
-        return _read_annotation(path, Path(hand_file))
+def load_annotation(hand_file: str | Path, side: str) -> Annotation | None:
+    """The sidecar of ``hand_file``'s ``side`` hand, else its version 1 side-less sidecar (``side`` None in
+    the result: the caller checks that its frames fit this hand, see `io.rig.annotate`), else None; an
+    `InputFileError` naming the sidecar if it is damaged, of another schema, version or side, or made for a
+    different version of the hand file."""
+    for path in (sidecar_path(hand_file, side), legacy_sidecar_path(hand_file)):
+        if path.exists():
+            with reading(path, "a TBS annotation sidecar"):
+                annotation = _read_annotation(path, Path(hand_file))
+            if annotation.side not in (side, None):
+                raise InputFileError(path, f"holds the {annotation.side} hand's frames, not the {side} one's: "
+                                           f"renamed? save the {side} hand's annotation again")
+            return annotation
+    return None
 
 
 def _read_annotation(path: Path, hand_file: Path) -> Annotation:
@@ -178,9 +210,12 @@ def _read_annotation(path: Path, hand_file: Path) -> Annotation:
         raise InputFileError(path, f"not valid JSON ({exc})") from None
     if not isinstance(document, dict) or document.get("schema") != SCHEMA:
         raise InputFileError(path, f"not an s2h TBS annotation (schema {SCHEMA!r} expected)")
-    if document.get("version") != VERSION:
+    if document.get("version") not in READ_VERSIONS:
         raise InputFileError(path, f"annotation version {document.get('version')!r} is not supported "
-                                   f"(this s2h reads version {VERSION})")
+                                   f"(this s2h reads versions {', '.join(map(str, READ_VERSIONS))})")
+    side = document.get("side") if document["version"] >= 2 else None
+    if document["version"] >= 2 and side not in SIDES:
+        raise InputFileError(path, f"side {side!r} is not right or left")
     if document.get("hand_sha256") != file_sha256(hand_file):
         raise InputFileError(path, f"was made for a different version of {hand_file.name} (its hash "
                                    f"differs); re-run `s2h annotate --save` or delete the sidecar")
@@ -202,4 +237,4 @@ def _read_annotation(path: Path, hand_file: Path) -> Annotation:
     diagnostics = document.get("diagnostics", [])
     if not isinstance(diagnostics, list) or not all(isinstance(d, str) for d in diagnostics):
         raise InputFileError(path, "diagnostics must be a list of strings")
-    return Annotation(frames, set_by, confidence, diagnostics)
+    return Annotation(frames, set_by, confidence, diagnostics, side)

@@ -23,11 +23,11 @@ from s2h_viewer.errors import InputFileError, reading, require_readable_file
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
-from s2h_viewer.io.annotation import refuse_foreign_sidecar, save_hand_frames
+from s2h_viewer.io.annotation import hand_side, refuse_foreign_sidecar, save_hand_frames
 from s2h_viewer.io.atomic import atomic_path
 from s2h_viewer.hand.mirror import reflection
-from s2h_viewer.io.rig import (MIRROR_NORMAL, RigSkeleton, build_hand, motion_from_world_rotations, recognise,
-                               world_rotations_from_motion)
+from s2h_viewer.io.rig import (MIRROR_NORMAL, RigMapping, RigSkeleton, build_hand, motion_from_world_rotations,
+                               recognise, world_rotations_from_motion)
 
 WRITE_ORDER = "ZXY"
 
@@ -175,6 +175,39 @@ def _world(clip: BvhClip, local: np.ndarray) -> np.ndarray:
     return world
 
 
+@dataclass
+class FoldedJoints:
+    """A clip's joints with each run of zero-length bones folded into one: optical finger mocap writes a joint
+    per degree of freedom (``INDEX_MCP_FE`` then ``INDEX_MCP_AA`` at the same point) and zero-length End Sites.
+    ``kept`` are the joints that stay (each run's first, which carries the offset and the name), ``last`` the
+    run's last joint of each, whose world rotation is the run's rotation; ``parents`` index into ``kept``."""
+
+    kept: np.ndarray  # (K,) clip joint indices
+    last: np.ndarray  # (K,) clip joint index of each kept joint's run end
+    parents: np.ndarray  # (K,)
+
+
+def fold_zero_length(clip: BvhClip) -> FoldedJoints:
+    """Fold every joint at its parent's point (an offset under a millionth of the skeleton's bones), where it
+    is its parent's only child, into the parent (`FoldedJoints`)."""
+    lengths = np.linalg.norm(clip.offsets, axis=1)
+    scale = float(np.median(lengths[lengths > 0])) if np.any(lengths > 0) else 1.0
+    children = np.bincount(clip.parents[clip.parents >= 0], minlength=len(clip.names))
+    folded = np.array([p >= 0 and lengths[j] <= 1e-6 * scale and children[p] == 1
+                       for j, p in enumerate(clip.parents)])
+    head = np.arange(len(clip.names))
+    for j, p in enumerate(clip.parents):  # parents come first: a folded joint joins its parent's run
+        if folded[j]:
+            head[j] = head[p]
+    kept = np.flatnonzero(~folded)
+    last = kept.copy()
+    for j in np.flatnonzero(folded):
+        last[np.searchsorted(kept, head[j])] = j  # deeper joints of a run come later
+    position = {int(k): i for i, k in enumerate(kept)}
+    parents = np.array([position[int(head[clip.parents[k]])] if clip.parents[k] >= 0 else -1 for k in kept])
+    return FoldedJoints(kept, last, parents)
+
+
 def bvh_skeleton(clip: BvhClip) -> RigSkeleton:
     """The clip's skeleton at rest: BVH rest frames are the world axes, so only positions vary."""
     rest = np.zeros((len(clip.names), 3))
@@ -187,24 +220,77 @@ def bvh_skeleton(clip: BvhClip) -> RigSkeleton:
 
 
 def load_bvh(path: str | Path, side: str | None = None, scheme: str | None = None,
-             joint_map: dict[str, str] | None = None, name: str | None = None) -> tuple[HandModel, Motion]:
+             joint_map: dict[str, str] | None = None, name: str | None = None, unit: str | None = None
+             ) -> tuple[HandModel, Motion]:
     """The hand skeleton of a BVH file and its finger motion (a hand alone or one hand of a body)."""
     path = Path(path)
     with reading(path, "a BVH rig and motion"):
-        return _load_bvh(path, read_bvh(path), side, scheme, joint_map, name)
+        return _load_bvh(path, read_bvh(path), side, scheme, joint_map, name, unit)
+
+
+def folded_skeleton(clip: BvhClip) -> tuple[RigSkeleton, FoldedJoints]:
+    """The clip's skeleton at rest with its zero-length bones folded (`fold_zero_length`): what is recognised."""
+    full = bvh_skeleton(clip)
+    folds = fold_zero_length(clip)
+    return RigSkeleton([clip.names[k] for k in folds.kept], full.world[folds.kept], folds.parents), folds
+
+
+def _frame_positions(clip: BvhClip, world: np.ndarray, frames: np.ndarray) -> np.ndarray:
+    """(F, N, 3) every joint's position at ``frames`` (root translation left out: hand shape is what matters)."""
+    out = np.zeros((len(frames), len(clip.names), 3))
+    for j, p in enumerate(clip.parents):
+        if p >= 0:
+            out[:, j] = out[:, p] + world[frames, p] @ clip.offsets[j]
+    return out
+
+
+def _side_from_frames(clip: BvhClip, world: np.ndarray, skeleton: RigSkeleton, folds: FoldedJoints,
+                      mapping) -> tuple[str, float]:
+    """The side the clip's own poses say (a zero pose of per-DOF mocap is no hand pose): geometry's call on
+    up to 50 frames, summed with its confidence as weight."""
+    from s2h_viewer.hand.rig_recognition import Skeleton, canonical_positions, detect_side
+    frames = np.unique(np.linspace(0, len(clip.frames) - 1, min(50, len(clip.frames))).astype(int))
+    positions = _frame_positions(clip, world, frames)[:, folds.kept]
+    score = 0.0
+    for pose in positions:
+        side, sure = detect_side(canonical_positions(Skeleton(skeleton.names, skeleton.parents, pose),
+                                                     mapping.joints))
+        score += sure if side == "right" else -sure
+    return ("right" if score >= 0 else "left"), min(abs(score) / len(frames), 1.0)
+
+
+def recognise_bvh(path: Path, clip: BvhClip, side: str | None = None, scheme: str | None = None,
+                  joint_map: dict[str, str] | None = None) -> tuple[RigSkeleton, FoldedJoints, RigMapping, np.ndarray]:
+    """The hand of a BVH clip: recognised on its folded skeleton (`folded_skeleton`), its side, where geometry
+    decides it, from the clip's poses; with the skeleton, the folds and every joint's world rotations (T, N)."""
+    from s2h_viewer.hand.rig_recognition import SURE, Skeleton, canonical_positions, detect_side
+    full = _world(clip, _local_rotations(clip))
+    skeleton, folds = folded_skeleton(clip)
+    mapping = recognise(skeleton, path, side, scheme, joint_map)
+    if mapping.side_from.startswith("geometry"):  # the poses decide; a rest pose that agrees adds its certainty
+        at_rest, rest_sure = detect_side(canonical_positions(
+            Skeleton(skeleton.names, skeleton.parents, skeleton.world[:, :3, 3]), mapping.joints))
+        mapping.side, sure = _side_from_frames(clip, full, skeleton, folds, mapping)
+        sure = max(sure, rest_sure) if at_rest == mapping.side else sure
+        mapping.side_from = f"geometry of the clip's poses (confidence {sure:.2f})"
+        mapping.notes = [n for n in mapping.notes if not n.startswith("the side is a guess")] + (
+            [f"the side is a guess ({mapping.side}, confidence {sure:.2f}): check it, or pass --side"]
+            if sure < SURE else [])
+        if mapping.scheme != "topology":  # names settled the joints; the side is all geometry decided
+            mapping.confidence = sure
+    return skeleton, folds, mapping, full
 
 
 def _load_bvh(path: Path, clip: BvhClip, side: str | None, scheme: str | None, joint_map: dict[str, str] | None,
-              name: str | None) -> tuple[HandModel, Motion]:
-    world = _world(clip, _local_rotations(clip))
-    skeleton = bvh_skeleton(clip)
-    mapping = recognise(skeleton, path, side, scheme, joint_map)
-    for tip in mapping.missing_tips:  # a finger's End Site is its tip
+              name: str | None, unit: str | None = None) -> tuple[HandModel, Motion]:
+    skeleton, folds, mapping, full = recognise_bvh(path, clip, side, scheme, joint_map)
+    for tip in mapping.missing_tips:  # a finger's End Site is its tip (unless of zero length: folded away)
         end_site = f"{mapping.joints[topo.JOINT_NAMES[topo.joint_index(tip) - 1]]}_end"
-        if end_site in clip.names:
+        if end_site in skeleton.names:
             mapping.joints[tip] = end_site
-    hand = build_hand(path, skeleton, mapping, None, name)
-    lookup = {n: i for i, n in enumerate(clip.names)}
+    world = full[:, folds.last]  # a folded run turns as its last joint
+    hand = build_hand(path, skeleton, mapping, None, name, unit, declared=None)  # BVH says no unit
+    lookup = {n: i for i, n in enumerate(skeleton.names)}
     rotating = [lookup[mapping.joints[topo.JOINT_NAMES[j]]] for j in topo.ROTATING_JOINTS]
     fps = 1.0 / clip.frame_time
     fps = float(round(fps)) if abs(fps - round(fps)) < 1e-3 else fps  # "Frame Time: 0.0333333" is 30 fps
@@ -218,7 +304,7 @@ def save_bvh(path: str | Path, motion: Motion, hand: HandModel) -> Path:
     avatar; else with the project's joint names (centimetres, the wrist as root). The hand's TBS frames
     go beside it as its annotation sidecar, so that it reads back with the same TBS rotations."""
     path = Path(path)
-    refuse_foreign_sidecar(path)
+    refuse_foreign_sidecar(path, hand_side(hand))
     if "rig_joints" in hand.meta and Path(hand.source).exists():
         from s2h_viewer.io.files import read_rig_skeleton
         return _save_rig_bvh(path, motion, hand, read_rig_skeleton(hand.source))

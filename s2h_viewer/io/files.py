@@ -10,14 +10,14 @@ Retargeted motion out: ``.npz``, ``.bvh``, ``.glb``.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from s2h_viewer.errors import InputFileError, reading, require_readable_file
 from s2h_viewer.io.atomic import atomic_path
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
-from s2h_viewer.hand.rig_mapping import load_user_mapping
+from s2h_viewer.hand.rig_mapping import load_user_mapping, sides_named
 
 HAND_SUFFIXES = (".npz", ".glb", ".gltf", ".vrm", ".fbx", ".bvh")
 MOTION_SUFFIXES = (".npz", ".bvh", ".glb", ".gltf", ".vrm", ".fbx", ".json", ".npy")
@@ -39,16 +39,39 @@ def joint_map_template_path(hand_file: str | Path) -> Path:
     return hand_file.with_name(f"{hand_file.stem}{JOINT_MAP_TEMPLATE_SUFFIX}")
 
 
-def joint_map_sidecar(hand_file: str | Path) -> Path:
-    """``<stem>.joints.json`` beside a hand file: its own joint map, picked up like the TBS sidecar."""
+def joint_map_sidecar(hand_file: str | Path, side: str) -> Path:
+    """``<stem>.<side>.joints.json`` beside a hand file: the joint map of its ``side`` hand, picked up like the
+    TBS sidecar."""
+    hand_file = Path(hand_file)
+    return hand_file.with_name(f"{hand_file.stem}.{side}{JOINT_MAP_SUFFIX}")
+
+
+def legacy_joint_map_sidecar(hand_file: str | Path) -> Path:
+    """``<stem>.joints.json``: where s2h before per-hand maps saved a file's one joint map."""
     hand_file = Path(hand_file)
     return hand_file.with_name(f"{hand_file.stem}{JOINT_MAP_SUFFIX}")
 
 
-def save_joint_map(hand_file: str | Path, mapping: dict[str, str], path: str | Path | None = None) -> Path:
-    """Write ``mapping`` atomically to ``path`` (default: ``hand_file``'s sidecar, where loading the hand looks
-    for it); returns the path written."""
-    path = joint_map_sidecar(hand_file) if path is None else Path(path)
+def saved_joint_map(hand_file: str | Path, side: str | None) -> tuple[dict[str, str], str | None] | None:
+    """The joint map saved beside ``hand_file`` for its ``side`` hand (None: the right one's, else the left
+    one's) and the side it maps, else the older side-less ``<stem>.joints.json`` (side None) unless its bones'
+    names mark the other side, else None."""
+    for one in ((side,) if side else ("right", "left")):
+        if joint_map_sidecar(hand_file, one).exists():
+            return load_user_mapping(joint_map_sidecar(hand_file, one)), one
+    legacy = legacy_joint_map_sidecar(hand_file)
+    if not legacy.exists():
+        return None
+    mapping = load_user_mapping(legacy)
+    named = sides_named(list(mapping.values()))
+    return None if side is not None and named and side not in named else (mapping, None)
+
+
+def save_joint_map(hand_file: str | Path, mapping: dict[str, str], side: str, path: str | Path | None = None
+                   ) -> Path:
+    """Write ``mapping`` (of ``hand_file``'s ``side`` hand) atomically to ``path`` (default: that hand's
+    sidecar, where loading the hand looks for it); returns the path written."""
+    path = joint_map_sidecar(hand_file, side) if path is None else Path(path)
     with atomic_path(path) as tmp:
         tmp.write_text(json.dumps(mapping, indent=2) + "\n")
     return path
@@ -57,24 +80,29 @@ def save_joint_map(hand_file: str | Path, mapping: dict[str, str], path: str | P
 @dataclass(frozen=True)
 class RigOptions:
     """How to read a rig: which hand (None: as names or geometry say), which naming scheme, a user joint
-    map (a JSON file or a dict; else the file's own ``<stem>.joints.json`` if there is one), which animation
-    or take; and a tracking recording's frame rate where the file has none (keypoint arrays)."""
+    map (a JSON file or a dict; else the file's own ``<stem>.<side>.joints.json`` if there is one), which
+    animation or take; a tracking recording's frame rate where the file has none (keypoint arrays); the
+    rig's length unit where the file's is wrong or missing."""
 
     side: str | None = None
     scheme: str | None = None
     joint_map: str | Path | dict[str, str] | None = None
     animation: str | int | None = None
     fps: float | None = None
+    unit: str | None = None  # the rig's length unit (`io.units.UNITS`); None: the format's, else guessed
 
-    def mapping(self, hand_file: str | Path | None = None) -> dict[str, str] | None:
-        """The user's joint map, else ``hand_file``'s sidecar joint map, else None (recognise the rig)."""
+    def for_file(self, hand_file: str | Path) -> "RigOptions":
+        """These options with the joint map to use on ``hand_file`` as a dict: the user's, else the one saved
+        beside the file for the side asked (`saved_joint_map`, whose side is then the side), else None
+        (recognise the rig)."""
         if isinstance(self.joint_map, dict):
-            return dict(self.joint_map)
+            return replace(self, joint_map=dict(self.joint_map))
         if self.joint_map:
-            return load_user_mapping(self.joint_map)
-        if hand_file is not None and joint_map_sidecar(hand_file).exists():
-            return load_user_mapping(joint_map_sidecar(hand_file))
-        return None
+            return replace(self, joint_map=load_user_mapping(self.joint_map))
+        saved = saved_joint_map(hand_file, self.side)
+        if saved is None:
+            return self
+        return replace(self, joint_map=saved[0], side=self.side or saved[1])
 
 
 def _suffix(path: Path, allowed: tuple[str, ...], what: str) -> str:
@@ -100,14 +128,15 @@ def _load_hand(path: Path, suffix: str, options: RigOptions) -> HandModel:
     if suffix == ".npz":
         from s2h_viewer.io.npz import load_hand
         return load_hand(path)
+    o = options.for_file(path)
     if suffix in GLTF_FAMILY:
         from s2h_viewer.io.gltf import load_gltf_hand
-        return load_gltf_hand(path, options.side, options.scheme, options.mapping(path))
+        return load_gltf_hand(path, o.side, o.scheme, o.joint_map, unit=o.unit)
     if suffix == ".fbx":
         from s2h_viewer.io.fbx import load_fbx_hand
-        return load_fbx_hand(path, options.side, options.scheme, options.mapping(path))
+        return load_fbx_hand(path, o.side, o.scheme, o.joint_map, unit=o.unit)
     from s2h_viewer.io.bvh import load_bvh
-    return load_bvh(path, options.side, options.scheme, options.mapping(path))[0]
+    return load_bvh(path, o.side, o.scheme, o.joint_map, unit=o.unit)[0]
 
 
 def load_motion_file(path: str | Path, hand: HandModel | None = None, options: RigOptions = RigOptions()
@@ -134,7 +163,8 @@ def _load_motion(path: Path, suffix: str, hand: HandModel | None, options: RigOp
         return load_motion(path), hand
     if suffix == ".bvh":
         from s2h_viewer.io.bvh import load_bvh
-        rig, motion = load_bvh(path, options.side, options.scheme, options.mapping(path))
+        o = options.for_file(path)
+        rig, motion = load_bvh(path, o.side, o.scheme, o.joint_map, unit=o.unit)
         return motion, rig
     rig = hand or _load_hand(path, suffix, options)
     if options.animation == ALL_ANIMATIONS:
@@ -191,12 +221,13 @@ def save_motion_file(path: str | Path, motion: Motion, hand: HandModel) -> Path:
     return save_gltf_motion(path, motion, hand)
 
 
-def export_sidecar(path: str | Path) -> Path | None:
-    """The TBS frames sidecar that `save_motion_file` writes beside a motion exported to ``path`` (the BVH
-    and GLB writers do: `io.annotation.save_hand_frames`), None for npz; what an export's report names."""
-    from s2h_viewer.io.annotation import sidecar_path
+def export_sidecar(path: str | Path, hand: HandModel) -> Path | None:
+    """The TBS frames sidecar that `save_motion_file` writes beside a motion on ``hand`` exported to ``path``
+    (the BVH and GLB writers do: `io.annotation.save_hand_frames`), None for npz; what an export's report
+    names."""
+    from s2h_viewer.io.annotation import hand_side, sidecar_path
     path = Path(path)
-    return sidecar_path(path) if path.suffix.lower() in (".bvh", ".glb") else None
+    return sidecar_path(path, hand_side(hand)) if path.suffix.lower() in (".bvh", ".glb") else None
 
 
 def read_rig_skeleton(path: str | Path):
@@ -215,15 +246,33 @@ def read_rig_skeleton(path: str | Path):
     return bvh_skeleton(read_bvh(path))
 
 
+def _recognition_skeleton(path: Path):
+    """The skeleton recognition reads: a BVH's with its zero-length bones folded (`io.bvh.fold_zero_length`)."""
+    if path.suffix.lower() == ".bvh":
+        from s2h_viewer.io.bvh import folded_skeleton, read_bvh
+        return folded_skeleton(read_bvh(path))[0]
+    return read_rig_skeleton(path)
+
+
+def rig_unit(path: str | Path, mapping, options: RigOptions = RigOptions()):
+    """The `io.units.UnitChoice` a rig file is read in, for its recognised ``mapping`` (what `s2h rig` says)."""
+    from s2h_viewer.io.rig import file_unit
+    return file_unit(_recognition_skeleton(Path(path)), mapping, path, options.unit,
+                     None if Path(path).suffix.lower() == ".bvh" else "m")
+
+
 def recognise_file(path: str | Path, options: RigOptions = RigOptions()):
     """The `RigMapping` of a rig file's hand (what `s2h rig` reports), without building the hand."""
     path = Path(path)
     from s2h_viewer.io.rig import recognise
+    o = options.for_file(path)
     if path.suffix.lower() in GLTF_FAMILY:
         from s2h_viewer.io.gltf import _Document, _recognise
-        return _recognise(_Document(path), options.side, options.scheme, options.mapping(path))
-    skeleton = read_rig_skeleton(path)
-    return recognise(skeleton, path, options.side, options.scheme, options.mapping(path))
+        return _recognise(_Document(path), o.side, o.scheme, o.joint_map)
+    if path.suffix.lower() == ".bvh":
+        from s2h_viewer.io.bvh import read_bvh, recognise_bvh
+        return recognise_bvh(path, read_bvh(path), o.side, o.scheme, o.joint_map)[2]
+    return recognise(read_rig_skeleton(path), path, o.side, o.scheme, o.joint_map)
 
 
 def joint_map_template(path: str | Path, side: str | None = None) -> dict[str, str]:
@@ -242,12 +291,12 @@ def suggested_joint_map(path: str | Path, side: str | None = None) -> dict[str, 
     that cannot be read is skipped: it is what is being replaced), the names' guesses (`joint_map_template`)
     elsewhere."""
     template = joint_map_template(path, side)
-    sidecar = joint_map_sidecar(path)
-    if not sidecar.exists():
-        return template
     try:
-        saved = load_user_mapping(sidecar)
+        found = saved_joint_map(path, side)
     except InputFileError:
         return template
+    if found is None:
+        return template
+    saved = found[0]
     names = set(read_rig_skeleton(path).names)
     return {joint: saved[joint] if saved.get(joint) in names else bone for joint, bone in template.items()}

@@ -22,7 +22,7 @@ from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.hand.rig_mapping import RigMapping
-from s2h_viewer.io.annotation import refuse_foreign_sidecar, save_hand_frames
+from s2h_viewer.io.annotation import hand_side, refuse_foreign_sidecar, save_hand_frames
 from s2h_viewer.io.atomic import atomic_path
 from s2h_viewer.io.rig import (RigMesh, RigSkeleton, bone_indices, build_hand, motion_from_world_rotations,
                                recognise, rotation_part, world_rotations_from_motion)
@@ -102,6 +102,21 @@ def _check_glb_header(path: Path) -> None:
                                    f"{exc.msg})") from None
 
 
+#: extensions whose data s2h cannot decode: a file that requires one is refused, naming it, never misread
+COMPRESSION_EXTENSIONS = {"EXT_meshopt_compression": "meshopt", "KHR_draco_mesh_compression": "Draco"}
+
+
+def _refuse_compressed(path: Path, gltf: pygltflib.GLTF2) -> None:
+    """An `InputFileError` for a file whose buffers or meshes are compressed with an extension it requires
+    (without the requirement, the uncompressed fallback data is there and is what is read)."""
+    required = [e for e in (gltf.extensionsRequired or []) if e in COMPRESSION_EXTENSIONS]
+    if required:
+        kinds = " and ".join(f"{COMPRESSION_EXTENSIONS[e]} ({e})" for e in required)
+        raise InputFileError(path, f"its meshes are {kinds} compressed, which s2h does not decode; write it "
+                                   f"uncompressed (gltfpack -i FILE -o OUT.glb -noq, or a Blender re-export without "
+                                   f"compression) and open that")
+
+
 class _Document:
     """A parsed glTF with its binary data in one blob, and the scene graph at rest."""
 
@@ -120,6 +135,7 @@ class _Document:
         except Exception as exc:  # pygltflib raises many types on damaged input
             raise InputFileError(path, f"not a readable glTF/GLB file ({type(exc).__name__}: {exc})") from None
         self.blob = self.gltf.binary_blob() or b""
+        _refuse_compressed(self.path, self.gltf)
         nodes = self.gltf.nodes or []
         if len(nodes) > MAX_NODES:
             raise InputFileError(path, f"has {len(nodes)} nodes, over the limit of {MAX_NODES}")
@@ -325,14 +341,16 @@ def _recognise(doc: _Document, side: str | None, scheme: str | None, joint_map: 
 
 
 def load_gltf_hand(path: str | Path, side: str | None = None, scheme: str | None = None,
-                   joint_map: dict[str, str] | None = None, name: str | None = None) -> HandModel:
+                   joint_map: dict[str, str] | None = None, name: str | None = None, unit: str | None = None
+                   ) -> HandModel:
     """The hand of a glTF/GLB file (a lone hand or one hand of a character), annotated, as a right hand.
-    ``side`` None: the side the names say, else the one geometry says (see `rig_recognition`)."""
+    ``side`` None: the side the names say, else the one geometry says (see `rig_recognition`); ``unit`` None:
+    metres where the hand is plausible in them, else a guess (`io.units`)."""
     with reading(path, "a glTF hand"):
         doc = _Document(Path(path))
         mapping = _recognise(doc, side, scheme, joint_map)
         skeleton = RigSkeleton(doc.names, doc.world, doc.parents)
-        return build_hand(doc.path, skeleton, mapping, _skinned_mesh(doc), name)
+        return build_hand(doc.path, skeleton, mapping, _skinned_mesh(doc), name, unit)
 
 
 def list_gltf_animations(path: str | Path) -> list[tuple[str, float]]:
@@ -485,7 +503,7 @@ def save_gltf_motion(path: str | Path, motion: Motion, hand: HandModel) -> Path:
     hand's TBS frames go beside it as its annotation sidecar, so that it reads back with the same TBS
     rotations; a sidecar of another file under that name is refused, before anything is written."""
     path = Path(path)
-    refuse_foreign_sidecar(path)
+    refuse_foreign_sidecar(path, hand_side(hand))
     source = Path(hand.source)
     if source.suffix.lower() in GLTF_SUFFIXES and source.exists() and "rig_joints" in hand.meta:
         doc = _Document(source)

@@ -24,7 +24,8 @@ from s2h_viewer.hand.model import HandModel, SkinnedMesh
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.hand.rig_mapping import RigMapping
 from s2h_viewer.hand.rig_recognition import Skeleton, recognise_rig
-from s2h_viewer.io.annotation import load_annotation
+from s2h_viewer.io.annotation import hand_side, legacy_sidecar_path, load_annotation
+from s2h_viewer.io.units import UNIT_NAMES, UNITS, UnitChoice, choose_unit
 
 #: a tip missing from the rig is put this far beyond its DIP, as a fraction of the DIP bone
 TIP_EXTRAPOLATION = 0.8
@@ -88,29 +89,43 @@ def _bone_index(skeleton: RigSkeleton, mapping: RigMapping) -> np.ndarray:
     return np.array([lookup.get(mapping.joints.get(name, ""), -1) for name in topo.JOINT_NAMES])
 
 
-def _hand_space(skeleton: RigSkeleton, index: np.ndarray, source: Path) -> tuple[np.ndarray, np.ndarray, float]:
-    """Wrist rotation (3, 3), wrist origin (3,) and the world-to-metres factor."""
-    wrist = skeleton.world[index[0]]
-    positions = skeleton.world[index[index >= 0], :3, 3]
+def file_unit(skeleton: RigSkeleton, mapping: RigMapping, source: str | Path, unit: str | None = None,
+              declared: str | None = "m") -> UnitChoice:
+    """The length unit of a mapped rig (`io.units.choose_unit`); an `InputFileError` where no unit (or not the
+    user's) makes it a plausible hand."""
+    return _unit(skeleton, _bone_index(skeleton, mapping), Path(source), unit, declared)
+
+
+def _unit(skeleton: RigSkeleton, index: np.ndarray, source: Path, unit: str | None, declared: str | None
+          ) -> UnitChoice:
     if not np.isfinite(skeleton.world).all():
         raise InputFileError(source, "bone transforms contain NaN or infinite values")
-    length = np.linalg.norm(positions[topo.joint_index("middle_dip")] - positions[0])
-    for factor in (1.0, 0.01, 0.001):  # metres, centimetres (FBX, BVH), millimetres
-        if 0.03 <= length * factor <= 0.6:
-            return rotation_part(wrist), wrist[:3, 3], factor
-    raise InputFileError(source, f"wrist to middle DIP is {length:.4g} file units, not a plausible hand in "
-                                 f"metres, centimetres or millimetres")
+    length = _length(skeleton, index)
+    choice = choose_unit(length, unit, declared)
+    if choice is None and unit is not None:
+        raise InputFileError(source, f"wrist to middle DIP is {length:.4g} file units: in {UNIT_NAMES[unit]} "
+                                     f"(--unit {unit}) a hand of {length * UNITS[unit]:.4g} m, not a plausible one")
+    if choice is None:
+        raise InputFileError(source, f"wrist to middle DIP is {length:.4g} file units, not a plausible hand in "
+                                     f"{', '.join(UNIT_NAMES.values())}"
+                                     + ("; is the hand collapsed (a bone scaled to 0)?" if length < 1e-9 else ""))
+    return choice
 
 
 def build_hand(source: str | Path, skeleton: RigSkeleton, mapping: RigMapping, mesh: RigMesh | None,
-               name: str | None = None) -> HandModel:
-    """The `HandModel` of a mapped rig, annotated (sidecar, solver or palm plane) and mirrored if left."""
+               name: str | None = None, unit: str | None = None, declared: str | None = "m") -> HandModel:
+    """The `HandModel` of a mapped rig, annotated (sidecar, solver or palm plane) and mirrored if left; lengths
+    in ``unit`` (None: the ``declared`` unit of the format where the hand is plausible in it, else a guess)."""
     from s2h_viewer.annotate.solver import palm_plane_frames
 
     source = Path(source)
     side = mapping.side
     index = _bone_index(skeleton, mapping)
-    wrist_rot, wrist_origin, to_metres = _hand_space(skeleton, index, source)
+    _refuse_collapsed(skeleton, mapping, index, source)
+    unit_choice = _unit(skeleton, index, source, unit, declared)
+    wrist_rot, wrist_origin = rotation_part(skeleton.world[index[0]]), skeleton.world[index[0], :3, 3]
+    to_metres = unit_choice.to_metres
+    unit_note = unit_choice.note(_length(skeleton, index))
     positions = np.zeros((topo.N_JOINTS, 3))
     present = index >= 0
     positions[present] = (skeleton.world[index[present], :3, 3] - wrist_origin) @ wrist_rot * to_metres
@@ -132,13 +147,32 @@ def build_hand(source: str | Path, skeleton: RigSkeleton, mapping: RigMapping, m
                          meta={"side": side, "side_from": mapping.side_from, "rig_scheme": mapping.scheme,
                                "rig_joints": mapping.joints, "rig_confidence": mapping.confidence,
                                "rig_notes": mapping.notes, "palm_bones": mapping.palm_bones,
-                               "extrapolated_tips": mapping.missing_tips, "to_metres": to_metres})
+                               "extrapolated_tips": mapping.missing_tips, "to_metres": to_metres,
+                               "unit": unit_choice.unit, "unit_note": unit_note})
         if side == "left":
             hand = mirror_hand(hand, MIRROR_NORMAL)
             hand.rest_frames = palm_plane_frames(hand.rest_positions)  # the guess, made for the right hand
         return annotate(hand, source)
     except InvalidHandError as exc:
         raise InputFileError(source, str(exc)) from None
+
+
+def _length(skeleton: RigSkeleton, index: np.ndarray) -> float:
+    """Wrist to middle DIP in file units."""
+    return float(np.linalg.norm(skeleton.world[index[topo.joint_index("middle_dip")], :3, 3]
+                                - skeleton.world[index[0], :3, 3]))
+
+
+def _refuse_collapsed(skeleton: RigSkeleton, mapping: RigMapping, index: np.ndarray, source: Path) -> None:
+    """An `InputFileError` for a hand bone whose transform collapses space (a scale of 0 on it or above it):
+    its fingers sit on one point, not a hand to retarget."""
+    blocks = skeleton.world[index[index >= 0], :3, :3]
+    scale = np.abs(np.linalg.det(blocks)) ** (1.0 / 3.0)
+    flat = np.flatnonzero(~(scale > 1e-6 * max(float(scale.max(initial=0.0)), 1e-300)))
+    if len(flat) or not np.any(scale > 0):
+        bone = mapping.joints[topo.JOINT_NAMES[int(np.flatnonzero(index >= 0)[flat[0] if len(flat) else 0])]]
+        raise InputFileError(source, f"bone {bone!r} is scaled to 0 (or a node above it is): the hand collapses to "
+                                     f"a point; fix the scale in the authoring tool")
 
 
 def _check_mesh(mesh: RigMesh, skeleton: RigSkeleton, source: Path) -> None:
@@ -155,8 +189,14 @@ def annotate(hand: HandModel, source: Path) -> HandModel:
     """Set ``hand``'s TBS frames and radii: the sidecar of ``source``, else the solver, else the palm plane."""
     from s2h_viewer.annotate.solver import estimate_radii, solve_tbs_frames
 
-    annotation = load_annotation(source) if source.exists() else None
+    side = hand_side(hand)
+    annotation = load_annotation(source, side) if source.exists() else None
     solution = solve_tbs_frames(hand) if hand.mesh is not None else None
+    refused = None
+    if annotation is not None and annotation.side is None and not _frames_fit(hand, annotation.frames):
+        refused = (f"{legacy_sidecar_path(source).name} (an older sidecar that does not say its hand) does not fit "
+                   f"the {side} hand: not used; annotate this hand and save to write its own sidecar")
+        annotation = None
     if annotation is not None:
         hand.rest_frames, how = annotation.frames, "sidecar"
     elif solution is not None:
@@ -165,10 +205,20 @@ def annotate(hand: HandModel, source: Path) -> HandModel:
         how = "palm plane (no mesh)"
     hand.radii = estimate_radii(hand, solution)
     hand.meta["annotation"] = how
-    if solution is not None:
-        hand.meta["solver_diagnostics"] = solution.diagnostics
+    if solution is not None or refused:
+        hand.meta["solver_diagnostics"] = ([refused] if refused else []) + (solution.diagnostics if solution else [])
     hand.validate()
     return hand
+
+
+def _frames_fit(hand: HandModel, frames: np.ndarray) -> bool:
+    """Whether ``frames`` are TBS frames of ``hand`` (each twist axis along its bone), as a side-less sidecar
+    made for the other hand of a file is not."""
+    try:
+        HandModel(hand.name, hand.offsets, frames, hand.rig_frames, hand.radii).validate()
+    except InvalidHandError:
+        return False
+    return True
 
 
 def _hand_mesh(mesh: RigMesh, skeleton: RigSkeleton, mapping: RigMapping, index: np.ndarray, wrist_rot: np.ndarray,

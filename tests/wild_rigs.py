@@ -1,0 +1,162 @@
+"""Rig files of kinds met in the wild, made here from a real rig's skeleton where no such file can be shipped:
+Meta hand-tracking skeletons with marker nodes, renamed, mirrored and rescaled variants."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pygltflib
+
+from s2h_viewer.io.files import read_rig_skeleton
+
+
+def write_gltf_skeleton(path: Path, names: list[str], parents: list[int], positions: np.ndarray,
+                        scale: float = 1.0) -> Path:
+    """A glTF holding only a node tree: each node translated to its world ``positions`` (rotation identity);
+    ``scale`` on a root node above them all (the skeleton then reads ``positions * scale`` in world units)."""
+    positions = np.asarray(positions, dtype=float)
+    nodes = []
+    for i, p in enumerate(parents):
+        local = positions[i] - (positions[p] if p >= 0 else 0.0)
+        nodes.append(pygltflib.Node(name=names[i], translation=local.tolist(),
+                                    children=[c for c, q in enumerate(parents) if q == i]))
+    roots = [i for i, p in enumerate(parents) if p < 0]
+    nodes.append(pygltflib.Node(name="Armature", scale=[scale] * 3, children=roots))
+    gltf = pygltflib.GLTF2(scene=0, scenes=[pygltflib.Scene(nodes=[len(nodes) - 1])], nodes=nodes,
+                           asset=pygltflib.Asset(version="2.0"))
+    gltf.save(str(path))
+    return path
+
+
+def meta_hand_skeleton(fbx: Path, side: str = "r") -> tuple[list[str], list[int], np.ndarray]:
+    """The skeleton of a Meta/Oculus custom hand (``b_r_hand`` ..) in metres, named as Meta's hand-tracking
+    meshes are (``b_r_wrist``, ``b_r_index_null`` tips) with the marker nodes they hang on each finger
+    (``r_index_finger_tip_marker``, ``..._pad_marker`` beside the tip, ``..._knuckle_marker`` on the proximal)."""
+    skeleton = read_rig_skeleton(fbx)
+    keep = [i for i, n in enumerate(skeleton.names) if ":b_" in n]
+    index = {old: new for new, old in enumerate(keep)}
+    names = [skeleton.names[i].split(":")[-1].replace("_ignore", "_null").replace("_hand", "_wrist")
+             .replace("b_r_", f"b_{side}_") for i in keep]
+    parents = [index.get(int(skeleton.parents[i]), -1) for i in keep]
+    positions = skeleton.world[keep, :3, 3]  # metres (the FBX reader applies the file's unit)
+    for finger in ("thumb", "index", "middle", "ring", "pinky"):
+        tip = names.index(f"b_{side}_{finger}_null")
+        distal, proximal = parents[tip], names.index(f"b_{side}_{finger}1")
+        for part, at, where in (("tip", distal, 1.0), ("pad", distal, 0.8), ("knuckle", proximal, 0.0)):
+            names.append(f"{side}_{finger}_finger_{part}_marker")
+            parents.append(at)
+            target = tip if part != "knuckle" else proximal
+            positions = np.vstack([positions, positions[at] + where * (positions[target] - positions[at])
+                                   + (0.002 if part == "pad" else 0.0)])
+    return names, parents, positions
+
+
+def mirrored(positions: np.ndarray) -> np.ndarray:
+    """The same skeleton reflected across the world's y-z plane: a left hand from a right one."""
+    return positions * np.array([-1.0, 1.0, 1.0])
+
+
+def rescaled_bvh(source: Path, out: Path, factor: float) -> Path:
+    """A BVH in another length unit: every OFFSET and the root's position channels (a frame's first three
+    values, as our writer orders them) times ``factor``."""
+    hierarchy, motion = source.read_text().split("MOTION\n")
+
+    def scale(match) -> str:
+        return "OFFSET " + " ".join(f"{float(v) * factor:.9g}" for v in match.group(1).split())
+
+    hierarchy = re.sub(r"OFFSET ((?:\S+ ){2}\S+)", scale, hierarchy)
+    lines = motion.splitlines()
+    frames = [" ".join([*(f"{float(v) * factor:.9g}" for v in line.split()[:3]), *line.split()[3:]])
+              for line in lines[2:]]
+    out.write_text(hierarchy + "MOTION\n" + "\n".join(lines[:2] + frames) + "\n")
+    return out
+
+
+def _minimal_rotation(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """The smallest rotation taking direction ``a`` to direction ``b``."""
+    from scipy.spatial.transform import Rotation
+    a, b = a / np.linalg.norm(a), b / np.linalg.norm(b)
+    axis = np.cross(a, b)
+    angle = np.arctan2(np.linalg.norm(axis), a @ b)
+    return Rotation.from_rotvec(axis / max(np.linalg.norm(axis), 1e-12) * angle).as_matrix()
+
+
+def per_dof_bvh(source: Path, out: Path) -> Path:
+    """Optical finger mocap's way of writing a hand BVH (made from one of ours, ZXY channels): upper-case
+    names, a joint per degree of freedom (``INDEX_MCP_FE`` turning Z and X, then ``INDEX_MCP_AA`` at the same
+    point turning Y; the thumb CMC too), zero-length End Sites for tips, and a zero pose that is no hand pose
+    (every finger and the thumb straight along the palm); the frames move every joint where the source's do."""
+    from scipy.spatial.transform import Rotation
+
+    from s2h_viewer.io.bvh import read_bvh
+    clip = read_bvh(source)
+    n, parents = len(clip.names), clip.parents
+    local = np.tile(np.eye(3), (len(clip.frames), n, 1, 1))
+    column, roots = 0, {}
+    for j, chans in enumerate(clip.channels):
+        if any(c.endswith("position") for c in chans):
+            roots[j] = clip.frames[:, column:column + 3]
+        rot = [(c[0], column + k) for k, c in enumerate(chans) if c.endswith("rotation")]
+        if rot:
+            local[:, j] = Rotation.from_euler("".join(a for a, _ in rot), clip.frames[:, [c for _, c in rot]],
+                                              degrees=True).as_matrix()
+        column += len(chans)
+    rest = np.zeros((n, 3))
+    for j, p in enumerate(parents):
+        rest[j] = rest[p] + clip.offsets[j] if p >= 0 else clip.offsets[j]
+    wrist = 0
+    forward = rest[clip.names.index("middle_mcp")] - rest[wrist]
+    forward /= np.linalg.norm(forward)
+    offsets = clip.offsets.copy()
+    for j, p in enumerate(parents):
+        if p > wrist:  # a finger's bones (and tips) straight along the palm
+            offsets[j] = np.linalg.norm(clip.offsets[j]) * forward
+    turn = np.tile(np.eye(3), (n, 1, 1))
+    for j in range(n):
+        kids = [c for c in range(n) if parents[c] == j]
+        if j != wrist and len(kids) == 1:
+            turn[j] = _minimal_rotation(offsets[kids[0]], clip.offsets[kids[0]])
+    new_local = local.copy()
+    for j, p in enumerate(parents):
+        if p >= 0:
+            new_local[:, j] = turn[p].T @ local[:, j] @ turn[j]
+    lines, data = ["HIERARCHY"], []
+
+    def write(j: int, depth: int) -> None:
+        pad, name = "  " * depth, clip.names[j].upper()
+        kids = [c for c in range(n) if parents[c] == j]
+        off = offsets[j]
+        if not clip.channels[j]:  # an End Site: zero length, as such mocap writes it
+            lines.extend([f"{pad}End Site", f"{pad}{{", f"{pad}  OFFSET 0 0 0", f"{pad}}}"])
+            return
+        euler = Rotation.from_matrix(new_local[:, j]).as_euler("ZXY", degrees=True)
+        two_dof = name.endswith("_MCP") and not name.startswith("THUMB") or name == "THUMB_CMC"
+        root = parents[j] < 0
+        head = f"{pad}{'ROOT' if root else 'JOINT'} {name if root else name + '_FE'}"
+        chans = (["Xposition", "Yposition", "Zposition"] if root else []) + ["Zrotation", "Xrotation"]
+        lines.extend([head, f"{pad}{{", f"{pad}  OFFSET {off[0]:.9f} {off[1]:.9f} {off[2]:.9f}"])
+        if two_dof:
+            lines.append(f"{pad}  CHANNELS 2 Zrotation Xrotation")
+            lines.extend([f"{pad}  JOINT {name}_AA", f"{pad}  {{", f"{pad}    OFFSET 0 0 0",
+                          f"{pad}    CHANNELS 1 Yrotation"])
+            data.append(euler)
+            inner = depth + 2
+        else:
+            chans.append("Yrotation")
+            lines.append(f"{pad}  CHANNELS {len(chans)} {' '.join(chans)}")
+            data.append(np.concatenate([roots[j], euler], axis=1) if root else euler)
+            inner = depth + 1
+        for kid in kids:
+            write(kid, inner)
+        if two_dof:
+            lines.append(f"{pad}  }}")
+        lines.append(f"{pad}}}")
+
+    write(wrist, 0)
+    table = np.concatenate(data, axis=1)
+    motion = [f"Frames: {len(table)}", f"Frame Time: {clip.frame_time:.7f}"]
+    motion += [" ".join(f"{v:.6f}" for v in row) for row in table]
+    out.write_text("\n".join(lines + ["MOTION"] + motion) + "\n")
+    return out
