@@ -3,8 +3,12 @@ PYTHON ?= python3
 VENV   ?= .venv
 PY      = $(VENV)/bin/python
 STAMP   = $(VENV)/.installed
+# Blender (bpy on PyPI: Python 3.11 only, numpy < 2) lives in a venv of its own, driven as a subprocess
+BLENDER_PYTHON ?= python3.11
+BLENDER_VENV   ?= .venv-blender
+BLENDER_STAMP   = $(BLENDER_VENV)/.installed
 
-.PHONY: run test bench assets train screenshots clean
+.PHONY: run test bench assets train screenshots clean blender
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -16,8 +20,18 @@ $(STAMP): pyproject.toml
 run: $(STAMP)
 	$(VENV)/bin/s2h view
 
-test: $(STAMP)
+# CI (CI=true) builds the Blender venv too, so that the Blender round trip (tests/test_blender_roundtrip.py) runs
+test: $(STAMP) $(if $(CI),$(BLENDER_STAMP))
 	bash scripts/test.sh $(PY)
+
+# the Blender round-trip check's venv (374 MB: bpy 5.0.1); `make test` runs that check once it is there
+blender: $(BLENDER_STAMP)
+
+$(BLENDER_STAMP):
+	$(BLENDER_PYTHON) -m venv $(BLENDER_VENV)
+	$(BLENDER_VENV)/bin/python -m pip install -q --upgrade pip
+	$(BLENDER_VENV)/bin/python -m pip install -q bpy==5.0.1
+	touch $(BLENDER_STAMP)
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_asm_fk.py
@@ -43,4 +57,4 @@ assets: $(STAMP)
 	$(PY) scripts/generate_assets.py
 
 clean:
-	rm -rf $(VENV) .pytest_cache
+	rm -rf $(VENV) $(BLENDER_VENV) .pytest_cache
