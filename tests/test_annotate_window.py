@@ -566,3 +566,27 @@ def test_open_hand_with_joint_map_edits_the_saved_map(window, qtbot, renamed_han
     assert seen["prefilled"]["index_pip"] == "pointer-phalanx-distal" and seen["ok_at_first"]  # the saved map
     assert json.loads(path.with_name("renamed.right.joints.json").read_text()) == joint_map
     np.testing.assert_allclose(window.annotation.hand.rest_positions, load_hand_file(WEBXR).rest_positions, atol=1e-9)
+
+
+def test_a_hand_whose_unit_the_size_leaves_open_asks_which_and_opens_in_the_one_chosen(window, sample_hands, tmp_path):
+    """A BVH hand of 12 file units from wrist to middle DIP is a small hand in centimetres or a large one in inches:
+    the window asks (the guess first), opens it in the unit clicked and says a sure guess in the status bar;
+    Cancel opens nothing."""
+    from s2h_viewer.io.files import save_motion_file
+    from wild_rigs import rescaled_bvh
+    clip = synthesize(["fist"], sample_hands["birch"], seed=1, name="short")
+    written = save_motion_file(tmp_path / "hand.bvh", clip, sample_hands["birch"])  # centimetres, 18 units
+    small = rescaled_bvh(written, tmp_path / "small.bvh", 12.0 / 18.15)
+    shown = answer(click("inches"))
+    window.annotate_file(str(small))
+    assert "small.bvh: in which unit are its lengths?" in shown[0] and "centimetres (wrist to middle DIP" in shown[0]
+    hand = window.annotate.session.hand
+    assert hand.meta["unit"] == "in" and hand.hand_length == pytest.approx(
+        sample_hands["birch"].hand_length * 12.0 / 18.15 * 2.54, rel=1e-2)
+    answer(click("Cancel"))
+    window.annotate_file(str(small))
+    assert window.annotate.session.hand is hand and "not opened (its unit not chosen)" in \
+        window.statusBar().currentMessage()
+    window.annotate_file(str(written))  # 18 units: centimetres, sure; said, not asked
+    assert window.annotate.session.hand.meta["unit"] == "cm"
+    assert "length unit guessed from the hand's size: centimetres" in window.statusBar().currentMessage()

@@ -1,6 +1,7 @@
 """A real client reads our exports back (issue 22): Blender (bpy from PyPI, in the venv `make blender` makes)
-imports the GLB and BVH written for each hand of a full-body character, and every hand bone turns, frame by
-frame, as the retarget says, with the avatar's own bone names and hierarchy.
+imports the GLB and BVH written for each hand of a full-body character and for an FBX hand (its GLB rebuilt
+from the FBX's own rig), and every hand bone turns, frame by frame, as the retarget says, with the avatar's own
+bone names and hierarchy.
 
 Runs where `.venv-blender` exists (CI builds it: `make test` with CI=true); skipped elsewhere, saying how to
 make it.
@@ -26,6 +27,9 @@ from s2h_viewer.samples import ASSETS_DIR, load_sample_hand
 ROOT = Path(__file__).resolve().parent.parent
 BLENDER_PYTHON = ROOT / ".venv-blender" / "bin" / "python"
 FEMALE = ASSETS_DIR / "hands" / "real" / "human-female.glb"
+OCULUS = ASSETS_DIR / "hands" / "real" / "r_hand_skeletal_lowres.fbx"
+#: (avatar, hand): both hands of a glTF character, the one hand of an FBX
+TARGETS = [(FEMALE, "right"), (FEMALE, "left"), (OCULUS, None)]
 #: glTF and BVH are Y-up, Blender Z-up: its importers turn the file's (x, y, z) into Blender's (x, -z, y)
 TO_BLENDER = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 TOLERANCE_DEG = 0.5
@@ -48,28 +52,29 @@ def quats(values) -> Rotation:
 
 @pytest.fixture(scope="module")
 def retargets():
-    """The gestures clip TBS-copied onto each hand of human-female.glb: (side, hand, motion)."""
+    """The gestures clip TBS-copied onto each target hand: (avatar, hand, motion)."""
     motion = load_motion(ASSETS_DIR / "motions" / "gestures.npz")
     source = load_sample_hand(motion.hand_name)
     out = []
-    for side in ("right", "left"):
-        hand = load_hand_file(FEMALE, RigOptions(side=side))
-        out.append((side, hand, retarget(motion, source, hand, "tbs_copy")))
+    for avatar, side in TARGETS:
+        hand = load_hand_file(avatar, RigOptions(side=side))
+        out.append((avatar, hand, retarget(motion, source, hand, "tbs_copy")))
     return out
 
 
 @pytest.mark.parametrize("suffix", [".glb", ".bvh"])
 def test_blender_reimports_our_exports_of_both_hands_within_half_a_degree(suffix, retargets, tmp_path):
-    skeleton = read_rig_skeleton(FEMALE)
-    lookup = {n: i for i, n in enumerate(skeleton.names)}
-    for side, hand, motion in retargets:
-        path = save_motion_file(tmp_path / f"female_{side}{suffix}", motion, hand)
+    for avatar, hand, motion in retargets:
+        skeleton = read_rig_skeleton(avatar)
+        lookup = {n: i for i, n in enumerate(skeleton.names)}
+        side = hand.meta["side"]
+        path = save_motion_file(tmp_path / f"{avatar.stem}_{side}{suffix}", motion, hand)
         blender = blender_read_back(path, motion.fps)
         bones = [hand.meta["rig_joints"][topo.JOINT_NAMES[j]] for j in topo.ROTATING_JOINTS]
         parents = dict(zip(blender["bones"], blender["parents"]))
         for bone in bones[1:]:  # the avatar's own names and hierarchy
             own_parent = skeleton.names[skeleton.parents[lookup[bone]]]
-            assert parents[bone] == own_parent, (side, bone)
+            assert parents[bone] == own_parent, (avatar.name, side, bone)
         # what we meant: each bone's world rotation from rest, in the file's axes
         wrist = rotation_part(skeleton.world[lookup[bones[0]]])
         hand_space = world_rotations_from_motion(hand, motion)  # (T, 16, 3, 3), wrist at rest
@@ -85,7 +90,7 @@ def test_blender_reimports_our_exports_of_both_hands_within_half_a_degree(suffix
             rest = quats(blender["rest"][bone])
             frames = quats(blender["frames"][bone])
             theirs = (frames * rest.inv()).as_matrix()
-            assert len(theirs) == motion.n_frames, (side, bone, len(theirs))
+            assert len(theirs) == motion.n_frames, (avatar.name, side, bone, len(theirs))
             angle = Rotation.from_matrix(theirs @ ours[:, r].transpose(0, 2, 1)).magnitude()
             worst = max(worst, float(np.degrees(angle).max()))
-        assert worst < TOLERANCE_DEG, (side, suffix, worst)
+        assert worst < TOLERANCE_DEG, (avatar.name, side, suffix, worst)

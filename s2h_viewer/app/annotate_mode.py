@@ -133,7 +133,8 @@ class AnnotateMode(QObject):
         self.undo_stack.clear()
         self.view.set_session(session)
         review = sum(session.needs_review(j) for j in range(topo.N_ARTICULATED))
-        self.status(f"{hand.name}: frames from {session.frames_from}, {review} joint(s) to review")
+        unit = f"; {hand.meta['unit_note']}" if hand.meta.get("unit_note") else ""
+        self.status(f"{hand.name}: frames from {session.frames_from}, {review} joint(s) to review{unit}")
 
     def sidecar(self) -> Path | None:
         """Where Save writes: the sidecar of this hand (its side) beside the hand file, found there when the

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 
 from PySide6.QtCore import QSettings, QTimer, Signal
@@ -353,6 +354,12 @@ class MainWindow(QMainWindow):
         ``map_joints`` the user maps its bones first (the joint map dialog)."""
         try:
             hand = self._map_and_load(path) if map_joints else self._load_or_map(path)
+            unit = self._chosen_unit(path, hand) if hand is not None else None
+            if unit:
+                from s2h_viewer.io.files import load_hand_file
+                hand = load_hand_file(path, replace(self.open_options, unit=unit))
+            elif unit is None:
+                return None
         except S2HError as exc:
             self.error(str(exc))
             return None
@@ -361,6 +368,29 @@ class MainWindow(QMainWindow):
         self._remember(path)
         self.settings.setValue("files/hand_dir", str(Path(path).resolve().parent))
         return hand
+
+    def _chosen_unit(self, path: str, hand: HandModel) -> str | None:
+        """Where s2h guessed ``hand``'s length unit from its size and another unit would make a plausible hand
+        too, the unit the user picks ("" to keep the guess, None if they cancel); a sure guess is said in the
+        status bar ("")."""
+        from s2h_viewer.io.units import UNIT_NAMES
+        guess = hand.meta.get("unit_guess")
+        if guess is None:
+            return ""
+        name, note = Path(path).name, hand.meta["unit_note"]
+        if guess["sure"]:
+            self.statusBar().showMessage(f"{name}: {note}", 10000)
+            return ""
+        units = [guess["unit"], *guess["alternatives"]]
+        others = " or ".join(UNIT_NAMES[u] for u in units[1:])
+        choice = ask(self, "s2h-viewer: length unit", f"{name}: in which unit are its lengths?",
+                     [(UNIT_NAMES[u], QMessageBox.ButtonRole.AcceptRole) for u in units]
+                     + [("Cancel", QMessageBox.ButtonRole.RejectRole)],
+                     f"{note.split('; ')[0]}; in {others} it would be a plausible hand too.")
+        if choice == len(units):
+            self.statusBar().showMessage(f"{name}: not opened (its unit not chosen)", 5000)
+            return None
+        return "" if choice == 0 else units[choice]
 
     def _load_or_map(self, path: str) -> HandModel | None:
         """The hand in ``path``; where s2h does not recognise its bones (and a joint map can make it a hand: not
@@ -440,6 +470,11 @@ class MainWindow(QMainWindow):
         from s2h_viewer.samples import load_sample_hand
         try:
             motion, rig = load_motion_file(path, options=self.open_options)
+            unit = self._chosen_unit(path, rig) if rig is not None else ""
+            if unit is None:
+                return
+            if unit:
+                motion, rig = load_motion_file(path, options=replace(self.open_options, unit=unit))
             source = rig or load_sample_hand(motion.hand_name)
         except (S2HError, KeyError) as exc:
             self.error(str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc))

@@ -26,6 +26,7 @@ from s2h_viewer.io.annotation import hand_side, refuse_foreign_sidecar, save_han
 from s2h_viewer.io.atomic import atomic_path
 from s2h_viewer.io.rig import (RigMesh, RigSkeleton, bone_indices, build_hand, motion_from_world_rotations,
                                recognise, rotation_part, world_rotations_from_motion)
+from s2h_viewer.io.rig_gltf import node_rotations, rig_document
 
 _DTYPES = {5120: np.int8, 5121: np.uint8, 5122: np.int16, 5123: np.uint16, 5125: np.uint32, 5126: np.float32}
 _WIDTH = {"SCALAR": 1, "VEC2": 2, "VEC3": 3, "VEC4": 4, "MAT4": 16}
@@ -499,43 +500,36 @@ def _save_glb(gltf: pygltflib.GLTF2, blob: bytearray, path: Path) -> None:
 
 def save_gltf_motion(path: str | Path, motion: Motion, hand: HandModel) -> Path:
     """Write ``motion`` on ``hand`` as a GLB: the hand's glTF source with the animation added when it has
-    one (so the avatar opens animated in Blender), else the hand itself, skinned, with the animation. The
+    one (so the avatar opens animated in Blender), an FBX source's rig and mesh rebuilt as glTF
+    (`io.rig_gltf`), else the hand itself, skinned, with the animation. The
     hand's TBS frames go beside it as its annotation sidecar, so that it reads back with the same TBS
     rotations; a sidecar of another file under that name is refused, before anything is written."""
     path = Path(path)
     refuse_foreign_sidecar(path, hand_side(hand))
     source = Path(hand.source)
-    if source.suffix.lower() in GLTF_SUFFIXES and source.exists() and "rig_joints" in hand.meta:
+    from_rig = source.exists() and "rig_joints" in hand.meta
+    if from_rig and source.suffix.lower() in GLTF_SUFFIXES:
         doc = _Document(source)
         gltf, blob = doc.gltf, bytearray(doc.blob)
-        node_rotations = _source_node_rotations(doc, hand, motion)
+        rotations = _source_node_rotations(doc, hand, motion)
+    elif from_rig and source.suffix.lower() == ".fbx":  # the avatar's own rig, rebuilt as glTF
+        from s2h_viewer.io.fbx import _read
+        skeleton, mesh, _ = _read(source)
+        blob = bytearray()
+        gltf = rig_document(skeleton, mesh, source.stem, lambda g, data, kind, component, target, bounds: _append(
+            g, blob, data, kind, component, target, bounds))
+        rotations = node_rotations(skeleton, hand, motion, world_rotations_from_motion(hand, motion))
     else:
-        gltf, blob, node_rotations = _hand_document(hand, motion)
-    _add_animation(gltf, blob, motion, node_rotations)
+        gltf, blob, rotations = _hand_document(hand, motion)
+    _add_animation(gltf, blob, motion, rotations)
     _save_glb(gltf, blob, path)
     return save_hand_frames(path, hand, hand.rig_frames[0].T)  # the file loads in its wrist bone's frame
 
 
 def _source_node_rotations(doc: _Document, hand: HandModel, motion: Motion) -> dict[int, np.ndarray]:
     """Local rotations over time of the source file's mapped bones playing ``motion`` (wrist held at rest)."""
-    lookup = {n: i for i, n in enumerate(doc.names)}
-    rotating = {lookup[hand.meta["rig_joints"][topo.JOINT_NAMES[j]]]: r for r, j in enumerate(topo.ROTATING_JOINTS)}
-    wrist_world = rotation_part(doc.world[next(n for n, r in rotating.items() if r == 0)])
-    hand_rot = world_rotations_from_motion(hand, motion)  # (T, 16, 3, 3) in hand space
-    world = np.broadcast_to(rotation_part(doc.world), (motion.n_frames, len(doc.names), 3, 3)).copy()
-    local_rest = rotation_part(doc.local)
-    for i in doc.order:
-        if i in rotating:
-            world[:, i] = wrist_world @ hand_rot[:, rotating[i]]
-        elif doc.parents[i] >= 0:
-            world[:, i] = world[:, doc.parents[i]] @ local_rest[i]
-    out = {}
-    for node, r in rotating.items():
-        if r == 0:
-            continue
-        parent = doc.parents[node]
-        out[node] = world[:, node] if parent < 0 else world[:, parent].transpose(0, 2, 1) @ world[:, node]
-    return out
+    return node_rotations(RigSkeleton(doc.names, doc.world, doc.parents), hand, motion,
+                          world_rotations_from_motion(hand, motion))
 
 
 def _hand_document(hand: HandModel, motion: Motion) -> tuple[pygltflib.GLTF2, bytearray, dict[int, np.ndarray]]:

@@ -125,7 +125,10 @@ def build_hand(source: str | Path, skeleton: RigSkeleton, mapping: RigMapping, m
     unit_choice = _unit(skeleton, index, source, unit, declared)
     wrist_rot, wrist_origin = rotation_part(skeleton.world[index[0]]), skeleton.world[index[0], :3, 3]
     to_metres = unit_choice.to_metres
-    unit_note = unit_choice.note(_length(skeleton, index))
+    length = _length(skeleton, index)
+    unit_note = unit_choice.note(length)
+    unit_guess = None if unit_note is None else {"unit": unit_choice.unit, "sure": unit_choice.sure,
+                                                  "alternatives": unit_choice.alternatives(length)}
     positions = np.zeros((topo.N_JOINTS, 3))
     present = index >= 0
     positions[present] = (skeleton.world[index[present], :3, 3] - wrist_origin) @ wrist_rot * to_metres
@@ -148,7 +151,7 @@ def build_hand(source: str | Path, skeleton: RigSkeleton, mapping: RigMapping, m
                                "rig_joints": mapping.joints, "rig_confidence": mapping.confidence,
                                "rig_notes": mapping.notes, "palm_bones": mapping.palm_bones,
                                "extrapolated_tips": mapping.missing_tips, "to_metres": to_metres,
-                               "unit": unit_choice.unit, "unit_note": unit_note})
+                               "unit": unit_choice.unit, "unit_note": unit_note, "unit_guess": unit_guess})
         if side == "left":
             hand = mirror_hand(hand, MIRROR_NORMAL)
             hand.rest_frames = palm_plane_frames(hand.rest_positions)  # the guess, made for the right hand

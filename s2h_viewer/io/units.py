@@ -31,11 +31,15 @@ class UnitChoice:
     decided_by: str  # "the user" | "the file" | "the hand's size"
     sure: bool = True
 
+    def alternatives(self, length: float) -> list[str]:
+        """The other units in which a ``length`` (file units) hand would be plausible too."""
+        return [u for u in UNITS if u != self.unit and plausible(length * UNITS[u])]
+
     def note(self, length: float) -> str | None:
         """A line for the rig's notes where the unit was guessed, None where the user or the file said it."""
         if self.decided_by != "the hand's size":
             return None
-        alternatives = ", ".join(u for u in UNITS if u != self.unit and plausible(length * UNITS[u]))
+        alternatives = ", ".join(self.alternatives(length))
         return (f"length unit guessed from the hand's size: {UNIT_NAMES[self.unit]} (wrist to middle DIP "
                 f"{length:.4g} file units = {length * self.to_metres:.3f} m)"
                 + (f"; {alternatives} would also give a plausible hand: check it, or pass --unit" if not self.sure
