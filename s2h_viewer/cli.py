@@ -423,7 +423,8 @@ def build_parser() -> argparse.ArgumentParser:
     rt.add_argument("--source", help="hand the motion is performed on (default: its own rig, or its sample hand)")
     rt.add_argument("--target", required=True, help="target hand file or sample name")
     rt.add_argument("--method", default="asrn", help="copy, tbs_copy, dm, asrn or asm_opt")
-    rt.add_argument("--out", required=True, help="output file: .glb (on the target rig), .bvh or .npz")
+    rt.add_argument("--out", required=True, help="output file: .glb (on the target rig), .bvh, .npz, or .fbx (through "
+                                                       "Blender: `make blender`)")
     rt.add_argument("--quiet", action="store_true", help="no progress bar")
     _add_rig_options(rt)
     rt.set_defaults(func=_cmd_retarget)

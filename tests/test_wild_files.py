@@ -364,3 +364,18 @@ def test_a_per_dof_mocap_bvh_is_read_by_its_names_with_its_joints_folded_and_its
             return forward_kinematics(hand, torch.as_tensor(clip.q_tbs, dtype=torch.float64)).positions.numpy()
     error = np.abs(positions(rig, motion)[:, joints] - positions(reference_rig, reference)[:, joints]).max()
     assert error < 1e-6
+
+
+def test_fbx_out_without_blender_is_one_line_saying_how_to_get_it_and_writes_nothing(tmp_path):
+    """FBX is written through Blender (`make blender`); where there is none, `--out x.fbx` says so in one line."""
+    import os
+    out = tmp_path / "out.fbx"
+    done = subprocess.run([sys.executable, "-m", "s2h_viewer.cli", "retarget", "--motion", str(GESTURES), "--target",
+                           "iris", "--method", "tbs_copy", "--out", str(out), "--quiet"], capture_output=True,
+                          text=True, cwd=ROOT, timeout=300,
+                          env={**os.environ, "S2H_BLENDER_PYTHON": str(tmp_path / "no-blender" / "python")})
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert done.stderr.strip() == (f"s2h: error: {out}: writing FBX goes through Blender, which is not installed "
+                                   f"here: run `make blender` (or set S2H_BLENDER_PYTHON to a Python with bpy), or "
+                                   f"write .glb, which Blender, Unity and Unreal import")
+    assert list(tmp_path.iterdir()) == []

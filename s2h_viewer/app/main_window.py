@@ -603,7 +603,8 @@ class MainWindow(QMainWindow):
         if self.comparison is None:
             return None
         result = self.compare.selected_result()
-        path = self._ask_to_save(f"Export {result.method} -> {result.target.name}", "Motion (*.glb *.bvh *.npz)", path,
+        path = self._ask_to_save(f"Export {result.method} -> {result.target.name}",
+                                 "Motion (*.glb *.bvh *.npz *.fbx)", path,
                                  lambda: exports.suggested_name(self.compare, ".glb"))
         if not path:
             return None

@@ -1,7 +1,7 @@
-"""FBX (read only, ufbx): a rigged hand or one hand of a character, and its takes as motion.
+"""FBX in (ufbx): a rigged hand or one hand of a character, and its takes as motion.
 
 ufbx converts units to metres and reads the bind pose; it runs in a child process (`fbx_scene`).
-s2h writes no FBX: export to glTF, which Blender, Unity and Unreal all import.
+FBX out goes through Blender (`fbx_export`).
 """
 
 from __future__ import annotations

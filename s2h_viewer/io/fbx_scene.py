@@ -1,15 +1,20 @@
 """The ufbx half of FBX reading, run in a child process: ``python -m s2h_viewer.io.fbx_scene IN OUT [FPS]``.
 
 ufbx 0.0.5 caches one Python wrapper per scene object without owning it, so a wrapper that Python
-frees is later handed out again and crashes the interpreter (``Scene.free`` does the same). Every
-wrapper fetched is kept in ``keep`` until the copy into numpy is done, and the whole read happens in
-a process of its own, so a crash there becomes an error message, never a dead application.
+frees is later handed out again and crashes the interpreter (``Scene.free`` does the same). Freeing
+them at all is unsafe: the scene and its wrappers, dropped when `read_scene` returned, crashed the
+process at random (signal 11 in about 1 read in 12 of a Blender-exported FBX: Python's teardown order
+of a frame's locals decides whether a wrapper outlives the scene it points into). So every wrapper
+fetched is kept in ``keep``, the scene and ``keep`` are never freed (`_NEVER_FREED`), and the process
+leaves with ``os._exit`` once the arrays are written; the whole read happens in a process of its own,
+so any crash left becomes an error message, never a dead application.
 Imports numpy, scipy and ufbx only (fast to start).
 """
 
 from __future__ import annotations
 
 import json
+import os
 import sys
 
 import numpy as np
@@ -18,6 +23,8 @@ from scipy.spatial.transform import Rotation
 
 #: frames x bones evaluated for one take (each a ufbx call): bounds the read's time and memory
 MAX_TAKE_SAMPLES = 5_000_000
+#: every scene read and the wrappers fetched from it, held until the process exits (see the module docstring)
+_NEVER_FREED: list = []
 
 
 def _matrix(m) -> np.ndarray:
@@ -136,6 +143,7 @@ def read_scene(path: str, fps: float) -> dict[str, np.ndarray]:
     """Everything s2h needs from an FBX file, as arrays (names as JSON); raises on unreadable files."""
     scene = ufbx.load_file(path, target_unit_meters=1.0, ignore_embedded=True)
     keep = list(scene.nodes)
+    _NEVER_FREED.append((scene, keep))
     nodes = [n for n in keep if not n.is_root]
     names = [n.name for n in nodes]
     index = {n.typed_id: i for i, n in enumerate(nodes)}
@@ -165,4 +173,7 @@ def main(argv: list[str]) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    code = main(sys.argv[1:])
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)  # no teardown: nothing of ufbx is ever freed (see the module docstring)

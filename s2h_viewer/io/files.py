@@ -4,7 +4,7 @@ Hands: ``.npz`` (the project's), ``.glb``/``.gltf``, ``.fbx``, ``.bvh`` (skeleto
 of a shipped sample hand. Motions: ``.npz``, ``.bvh``, ``.glb``/``.gltf`` animation, ``.fbx`` take, and
 tracking recordings (WebXR/OpenXR or MediaPipe ``.json``, keypoint ``.npy``/``.npz``: `io.recordings`),
 which come with a source hand fitted to them (`tracking.fitter`).
-Retargeted motion out: ``.npz``, ``.bvh``, ``.glb``.
+Retargeted motion out: ``.npz``, ``.bvh``, ``.glb``, and ``.fbx`` through Blender (`io.fbx_export`).
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from s2h_viewer.hand.rig_mapping import load_user_mapping, sides_named
 HAND_SUFFIXES = (".npz", ".glb", ".gltf", ".vrm", ".fbx", ".bvh")
 MOTION_SUFFIXES = (".npz", ".bvh", ".glb", ".gltf", ".vrm", ".fbx", ".json", ".npy")
 GLTF_FAMILY = (".glb", ".gltf", ".vrm")  # a .vrm is a GLB with a VRM extension
-EXPORT_SUFFIXES = (".npz", ".bvh", ".glb")
+EXPORT_SUFFIXES = (".npz", ".bvh", ".glb", ".fbx")
 #: ``RigOptions.animation`` for every animation of a file in turn, as one clip labelled by animation
 ALL_ANIMATIONS = "all"
 
@@ -205,7 +205,7 @@ def list_animations(path: str | Path) -> list[str]:
 
 
 def save_motion_file(path: str | Path, motion: Motion, hand: HandModel) -> Path:
-    """Write ``motion`` (on ``hand``) as npz, BVH or GLB, chosen by suffix, atomically."""
+    """Write ``motion`` (on ``hand``) as npz, BVH, GLB or FBX (through Blender), chosen by suffix, atomically."""
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in EXPORT_SUFFIXES:
@@ -217,6 +217,9 @@ def save_motion_file(path: str | Path, motion: Motion, hand: HandModel) -> Path:
     if suffix == ".bvh":
         from s2h_viewer.io.bvh import save_bvh
         return save_bvh(path, motion, hand)
+    if suffix == ".fbx":
+        from s2h_viewer.io.fbx_export import save_fbx_motion
+        return save_fbx_motion(path, motion, hand)
     from s2h_viewer.io.gltf import save_gltf_motion
     return save_gltf_motion(path, motion, hand)
 
