@@ -1,8 +1,8 @@
-"""Run by the Blender venv's Python (`make blender`: bpy from PyPI, its own venv, numpy < 2): import a GLB or BVH
-into an empty Blender scene, as a user's File > Import does, and write every armature bone's name, parent and
+"""Run by the Blender venv's Python (`make blender`: bpy from PyPI, its own venv, numpy < 2): import a GLB, BVH or
+FBX into an empty Blender scene, as a user's File > Import does, and write every armature bone's name, parent and
 world rotation per frame (quaternions w, x, y, z) at rest and over the animation to a JSON file.
 
-    .venv-blender/bin/python scripts/blender_readback.py IN.glb|IN.bvh OUT.json [FPS]
+    .venv-blender/bin/python scripts/blender_readback.py IN.glb|IN.bvh|IN.fbx OUT.json [FPS]
 
 FPS (default 30) is the scene's frame rate while a glTF is imported: its keys land on Blender frames at it.
 
@@ -25,8 +25,10 @@ def import_file(path: Path, fps: int) -> None:
         bpy.ops.import_scene.gltf(filepath=str(path))
     elif path.suffix.lower() == ".bvh":
         bpy.ops.import_anim.bvh(filepath=str(path), update_scene_fps=True, update_scene_duration=True)
+    elif path.suffix.lower() == ".fbx":
+        bpy.ops.import_scene.fbx(filepath=str(path))
     else:
-        raise SystemExit(f"{path}: not a GLB or BVH")
+        raise SystemExit(f"{path}: not a GLB, BVH or FBX")
 
 
 def frame_range(armature) -> tuple[int, int]:

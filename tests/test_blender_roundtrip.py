@@ -1,5 +1,5 @@
 """A real client reads our exports back (issue 22): Blender (bpy from PyPI, in the venv `make blender` makes)
-imports the GLB and BVH written for each hand of a full-body character and for an FBX hand (its GLB rebuilt
+imports the GLB, BVH and FBX written for each hand of a full-body character and for an FBX hand (its GLB rebuilt
 from the FBX's own rig), and every hand bone turns, frame by frame, as the retarget says, with the avatar's own
 bone names and hierarchy.
 
@@ -64,7 +64,7 @@ def retargets():
     return out
 
 
-@pytest.mark.parametrize("suffix", [".glb", ".bvh"])
+@pytest.mark.parametrize("suffix", [".glb", ".bvh", ".fbx"])
 def test_blender_reimports_our_exports_of_both_hands_within_half_a_degree(suffix, retargets, tmp_path):
     for avatar, hand, motion in retargets:
         skeleton = read_rig_skeleton(avatar)
