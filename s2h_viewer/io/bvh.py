@@ -244,17 +244,20 @@ def _frame_positions(clip: BvhClip, world: np.ndarray, frames: np.ndarray) -> np
     return out
 
 
+def _side_of_pose(skeleton: RigSkeleton, positions: np.ndarray, mapping: RigMapping) -> tuple[str, float]:
+    """Geometry's call (`rig_recognition.detect_side`) on the mapped hand with its bones at ``positions``."""
+    from s2h_viewer.hand.rig_recognition import Skeleton, canonical_positions, detect_side
+    return detect_side(canonical_positions(Skeleton(skeleton.names, skeleton.parents, positions), mapping.joints))
+
+
 def _side_from_frames(clip: BvhClip, world: np.ndarray, skeleton: RigSkeleton, folds: FoldedJoints,
-                      mapping) -> tuple[str, float]:
+                      mapping: RigMapping) -> tuple[str, float]:
     """The side the clip's own poses say (a zero pose of per-DOF mocap is no hand pose): geometry's call on
     up to 50 frames, summed with its confidence as weight."""
-    from s2h_viewer.hand.rig_recognition import Skeleton, canonical_positions, detect_side
     frames = np.unique(np.linspace(0, len(clip.frames) - 1, min(50, len(clip.frames))).astype(int))
-    positions = _frame_positions(clip, world, frames)[:, folds.kept]
     score = 0.0
-    for pose in positions:
-        side, sure = detect_side(canonical_positions(Skeleton(skeleton.names, skeleton.parents, pose),
-                                                     mapping.joints))
+    for pose in _frame_positions(clip, world, frames)[:, folds.kept]:
+        side, sure = _side_of_pose(skeleton, pose, mapping)
         score += sure if side == "right" else -sure
     return ("right" if score >= 0 else "left"), min(abs(score) / len(frames), 1.0)
 
@@ -263,13 +266,12 @@ def recognise_bvh(path: Path, clip: BvhClip, side: str | None = None, scheme: st
                   joint_map: dict[str, str] | None = None) -> tuple[RigSkeleton, FoldedJoints, RigMapping, np.ndarray]:
     """The hand of a BVH clip: recognised on its folded skeleton (`folded_skeleton`), its side, where geometry
     decides it, from the clip's poses; with the skeleton, the folds and every joint's world rotations (T, N)."""
-    from s2h_viewer.hand.rig_recognition import SURE, Skeleton, canonical_positions, detect_side
+    from s2h_viewer.hand.rig_recognition import SURE
     full = _world(clip, _local_rotations(clip))
     skeleton, folds = folded_skeleton(clip)
     mapping = recognise(skeleton, path, side, scheme, joint_map)
     if mapping.side_from.startswith("geometry"):  # the poses decide; a rest pose that agrees adds its certainty
-        at_rest, rest_sure = detect_side(canonical_positions(
-            Skeleton(skeleton.names, skeleton.parents, skeleton.world[:, :3, 3]), mapping.joints))
+        at_rest, rest_sure = _side_of_pose(skeleton, skeleton.world[:, :3, 3], mapping)
         mapping.side, sure = _side_from_frames(clip, full, skeleton, folds, mapping)
         sure = max(sure, rest_sure) if at_rest == mapping.side else sure
         mapping.side_from = f"geometry of the clip's poses (confidence {sure:.2f})"

@@ -169,11 +169,11 @@ def _length(skeleton: RigSkeleton, index: np.ndarray) -> float:
 def _refuse_collapsed(skeleton: RigSkeleton, mapping: RigMapping, index: np.ndarray, source: Path) -> None:
     """An `InputFileError` for a hand bone whose transform collapses space (a scale of 0 on it or above it):
     its fingers sit on one point, not a hand to retarget."""
-    blocks = skeleton.world[index[index >= 0], :3, :3]
-    scale = np.abs(np.linalg.det(blocks)) ** (1.0 / 3.0)
-    flat = np.flatnonzero(~(scale > 1e-6 * max(float(scale.max(initial=0.0)), 1e-300)))
-    if len(flat) or not np.any(scale > 0):
-        bone = mapping.joints[topo.JOINT_NAMES[int(np.flatnonzero(index >= 0)[flat[0] if len(flat) else 0])]]
+    present = np.flatnonzero(index >= 0)  # canonical joints the rig has
+    scale = np.abs(np.linalg.det(skeleton.world[index[present], :3, :3])) ** (1.0 / 3.0)
+    flat = np.flatnonzero(~(scale > 1e-6 * max(float(scale.max()), 1e-300)))  # all of them where every scale is 0
+    if len(flat):
+        bone = mapping.joints[topo.JOINT_NAMES[int(present[flat[0]])]]
         raise InputFileError(source, f"bone {bone!r} is scaled to 0 (or a node above it is): the hand collapses to "
                                      f"a point; fix the scale in the authoring tool")
 
