@@ -125,7 +125,7 @@ def test_a_session_opens_with_the_sidecars_set_by_and_confidence_and_keeps_manua
     assert reopened.frames_from == "sidecar" and reopened.set_by == fresh.set_by
     np.testing.assert_allclose(reopened.confidence, fresh.confidence, atol=1e-4, equal_nan=True)
     np.testing.assert_allclose(reopened.frames, fresh.frames, atol=1e-7)
-    assert "(manual)" in reopened.describe(2) and "not scored" in reopened.describe(5)
+    assert reopened.describe(2).endswith(": manual") and "not scored" in reopened.describe(5)
 
     kept = reopened.frames[2].copy()
     reopened.apply_solution(solution, keep_manual=True)

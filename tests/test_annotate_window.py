@@ -179,12 +179,16 @@ def test_click_a_joint_drag_its_ring_and_undo(window, qtbot, hand_file):
     np.testing.assert_allclose(after, rotate_about_twist(before, turn_angle(before, after)), atol=1e-9)
     np.testing.assert_allclose(view.plotter.camera.position, camera)  # the camera did not orbit
     assert window.annotation.set_by[joint] == "manual" and window.isWindowModified()
-    assert "manual" in view.joints.item(joint).text()
+    assert view.joints.item(joint).text() == f"{topo.ARTICULATED_NAMES[joint]}: manual"  # not the solver's 1.00
+    tab = window.tabs.indexOf(view)
+    assert window.windowTitle() == "s2h-viewer: annotating hand.glb (right hand)[*]"  # '*' shown by Qt
+    assert window.tabs.tabText(tab) == "Annotate *"  # unsaved, seen where no window manager draws the title
 
     keyboard_to(qtbot, view.interactor)
     QTest.keyClick(window, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
     np.testing.assert_allclose(window.annotation.frames[joint], before, atol=1e-12)
     assert window.annotation.set_by[joint] == "solver" and not window.isWindowModified()
+    assert window.tabs.tabText(tab) == "Annotate"
     QTest.keyClick(window, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier)
     np.testing.assert_allclose(window.annotation.frames[joint], after, atol=1e-12)
 
@@ -214,7 +218,8 @@ def test_second_hand_replaces_the_first_and_a_sidecar_brings_back_who_set_each_f
     np.testing.assert_allclose(session.confidence, first.confidence, atol=1e-4)
     np.testing.assert_allclose(session.frames, saved_frames, atol=1e-7)
     texts = [view.joints.item(j).text() for j in range(topo.N_ARTICULATED)]
-    assert "(manual)" in texts[6] and all(f"{first.confidence[j]:.2f} (solver)" in texts[j]
+    assert texts[6] == f"{topo.ARTICULATED_NAMES[6]}: manual"  # no solver confidence for a frame turned by hand
+    assert all(f"{first.confidence[j]:.2f} (solver)" in texts[j]
                                           for j in range(topo.N_ARTICULATED) if j != 6)
     assert len(set(texts)) > 2  # not one "1.00 (solver)" line for every joint
 
@@ -398,35 +403,54 @@ def test_an_edge_on_ring_rolls_under_the_pointer(window, qtbot, hand_file):
     assert (moved - target).manhattanLength() <= 3
 
 
-def test_the_dial_and_its_readout_show_the_turn_a_ring_drag_made_and_follow_undo(window, qtbot, hand_file):
+def screen_turn(view, path: list[QPoint], centre: np.ndarray) -> float:
+    """The signed turn of a pointer path about ``centre`` on screen, clockwise positive (Qt's y runs down)."""
+    middle = widget_point(view, centre)
+    first, last = (np.array([p.x() - middle.x(), p.y() - middle.y()], float) for p in (path[0], path[-1]))
+    return float(np.degrees(np.arctan2(first[0] * last[1] - first[1] * last[0], first @ last)))
+
+
+@pytest.mark.parametrize("camera_side", [1.0, -1.0], ids=["axis-toward-camera", "axis-away"])
+def test_the_dial_turns_the_way_the_ring_does_on_screen_and_follows_undo(window, qtbot, hand_file, camera_side):
+    """Issue 25: a clockwise drag of the ring put the dial anticlockwise. Now the dial shows the turn as seen
+    on screen, whichever side of the joint the camera is on, and a dial drag turns the ring the same way."""
     window.annotate_file(str(hand_file))
     view = window.annotate_view
     joint = 7  # middle_pip: turned face-on to the camera, so the drag follows the pointer exactly
     view.select(joint)
     frame = to_view(window.annotation.hand, window.annotation.frames[joint].T).T
+    centre = view.joint_centres()[joint]
     camera = view.plotter.camera
-    camera.focal_point = view.joint_centres()[joint]
-    camera.position = view.joint_centres()[joint] + camera.distance * frame[:, 0]
+    camera.focal_point = centre
+    camera.position = centre + camera_side * camera.distance * frame[:, 0]
     view.interactor.render()
     settle()
-    assert view.dial.value() == 0 and "+0 deg" in view.angle_label.text()
+    assert view.dial.value() == 0 and "turned 0 deg" in view.angle_label.text()
     path = ring_drag_path(view, joint, 40.0)
+    on_screen = screen_turn(view, path, centre)
+    assert 30 < abs(on_screen) < 50
     QTest.mousePress(view.interactor, Qt.MouseButton.LeftButton, pos=path[0])
     for point in path[1:]:
         QTest.mouseMove(view.interactor, point)
     turned = round(view.turn_from_opened())
-    assert abs(turned - 40) <= 3 and view.dial.value() == turned  # live, while the button is held
+    assert abs(turned - 40) <= 3
+    dial = view.dial.value()  # QDial's value grows clockwise
+    assert np.sign(dial) == np.sign(on_screen) and abs(dial) == turned  # live, the ring's way on screen
     QTest.mouseRelease(view.interactor, Qt.MouseButton.LeftButton, pos=path[-1])
-    assert view.dial.value() == turned and f"{turned:+d} deg" in view.angle_label.text()  # not back to 0
+    way = "clockwise" if on_screen > 0 else "anticlockwise"
+    assert view.dial.value() == dial and f"turned {turned} deg {way}" in view.angle_label.text()  # not back to 0
 
-    view.turn_selected(-15)  # the dial turns on from where the ring left the frame
-    assert view.dial.value() == turned - 15 and round(view.turn_from_opened()) == turned - 15
+    ring_before = widget_point(view, ring_point(view, joint, 0.0))
+    view.turn_selected(15)  # the dial, 15 deg clockwise, from where the ring left the frame
+    assert view.dial.value() == dial + 15
+    ring_after = widget_point(view, ring_point(view, joint, 0.0))  # the ring's mark, carried by the frame
+    assert screen_turn(view, [ring_before, ring_after], centre) == pytest.approx(15, abs=4)  # clockwise too
     window.undo_stack.undo()
-    assert view.dial.value() == turned and f"{turned:+d} deg" in view.angle_label.text()
+    assert view.dial.value() == dial and f"{turned} deg {way}" in view.angle_label.text()
     window.undo_stack.undo()
-    assert view.dial.value() == 0 and "+0 deg" in view.angle_label.text()
+    assert view.dial.value() == 0 and "turned 0 deg" in view.angle_label.text()
     window.undo_stack.redo()
-    assert view.dial.value() == turned
+    assert view.dial.value() == dial
     view.select(3)  # another joint: its own turn
     assert view.dial.value() == 0 and view.angle_label.text().startswith(topo.ARTICULATED_NAMES[3])
 

@@ -206,3 +206,11 @@ def test_playback_speed_and_looping_are_kept_for_the_next_launch(qtbot, sample_h
     first.close()
     again = open_compare_window(qtbot, sample_hands, tmp_path, compute=False)  # the same settings file
     assert again.timeline.speed.currentText() == "2x" and not again.timeline.loop.isChecked()
+
+
+def test_the_window_keeps_a_minimum_size_where_its_panels_have_room(window, qtbot):
+    """Issue 25: at 700 x 450 the heatmap was crushed; the window now stops at 1000 x 700."""
+    window.resize(700, 450)
+    qtbot.wait(50)
+    assert (window.width(), window.height()) == (1000, 700)
+    assert window.heatmap.width() > 0 and window.scores.height() > 0

@@ -106,12 +106,16 @@ class AnnotationSession:
         return self.set_by[joint] == "solver" and bool(self.confidence[joint] < LOW_CONFIDENCE)
 
     def describe(self, joint: int) -> str:
-        """The joint list's line: name, confidence (or what the frame came from), who set it, a review flag."""
+        """The joint list's line: name, confidence (or what the frame came from), who set it, a review flag. A
+        frame turned by hand says "manual": the solver's confidence no longer speaks for it."""
+        name = topo.ARTICULATED_NAMES[joint]
+        if self.set_by[joint] == "manual":
+            return f"{name}: manual"
         score = self.confidence[joint]
         shown = f"{score:.2f}" if np.isfinite(score) else "not scored"
-        by = self.set_by[joint] if np.isfinite(score) or self.set_by[joint] == "manual" else f"from {self.frames_from}"
+        by = self.set_by[joint] if np.isfinite(score) else f"from {self.frames_from}"
         flag = "  review" if self.needs_review(joint) else ""
-        return f"{topo.ARTICULATED_NAMES[joint]}: {shown} ({by}){flag}"
+        return f"{name}: {shown} ({by}){flag}"
 
     def restore(self, state: Annotation, frames_from: str) -> None:
         """Go back to a state taken with `annotation` (undo and redo of a solver run)."""

@@ -20,9 +20,13 @@ from s2h_viewer.app.focus import FocusKeeper
 from s2h_viewer.app.tasks import TaskRunner
 from s2h_viewer.errors import S2HError, TooFewBonesError, UnrecognisedRigError, reading
 from s2h_viewer.hand.model import HandModel
+from s2h_viewer.io.annotation import hand_side
 from s2h_viewer.io.files import export_sidecar
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.widgets import annotation_view, compare_view, error_curve, vtk_widget
+
+#: below this the heatmap, the scores table and the error curve no longer have room (issue 25)
+MINIMUM_SIZE = (1000, 700)
 
 __all__ = ["CompareSetup", "MainWindow", "default_setup", "run"]
 
@@ -68,6 +72,7 @@ class MainWindow(QMainWindow):
         self.batch_browser = BatchBrowser(self)
         self._build_menus()
         self.focus_keeper = FocusKeeper(self)  # shortcuts keep working after a dialog closes without a window manager
+        self.setMinimumSize(*MINIMUM_SIZE)
         geometry = self.settings.value("window/geometry")
         if geometry is not None:
             self.restoreGeometry(geometry)
@@ -86,8 +91,10 @@ class MainWindow(QMainWindow):
         timeline.loop.toggled.connect(lambda on: self.settings.setValue("playback/loop", on))
 
     def _show_unsaved(self, clean: bool) -> None:
-        """A '*' in the title while the annotation has edits not saved."""
+        """A '*' in the title and on the Annotate tab while the annotation has edits not saved (the tab's is seen
+        where no window manager draws a title)."""
         self.setWindowModified(not clean)
+        self.tabs.setTabText(self.tabs.indexOf(self.annotate.view), "Annotate" if clean else "Annotate *")
 
     # --- the modes' parts, under the names scripts and tests use ---
     @property
@@ -417,7 +424,6 @@ class MainWindow(QMainWindow):
     def _map_and_load(self, path: str, finding: str = "") -> HandModel | None:
         """The hand in ``path`` with the joint map the user makes in the dialog (prefilled with the file's saved
         map and what its names say), the map then saved beside the file; None if cancelled or failed (shown)."""
-        from s2h_viewer.io.annotation import hand_side
         from s2h_viewer.io.files import (RigOptions, joint_map_sidecar, load_hand_file, read_rig_skeleton,
                                          save_joint_map, suggested_joint_map)
         from s2h_viewer.widgets.joint_map_dialog import JointMapDialog
@@ -636,6 +642,8 @@ class MainWindow(QMainWindow):
             return
         self._remember(path, "annotate")
         self.annotate.open(hand, path)
+        if self.annotation is not None and self.annotation.hand is hand:
+            self.setWindowTitle(f"s2h-viewer: annotating {Path(path).name} ({hand_side(hand)} hand)[*]")
         self.tabs.setCurrentWidget(self.annotate.view)
         self._follow_mode()  # the solver and saving now have a hand
 

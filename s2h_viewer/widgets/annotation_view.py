@@ -53,6 +53,7 @@ class AnnotationView(QWidget):
         self.selected = 0
         self._drag_base: np.ndarray | None = None
         self._dial_at_grab = 0
+        self._sense_at_grab = 1  # the dial's sense on screen when it was grabbed (see `screen_sense`)
         self._opened: np.ndarray | None = None  # (15, 3, 3) the frames the hand was opened with
         self.plotter = window_plotter()
         self.interactor = PlotterWidget(self.plotter, self)
@@ -68,7 +69,7 @@ class AnnotationView(QWidget):
         self.legend.setWordWrap(True)
         side = QWidget()
         side_layout = QVBoxLayout(side)
-        for widget in (QLabel("Joints (solver confidence)"), self.joints, self.angle_label, self.dial, self.legend):
+        for widget in (QLabel("Joints (solver confidence, or manual)"), self.joints, self.angle_label, self.dial, self.legend):
             side_layout.addWidget(widget)
         self.editor = QSplitter()
         self.editor.addWidget(self.interactor)
@@ -160,6 +161,14 @@ class AnnotationView(QWidget):
         self._show_turn()
         self.interactor.render()
 
+    def screen_sense(self) -> int:
+        """+1 where a turn about the selected twist axis (right-hand rule) looks clockwise from the camera (the
+        axis points away from it), -1 where it looks anticlockwise: the dial turns as the ring does on screen."""
+        centre = self.joint_centres()[self.selected]
+        axis = to_view(self.session.hand, self.session.frames[self.selected].T).T[:, 0]
+        toward_camera = np.asarray(self.plotter.camera.position) - centre
+        return -1 if float(np.dot(axis, toward_camera)) > 0 else 1
+
     def turn_from_opened(self) -> float:
         """Degrees the selected joint's frame is turned about its twist axis from its frame at opening."""
         opened, now = self._opened[self.selected], self.session.frames[self.selected]
@@ -168,10 +177,12 @@ class AnnotationView(QWidget):
     def _show_turn(self) -> None:
         """The dial and the readout say the selected frame's turn, however it came (ring, dial, undo, solver)."""
         degrees = self.turn_from_opened()
-        self.angle_label.setText(f"{topo.ARTICULATED_NAMES[self.selected]}: turned {degrees:+.0f} deg about its "
-                                 f"twist axis from its frame at opening")
+        on_screen = self.screen_sense() * degrees
+        way = "clockwise" if on_screen >= 0 else "anticlockwise"
+        self.angle_label.setText(f"{topo.ARTICULATED_NAMES[self.selected]}: turned {abs(on_screen):.0f} deg {way} "
+                                 f"as seen here ({degrees:+.0f} deg about its twist axis) from its frame at opening")
         self.dial.blockSignals(True)
-        self.dial.setValue(round(degrees))
+        self.dial.setValue((round(on_screen) + 180) % 360 - 180)
         self.dial.blockSignals(False)
 
     def select(self, joint: int) -> None:
@@ -185,10 +196,12 @@ class AnnotationView(QWidget):
     def _begin_drag(self) -> None:
         self._drag_base = self.session.frames[self.selected].copy() if self.session is not None else None
         self._dial_at_grab = self.dial.value()
+        self._sense_at_grab = self.screen_sense() if self.session is not None else 1
 
     def _dial_turned(self, degrees: int) -> None:
-        """The dial shows the turn from the frame at opening: a drag turns by what it moved since the grab."""
-        self._turn_to(float((degrees - self._dial_at_grab + 180) % 360 - 180))
+        """The dial shows the turn from the frame at opening as seen on screen: a drag turns the frame by what
+        the dial moved since the grab, clockwise on the dial being clockwise on the ring."""
+        self._turn_to(self._sense_at_grab * float((degrees - self._dial_at_grab + 180) % 360 - 180))
 
     def _turn_to(self, degrees: float) -> None:
         """Live: the selected frame is its frame at the grab turned by ``degrees`` about its twist axis."""
