@@ -214,3 +214,36 @@ def test_the_window_keeps_a_minimum_size_where_its_panels_have_room(window, qtbo
     qtbot.wait(50)
     assert (window.width(), window.height()) == (1000, 700)
     assert window.heatmap.width() > 0 and window.scores.height() > 0
+
+
+def test_bracket_keys_jump_between_the_worst_frames_of_the_error_curve(window, qtbot):
+    """Issue 25: next/previous worst frame keys (']' and '['), wrapping round the clip, listed in Help."""
+    from PySide6.QtCore import Qt
+    from PySide6.QtTest import QTest
+
+    curve = window.compare.curve
+    worst = list(curve.worst)
+    assert len(worst) >= 2 and all(curve.error[f] >= np.median(curve.error) for f in worst)
+    window.activateWindow()
+    qtbot.waitUntil(lambda: window.isActiveWindow(), timeout=5000)
+    window.timeline.set_frame(0)
+    visited = []
+    for _ in range(len(worst) + 1):
+        QTest.keyClick(window, Qt.Key.Key_BracketRight)
+        visited.append(window.timeline.frame)
+    after_zero = [f for f in worst if f > 0]  # marked in frame order
+    assert visited[:len(after_zero)] == after_zero and visited[len(after_zero)] == worst[0]  # then round again
+    window.timeline.set_frame(worst[0])
+    QTest.keyClick(window, Qt.Key.Key_BracketLeft)
+    assert window.timeline.frame == worst[-1]  # wrapped to the last marked frame
+    QTest.keyClick(window, Qt.Key.Key_BracketLeft)
+    assert window.timeline.frame == worst[-2]
+    window.timeline.spin.setFocus()  # with the frame box focused the keys still jump (not typed into it)
+    qtbot.waitUntil(lambda: window.timeline.spin.hasFocus(), timeout=5000)
+    qtbot.keyClick(window.timeline.spin.lineEdit(), Qt.Key.Key_BracketRight)
+    assert window.timeline.frame == worst[-1]
+    from s2h_viewer.widgets.error_curve import next_worst
+    assert next_worst(np.zeros(0, dtype=int), 5, 1) is None  # nothing marked: the keys leave the frame alone
+    lines = window.shortcut_lines()
+    assert "]: Playback > Next worst frame (error curve)" in lines
+    assert "[: Playback > Previous worst frame (error curve)" in lines

@@ -90,6 +90,12 @@ class MainWindow(QMainWindow):
         timeline.speed.currentTextChanged.connect(lambda text: self.settings.setValue("playback/speed", text))
         timeline.loop.toggled.connect(lambda on: self.settings.setValue("playback/loop", on))
 
+    def _to_worst(self, direction: int) -> None:
+        """Jump to the next (1) or previous (-1) of the worst frames marked red on the error curve."""
+        frame = error_curve.next_worst(self.compare.curve.worst, self.timeline.frame, direction)
+        if frame is not None:
+            self.timeline.set_frame(frame)
+
     def _show_unsaved(self, clean: bool) -> None:
         """A '*' in the title and on the Annotate tab while the annotation has edits not saved (the tab's is seen
         where no window manager draws a title)."""
@@ -213,6 +219,8 @@ class MainWindow(QMainWindow):
         self._action(play, "Next frame", lambda: timeline.step(1), "Right")
         self._action(play, "First frame", lambda: timeline.set_frame(0), "Home")
         self._action(play, "Last frame", lambda: timeline.set_frame(timeline.n_frames - 1), "End")
+        self._action(play, "Next worst frame (error curve)", lambda: self._to_worst(1), "]")
+        self._action(play, "Previous worst frame (error curve)", lambda: self._to_worst(-1), "[")
         help_menu = bar.addMenu("&Help")
         self._action(help_menu, "Keyboard shortcuts", self.show_shortcuts, "F1")
         # a disabled menu's actions are greyed and their shortcuts off (the targets menu: in `_follow_mode`)

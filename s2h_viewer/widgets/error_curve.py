@@ -27,6 +27,15 @@ def worst_frames(error: np.ndarray, count: int = WORST, spacing: int | None = No
     return np.array(sorted(chosen), dtype=int)
 
 
+def next_worst(worst: np.ndarray, frame: int, direction: int) -> int | None:
+    """The marked worst frame after ``frame`` (``direction`` +1) or before it (-1), wrapping round the clip;
+    None where none is marked (the Playback menu's worst-frame keys)."""
+    if len(worst) == 0:
+        return None
+    later = worst[worst > frame] if direction > 0 else worst[worst < frame][::-1]
+    return int(later[0]) if len(later) else int(worst[0] if direction > 0 else worst[-1])
+
+
 class ErrorCurve(QWidget):
     """Emits ``frame_clicked(frame)``; ``set_curve`` gives the (T,) values, a title and what they measure."""
 
@@ -54,7 +63,7 @@ class ErrorCurve(QWidget):
         self.worst = worst_frames(self.error)
         self._curve = None
         self.setToolTip(f"{title}: {quantity}; worst frames (red): "
-                        f"{', '.join(str(f) for f in self.worst)}. {note}Click to jump.")
+                        f"{', '.join(str(f) for f in self.worst)}. {note}Click to jump; ] and [ step between the worst frames.")
         self.update()
 
     def set_frame(self, frame: int) -> None:

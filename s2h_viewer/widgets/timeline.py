@@ -24,7 +24,8 @@ from s2h_viewer.render.caption import frame_readout
 SPEEDS = (0.25, 0.5, 1.0, 2.0, 4.0)
 WIDGET_RATE = 30.0  # refreshes per second of the slider, the frame box and the readouts while playing
 MAX_DRAW_WAIT = 0.2  # seconds a tick waits for the view to draw the frame asked before asking anew
-PASSED_KEYS = (Qt.Key.Key_Space, Qt.Key.Key_Left, Qt.Key.Key_Right, Qt.Key.Key_Home, Qt.Key.Key_End)
+PASSED_KEYS = (Qt.Key.Key_Space, Qt.Key.Key_Left, Qt.Key.Key_Right, Qt.Key.Key_Home, Qt.Key.Key_End,
+               Qt.Key.Key_BracketLeft, Qt.Key.Key_BracketRight)  # the worst-frame keys
 
 
 class _LeaveShortcutKeys(QObject):
