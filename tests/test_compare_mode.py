@@ -558,24 +558,6 @@ def test_the_error_curve_keeps_clear_of_its_caption_and_its_edges(window):
     assert curve._x(0) - ring >= 0 and curve._x(len(curve.error) - 1) + ring <= curve.width() - 1
 
 
-def test_the_error_curve_has_a_numbered_frame_axis_and_the_playhead_stops_above_its_numbers(window):
-    """Issue 25: the curve had no axis or frame ticks and the playhead ran through its caption."""
-    curve = window.compare.curve
-    metrics = curve.fontMetrics()
-    ticks = curve.ticks()
-    step = ticks[1] - ticks[0]
-    assert ticks[0] == 0 and len(ticks) >= 3 and ticks[-1] <= len(curve.error) - 1 < ticks[-1] + step
-    assert str(step)[0] in "125" and set(str(step)[1:]) <= {"0"} and np.all(np.diff(ticks) == step)
-    widest = max(metrics.horizontalAdvance(str(t)) for t in ticks)
-    assert curve._x(ticks[1]) - curve._x(ticks[0]) >= widest + 4  # numbers that do not run into each other
-    caption_top = curve.height() - 4 - metrics.ascent()
-    assert curve.axis_y() + 3 + metrics.height() <= caption_top + 2  # the numbers' row sits over the caption
-    assert curve._y(0.0) == curve.axis_y()  # the curve's zero is on the axis; the playhead ends there too
-    assert curve.frame_at(curve._x(ticks[1])) == ticks[1]  # clicks still land on the frame drawn there
-    from s2h_viewer.widgets.error_curve import frame_ticks
-    assert frame_ticks(300, 600) == list(range(0, 300, 50)) and frame_ticks(8, 600) == list(range(8))
-
-
 def test_a_jump_while_playing_plays_on_from_the_frame_jumped_to(window, qtbot):
     """Home, a click on the error curve, the frame box: while playing the clock went on from the frame shown
     before the jump, so playback sprang back there at the next tick (a user test found every jump ignored)."""
