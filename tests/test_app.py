@@ -208,14 +208,6 @@ def test_playback_speed_and_looping_are_kept_for_the_next_launch(qtbot, sample_h
     assert again.timeline.speed.currentText() == "2x" and not again.timeline.loop.isChecked()
 
 
-def test_the_window_keeps_a_minimum_size_where_its_panels_have_room(window, qtbot):
-    """Issue 25: at 700 x 450 the heatmap was crushed; the window now stops at 1000 x 700."""
-    window.resize(700, 450)
-    qtbot.wait(50)
-    assert (window.width(), window.height()) == (1000, 700)
-    assert window.heatmap.width() > 0 and window.scores.height() > 0
-
-
 def test_bracket_keys_jump_between_the_worst_frames_of_the_error_curve(window, qtbot):
     """Issue 25: next/previous worst frame keys (']' and '['), wrapping round the clip, listed in Help."""
     from PySide6.QtCore import Qt

@@ -25,9 +25,6 @@ from s2h_viewer.io.files import export_sidecar
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.widgets import annotation_view, compare_view, error_curve, vtk_widget
 
-#: below this the heatmap, the scores table and the error curve no longer have room (issue 25)
-MINIMUM_SIZE = (1000, 700)
-
 __all__ = ["CompareSetup", "MainWindow", "default_setup", "run"]
 
 RECENT_FILES = 8
@@ -72,7 +69,6 @@ class MainWindow(QMainWindow):
         self.batch_browser = BatchBrowser(self)
         self._build_menus()
         self.focus_keeper = FocusKeeper(self)  # shortcuts keep working after a dialog closes without a window manager
-        self.setMinimumSize(*MINIMUM_SIZE)
         geometry = self.settings.value("window/geometry")
         if geometry is not None:
             self.restoreGeometry(geometry)
