@@ -69,7 +69,8 @@ class AnnotationView(QWidget):
         self.legend.setWordWrap(True)
         side = QWidget()
         side_layout = QVBoxLayout(side)
-        for widget in (QLabel("Joints (solver confidence, or manual)"), self.joints, self.angle_label, self.dial, self.legend):
+        header = QLabel("Joints (solver confidence, or manual)")
+        for widget in (header, self.joints, self.angle_label, self.dial, self.legend):
             side_layout.addWidget(widget)
         self.editor = QSplitter()
         self.editor.addWidget(self.interactor)
@@ -164,10 +165,8 @@ class AnnotationView(QWidget):
     def screen_sense(self) -> int:
         """+1 where a turn about the selected twist axis (right-hand rule) looks clockwise from the camera (the
         axis points away from it), -1 where it looks anticlockwise: the dial turns as the ring does on screen."""
-        centre = self.joint_centres()[self.selected]
-        axis = to_view(self.session.hand, self.session.frames[self.selected].T).T[:, 0]
-        toward_camera = np.asarray(self.plotter.camera.position) - centre
-        return -1 if float(np.dot(axis, toward_camera)) > 0 else 1
+        toward_camera = np.asarray(self.plotter.camera.position) - self.ring.centre  # the ring as `refresh` placed it
+        return -1 if float(np.dot(self.ring.axis, toward_camera)) > 0 else 1
 
     def turn_from_opened(self) -> float:
         """Degrees the selected joint's frame is turned about its twist axis from its frame at opening."""

@@ -63,7 +63,8 @@ class ErrorCurve(QWidget):
         self.worst = worst_frames(self.error)
         self._curve = None
         self.setToolTip(f"{title}: {quantity}; worst frames (red): "
-                        f"{', '.join(str(f) for f in self.worst)}. {note}Click to jump; ] and [ step between the worst frames.")
+                        f"{', '.join(str(f) for f in self.worst)}. {note}Click to jump; ] and [ step between "
+                        f"the worst frames.")
         self.update()
 
     def set_frame(self, frame: int) -> None:
