@@ -28,7 +28,7 @@ from grid_text import cell_pixels, hand_drawn, inside, intruders, text_actors, t
 from s2h_viewer.hand import topology as topo  # noqa: E402
 from s2h_viewer.render.caption import BAND  # noqa: E402
 from s2h_viewer.render.compare_scene import (COLOUR_BAR_SHARE, CONTACT_COLOUR, ELLIPSIS, MIN_LABEL_PX,  # noqa: E402
-                                             OVERLAY_PX)
+                                             OVERLAY_LEAST, OVERLAY_PX)
 from s2h_viewer.retarget.methods import METHODS  # noqa: E402
 from s2h_viewer.samples import ASSETS_DIR  # noqa: E402
 from s2h_viewer.widgets.asm_heatmap import CELL, LEFT, TOP  # noqa: E402
@@ -291,7 +291,7 @@ def test_cancel_a_video_export_writes_nothing(window, qtbot, tmp_path):
     with qtbot.waitSignal(job.progress, timeout=60_000):
         pass
     with qtbot.waitSignal(job.cancelled, timeout=60_000):
-        click_cancel(job.dialog, qtbot)
+        click_cancel(job.strip, qtbot)
         assert window.statusBar().currentMessage().startswith("cancelling the video export")  # said at once
     job.thread.join()
     assert not path.exists() and not list(tmp_path.glob("*.mp4*"))
@@ -302,11 +302,11 @@ def test_cancelling_a_video_export_in_its_dialog_gives_the_keyboard_back_to_the_
     job = window.export_video(str(tmp_path / "cancelled.mp4"))
     with qtbot.waitSignal(job.progress, timeout=60_000):
         pass
-    qtbot.waitUntil(job.dialog.isVisible, timeout=30_000)
-    job.dialog.activateWindow()  # the user clicks into the progress dialog: it holds the keyboard
-    qtbot.waitUntil(job.dialog.isActiveWindow, timeout=5000)
+    qtbot.waitUntil(job.strip.isVisible, timeout=30_000)
+    job.strip.activateWindow()  # the user clicks into the progress dialog: it holds the keyboard
+    qtbot.waitUntil(job.strip.isActiveWindow, timeout=5000)
     with qtbot.waitSignal(job.cancelled, timeout=60_000):
-        qtbot.mouseClick(job.dialog.findChild(QPushButton), Qt.MouseButton.LeftButton)
+        qtbot.mouseClick(job.strip.findChild(QPushButton), Qt.MouseButton.LeftButton)
     # without a window manager the focus fell to the root window: the app hands it back to the main window
     qtbot.waitUntil(window.isActiveWindow, timeout=5000)
 
@@ -558,6 +558,24 @@ def test_the_error_curve_keeps_clear_of_its_caption_and_its_edges(window):
     assert curve._x(0) - ring >= 0 and curve._x(len(curve.error) - 1) + ring <= curve.width() - 1
 
 
+def test_the_error_curve_has_a_numbered_frame_axis_and_the_playhead_stops_above_its_numbers(window):
+    """Issue 25: the curve had no axis or frame ticks and the playhead ran through its caption."""
+    curve = window.compare.curve
+    metrics = curve.fontMetrics()
+    ticks = curve.ticks()
+    step = ticks[1] - ticks[0]
+    assert ticks[0] == 0 and len(ticks) >= 3 and ticks[-1] <= len(curve.error) - 1 < ticks[-1] + step
+    assert str(step)[0] in "125" and set(str(step)[1:]) <= {"0"} and np.all(np.diff(ticks) == step)
+    widest = max(metrics.horizontalAdvance(str(t)) for t in ticks)
+    assert curve._x(ticks[1]) - curve._x(ticks[0]) >= widest + 4  # numbers that do not run into each other
+    caption_top = curve.height() - 4 - metrics.ascent()
+    assert curve.axis_y() + 3 + metrics.height() <= caption_top + 2  # the numbers' row sits over the caption
+    assert curve._y(0.0) == curve.axis_y()  # the curve's zero is on the axis; the playhead ends there too
+    assert curve.frame_at(curve._x(ticks[1])) == ticks[1]  # clicks still land on the frame drawn there
+    from s2h_viewer.widgets.error_curve import frame_ticks
+    assert frame_ticks(300, 600) == list(range(0, 300, 50)) and frame_ticks(8, 600) == list(range(8))
+
+
 def test_a_jump_while_playing_plays_on_from_the_frame_jumped_to(window, qtbot):
     """Home, a click on the error curve, the frame box: while playing the clock went on from the frame shown
     before the jump, so playback sprang back there at the next tick (a user test found every jump ignored)."""
@@ -789,22 +807,35 @@ def test_export_dialogs_start_in_the_export_folder_with_a_suggested_name(window,
     assert not list(work.iterdir())
 
 
-def test_a_second_job_dialog_stacks_above_the_first_at_the_bottom_of_the_window(long_window, qtbot, tmp_path):
+def test_two_jobs_show_their_progress_side_by_side_in_the_status_bar_covering_no_control(long_window, qtbot,
+                                                                                         tmp_path):
+    """Issue 25: the progress dialogs sat over Loop, the speed, the fps readout and the error curve."""
+    from PySide6.QtCore import QRect
+    from PySide6.QtWidgets import QAbstractButton, QAbstractSlider, QAbstractSpinBox, QComboBox
+
+    from s2h_viewer.app.job_progress import WIDTH
     window = long_window
-    from s2h_viewer.app.progress_dialog import WIDTH
     job = window.export_video(str(tmp_path / "stacked.mp4"))
-    qtbot.waitUntil(job.dialog.isVisible, timeout=60_000)
-    window.method_actions["asm_opt"].trigger()  # a retarget while the export runs: its own dialog
+    qtbot.waitUntil(job.strip.isVisible, timeout=60_000)
+    window.method_actions["asm_opt"].trigger()  # a retarget while the export runs: its own strip
     wait_until_running(window, qtbot, "asm_opt")
     retargets = window.compare._progress
     qtbot.waitUntil(retargets.isVisible, timeout=30_000)
-    first, second = job.dialog.frameGeometry(), retargets.frameGeometry()
-    assert not first.intersects(second) and second.bottom() < first.top()
-    view = window.view.geometry()
-    view_centre = window.view.mapToGlobal(view.center() - view.topLeft()).y()
-    window_bottom = window.geometry().bottom()
-    assert first.top() > view_centre and window_bottom - first.bottom() < 40  # at the bottom, off the grid's middle
-    assert job.dialog.width() == retargets.width() == WIDTH
+
+    def on_screen(widget) -> QRect:
+        return QRect(widget.mapToGlobal(widget.rect().topLeft()), widget.size())
+
+    strips = [on_screen(job.strip), on_screen(retargets)]
+    assert not strips[0].intersects(strips[1])
+    bar = on_screen(window.statusBar())
+    assert all(bar.contains(strip) for strip in strips)  # in the status bar, not floating over the window
+    controls = [w for kind in (QAbstractButton, QAbstractSlider, QAbstractSpinBox, QComboBox)
+                for w in window.compare.findChildren(kind) if w.isVisible()]
+    controls += [window.compare.curve, window.compare.timeline, window.view, window.scores]
+    assert len(controls) > 6
+    for control in controls:
+        assert not any(on_screen(control).intersects(strip) for strip in strips), control
+    assert job.strip.width() == retargets.width() == WIDTH
     window.compare.cancel()
     with qtbot.waitSignal(job.cancelled, timeout=60_000):
         job.cancel()
@@ -887,6 +918,7 @@ def test_skeleton_overlay_shows_through_an_opaque_skin(window, qtbot):
 
 def test_one_target_every_hand_fits_its_viewport(window):
     view = window.view
+    view.set_selected(-1)  # no cell framed: the selection's frame lies on the edges this test looks at
     w, h = view.interactor.width(), view.interactor.height()
     x0, y0, x1, y1 = view.hand_viewports()[0]
     assert (x1 - x0) * w / ((y1 - y0) * h) < 0.6  # one target: tall, narrow cells
@@ -1118,7 +1150,7 @@ def test_a_gif_is_written_while_its_frames_render_and_cancel_leaves_no_file(wind
     assert len(frames) == n and frames[0].shape[0] == window.view.interactor.height() + BAND
 
     job = window.export_video(str(tmp_path / "late.gif"))
-    job.progress.connect(lambda done, total: done >= total // 2 and job.dialog.findChild(QPushButton).click())
+    job.progress.connect(lambda done, total: done >= total // 2 and job.strip.findChild(QPushButton).click())
     with qtbot.waitSignal(job.cancelled, timeout=300_000):
         pass
     job.thread.join()
@@ -1171,7 +1203,7 @@ def test_a_retarget_shown_alone_keeps_the_colour_bar(window, qtbot):
         return int(((strip.max(-1) - strip.min(-1)) > 120).sum())  # plasma is saturated, the skin not there
 
     in_grid = bar_pixels()
-    assert in_grid > 1000
+    assert in_grid > 2 * window.view.interactor.height()  # the bar: 80% of the view's height, some pixels wide
     window.timeline.set_frame(40)
     window.scores.selectRow(1)  # ASRN -> iris
     window.activateWindow()
@@ -1207,8 +1239,8 @@ def test_labels_stay_legible_with_five_methods(qtbot, sample_hands, tmp_path):
 
 
 def test_a_crowded_grid_keeps_each_label_whole_or_elided_in_a_band_clear_of_the_hands(qtbot, sample_hands, tmp_path):
-    """Six targets x five methods on a 1000 x 700 window (cells some 70 x 80 pixels): the titles and scores
-    were cut mid-letter at the cells' edges and drawn over the hands, their skeletons and contact dots. Now
+    """Six targets x five methods on a 1000 x 700 window (pages of the rows that fit, cells some 70 pixels wide):
+    the titles and scores were cut mid-letter at the cells' edges and drawn over the hands, their skeletons and contact dots. Now
     each line is whole or a start of it with an ellipsis, inside its cell, in a font no smaller than
     MIN_LABEL_PX, and nothing but the text is drawn from a cell's top down to the text's bottom."""
     import dataclasses
@@ -1218,32 +1250,41 @@ def test_a_crowded_grid_keeps_each_label_whole_or_elided_in_a_band_clear_of_the_
     window = open_compare_window(qtbot, hands, tmp_path, methods=tuple(METHODS), targets=six)
     try:
         view = window.view
-        results = window.comparison.results
-        titles = [f"source: {window.comparison.source.name}"] + [
-            f"{METHODS[r.method].label} -> {r.target.name}" for t in six for r in results if r.target.name == t]
-        assert len(view._hands) == 31
-        elided = []
-        for hand, title in zip(view._hands, titles):
-            (actor,) = text_actors(hand.renderer)
-            line = actor.GetInput().split("\n")[0]
-            assert line == title or (line.endswith(ELLIPSIS) and title.startswith(line[:-1])), (line, title)
-            assert actor.GetTextProperty().GetFontSize() >= MIN_LABEL_PX
-            elided += [title] if line != title else []
-        assert {t for t in titles if long_name in t} <= set(elided), elided  # a long name ends in an ellipsis
-        for frame, overlays in ((0, False), (window.timeline.n_frames // 2, False), (40, True)):
-            window.timeline.set_frame(frame)
-            view.set_options(skeleton=overlays, contacts=overlays)
-            image = view.grab_rgb()
-            for renderer in view.plotter.renderers:
-                for actor in text_actors(renderer):
-                    cell, box = cell_pixels(image, renderer), text_box(actor, renderer)
-                    assert inside(box, cell), (actor.GetInput(), box, cell.shape)
-            for hand in view._hands:
-                cell, box = cell_pixels(image, hand.renderer), text_box(text_actors(hand.renderer)[0], hand.renderer)
-                assert intruders(cell, box) == 0, (frame, overlays, text_actors(hand.renderer)[0].GetInput())
-                assert hand_drawn(cell) > 0.05 * cell.shape[0] * cell.shape[1]  # the hand still drawn below
-                if overlays:  # dots sized for the cell: the default scene's 16 pixels hid a small cell's hand
-                    assert 5 <= hand.overlay.actors[1].prop.point_size <= OVERLAY_PX[2] * min(cell.shape[:2]) / 250
+        every = [f"{METHODS[r.method].label} -> {r.target.name}" for r in window.comparison.results]
+        assert view.page_count == -(-len(six) // view.rows) > 1  # six rows do not fit 1000 x 700: they page
+        seen, elided = [], []
+        for page in range(view.page_count):
+            view.set_page(page)
+            view.set_selected(-1)  # no cell framed: the selection's frame runs through the label rows looked at
+            titles = [f"source: {window.comparison.source.name}"] + [
+                f"{METHODS[r.method].label} -> {r.target.name}" for r in view.comparison.results]
+            assert len(view._hands) == len(titles) == 1 + view.rows * len(METHODS) or page == view.page_count - 1
+            seen += titles[1:]
+            for hand, title in zip(view._hands, titles):
+                (actor,) = text_actors(hand.renderer)
+                line = actor.GetInput().split("\n")[0]
+                assert line == title or (line.endswith(ELLIPSIS) and title.startswith(line[:-1])), (line, title)
+                assert actor.GetTextProperty().GetFontSize() >= MIN_LABEL_PX
+                elided += [title] if line != title else []
+            for frame, overlays in ((0, False), (window.timeline.n_frames // 2, False), (40, True)):
+                window.timeline.set_frame(frame)
+                view.set_options(skeleton=overlays, contacts=overlays)
+                image = view.grab_rgb()
+                for renderer in view.plotter.renderers:
+                    for actor in text_actors(renderer):
+                        cell, box = cell_pixels(image, renderer), text_box(actor, renderer)
+                        assert inside(box, cell), (actor.GetInput(), box, cell.shape)
+                for hand in view._hands:
+                    label = text_actors(hand.renderer)[0]
+                    cell, box = cell_pixels(image, hand.renderer), text_box(label, hand.renderer)
+                    assert intruders(cell, box) == 0, (frame, overlays, label.GetInput())
+                    assert hand_drawn(cell) > 0.05 * cell.shape[0] * cell.shape[1]  # the hand still drawn below
+                    if overlays:  # dots sized for the cell: the default scene's 16 pixels hid a small cell's hand
+                        size = hand.overlay.actors[1].prop.point_size
+                        assert OVERLAY_LEAST[2] <= size <= max(OVERLAY_LEAST[2],
+                                                               OVERLAY_PX[2] * min(cell.shape[:2]) / 250)
+        assert sorted(seen) == sorted(every)  # every retarget on one page
+        assert {t for t in every if long_name in t} <= set(elided), elided  # a long name ends in an ellipsis
     finally:
         window.close()
 
@@ -1321,8 +1362,8 @@ def test_a_video_export_writes_the_frames_chosen_with_their_own_frame_numbers(wi
     answer_video_export(qtbot, from_40_to_47)
     job = window.export_video()
     assert offered == [(0, n - 1), (40, n - 1), f"8 frames, {8 / window.comparison.motion.fps:.2f} s"]
-    assert job.dialog.maximum() == 8 and "(8 frames: 40 to 47)" in job.dialog.toolTip()  # progress counts the range
-    assert job.dialog.labelText().splitlines()[-1] == "(8 frames: 40 to 47)..."  # whole, however long the name
+    assert job.strip.maximum() == 8 and "(8 frames: 40 to 47)" in job.strip.toolTip()  # progress counts the range
+    assert job.strip.labelText().splitlines()[-1] == "(8 frames: 40 to 47)..."  # whole, however long the name
     with qtbot.waitSignal(job.written, timeout=300_000):
         pass
     path = tmp_path / "short_iris_tbs_copy.mp4"

@@ -15,25 +15,28 @@ the results they had, nothing recomputed."""
 
 from __future__ import annotations
 
+import html
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from PySide6.QtCore import Signal
+from PySide6.QtCore import Qt, Signal
 from PySide6.QtGui import QUndoCommand, QUndoStack
-from PySide6.QtWidgets import QComboBox, QLabel, QMenu, QSplitter, QVBoxLayout, QWidget
+from PySide6.QtWidgets import QComboBox, QFrame, QLabel, QMenu, QScrollArea, QSplitter, QVBoxLayout, QWidget
 
-from s2h_viewer.app.progress_dialog import JobProgressDialog
+from s2h_viewer.annotate.trust import frame_warning
+from s2h_viewer.app.job_progress import JobProgress
 from s2h_viewer.app.retarget_queue import RetargetQueue
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
+from s2h_viewer.render.compare_scene import BANNER_COLOUR
 from s2h_viewer.retarget.compare_state import CompareState, ResultKey
 from s2h_viewer.retarget.comparison import Comparison, MethodResult
 from s2h_viewer.retarget.methods import METHODS
-from s2h_viewer.semantics.flexion import SidewaysPeak
-from s2h_viewer.semantics.signature import SIDEWAYS_LIMIT
+from s2h_viewer.semantics.flexion import SidewaysPeak, flexion_and_sideways
+from s2h_viewer.semantics.signature import SIDEWAYS_FLEXION, SIDEWAYS_LIMIT
 from s2h_viewer.widgets.asm_heatmap import AsmHeatmap
 from s2h_viewer.widgets.compare_view import CompareView
 from s2h_viewer.widgets.error_curve import ErrorCurve
@@ -41,6 +44,9 @@ from s2h_viewer.widgets.scores_table import ScoresTable
 from s2h_viewer.widgets.timeline import Timeline
 
 PROGRESS_STEPS = 1000
+TABLE_SHARE = 0.25  # of the panels' height: the most the scores table takes until its splitter is dragged
+#: what the error curve can show (`CompareMode.show_curve`)
+ASM_CURVE, SIDEWAYS_CURVE, RESIDUAL_CURVE = "asm", "sideways", "residual"
 #: frames of results (every frame's pose and ASM error) the spare cache of unticked methods holds at most
 SPARE_FRAMES = 100_000
 
@@ -72,6 +78,23 @@ def sideways_text(scores) -> str:
             f"(the source: {scores.source_sideways_deg:.0f})")
     broken = scores.sideways_deg > max(SIDEWAYS_LIMIT, np.nan_to_num(scores.source_sideways_deg) + 5.0)
     return f"<span style='color:#c62828'>{text}</span>" if broken else text
+
+
+def selected_notes(result: MethodResult) -> str:
+    """The line over the curve: the retarget's worst sideways bend, and its target's unsure frames if any."""
+    warning = frame_warning(result.target)
+    text = sideways_text(result.scores)
+    if warning is None:
+        return text
+    note = f"! {result.target.name}: {warning.banner}: retargets may bend there; check them in Annotate"
+    return f"{text}<br><span style='color:{BANNER_COLOUR}'>{html.escape(note)}</span>"
+
+
+def sideways_curve(result: MethodResult) -> np.ndarray:
+    """(T,) the worst sideways bend (degrees) of the PIP/DIP joints flexed past `SIDEWAYS_FLEXION` each frame,
+    0 where none is: the error curve's sideways choice."""
+    flexion, sideways = flexion_and_sideways(result.pose.positions.numpy())
+    return np.where(flexion >= SIDEWAYS_FLEXION, np.nan_to_num(sideways), 0.0).max(axis=1)
 
 
 def label(result: MethodResult) -> str:
@@ -154,8 +177,8 @@ class CompareMode(QWidget):
         self.queue = RetargetQueue(self)
         self._done_in_batch = 0
         self._resume_playing = False  # the timeline played when retargets paused it: it plays on after
-        self._progress: JobProgressDialog | None = None
-        self.show_fit_residual = False  # the curve shows a tracked source's fit residual (View menu)
+        self._progress: JobProgress | None = None
+        self.curve_shows = ASM_CURVE  # or the sideways flexion, or a tracked source's fit residual (View menu)
         self.view = CompareView()
         self.timeline = Timeline()
         self.curve = ErrorCurve()
@@ -166,19 +189,11 @@ class CompareMode(QWidget):
         self.heatmap_choice.setToolTip("the retarget the heatmap, the error curve, the scores' highlight and "
                                        "exports follow")
         self.scores = ScoresTable()
-        self.sideways_note = QLabel()  # the selected retarget's worst sideways bend, in words
+        self.sideways_note = QLabel()  # the selected retarget's worst sideways bend and unsure frames, in words
         self.sideways_note.setWordWrap(True)
-        side = QWidget()
-        side_layout = QVBoxLayout(side)
-        side_layout.addWidget(self.heatmap_choice)
-        side_layout.addWidget(self.heatmap)
-        side_layout.addWidget(self.scores)
-        splitter = QSplitter()
-        splitter.addWidget(self.view)
-        splitter.addWidget(side)
-        splitter.setStretchFactor(0, 3)
+        self._table_height = 0  # the scores table's height the user dragged its splitter to (0: not dragged)
         layout = QVBoxLayout(self)
-        layout.addWidget(splitter, 1)
+        layout.addWidget(self._panels(), 1)
         layout.addWidget(self.timeline)
         layout.addWidget(self.sideways_note)  # a line over the curve: the side panel keeps its height
         layout.addWidget(self.curve)
@@ -194,6 +209,54 @@ class CompareMode(QWidget):
         self.queue.progress.connect(self._on_progress)
         self.queue.failed.connect(self._on_failure)
         self.queue.idle.connect(self._on_idle)
+
+    def _panels(self) -> QSplitter:
+        """The grid beside the heatmap, over the scores table the whole width (its columns need more than a side
+        panel has at 1000 pixels); splitters between them. The heatmap keeps its size and scrolls where the
+        window is too short for it, never squeezed under its legend."""
+        side = QWidget()
+        side_layout = QVBoxLayout(side)
+        side_layout.setContentsMargins(4, 0, 4, 0)
+        side_layout.addWidget(self.heatmap_choice)
+        side_layout.addWidget(self.heatmap)
+        side_layout.addStretch(1)
+        scroll = QScrollArea()
+        scroll.setWidget(side)
+        scroll.setWidgetResizable(True)
+        scroll.setFrameShape(QFrame.Shape.NoFrame)
+        scroll.setHorizontalScrollBarPolicy(Qt.ScrollBarPolicy.ScrollBarAlwaysOff)
+        scroll.setMinimumWidth(side.sizeHint().width() + scroll.verticalScrollBar().sizeHint().width())
+        top = QSplitter()
+        top.addWidget(self.view)
+        top.addWidget(scroll)
+        top.setStretchFactor(0, 1)
+        top.setStretchFactor(1, 0)
+        panels = QSplitter(Qt.Orientation.Vertical)
+        panels.addWidget(top)
+        panels.addWidget(self.scores)
+        panels.setStretchFactor(0, 1)
+        panels.setStretchFactor(1, 0)
+        panels.setChildrenCollapsible(False)
+        panels.splitterMoved.connect(self._table_dragged)
+        self.panels = panels
+        return panels
+
+    def _table_dragged(self) -> None:
+        self._table_height = self.panels.sizes()[1]  # the user's choice: kept from now on
+
+    def _fit_table(self) -> None:
+        """The table's share of the panels: its rows up to `TABLE_SHARE` of the height (at least two rows), or the
+        height the user dragged it to."""
+        total = sum(self.panels.sizes())
+        if total <= 0:
+            return
+        want = self._table_height or min(self.scores.sizeHint().height(), int(TABLE_SHARE * total))
+        want = max(want, self.scores.minimumSizeHint().height())
+        self.panels.setSizes([total - want, want])
+
+    def resizeEvent(self, event) -> None:
+        super().resizeEvent(event)
+        self._fit_table()
 
     @property
     def setup(self) -> CompareState:
@@ -268,6 +331,7 @@ class CompareMode(QWidget):
                     widget.blockSignals(True)
                     setter()
                     widget.blockSignals(False)
+                self.view.set_selected(index)
             self._show_selected_curve()
             self.show_frame(self.timeline.frame)
 
@@ -384,6 +448,7 @@ class CompareMode(QWidget):
         self._keep_results(set(self.state.wanted()))
         self.view.set_comparison(comparison)
         self.scores.show_comparison(comparison)
+        self._fit_table()
         self.heatmap_choice.blockSignals(True)
         self.heatmap_choice.clear()
         self.heatmap_choice.addItems([label(r) for r in comparison.results])
@@ -397,9 +462,8 @@ class CompareMode(QWidget):
     # --- progress ---
     def _show_progress(self) -> None:
         if self._progress is None:
-            # non-modal: the menus stay usable while it runs (their actions queue or cancel work)
-            self._progress = JobProgressDialog("Retargeting...", "Cancel", PROGRESS_STEPS, self,
-                                               "s2h-viewer: retargeting")
+            # in the status bar: the menus and the timeline stay usable while it runs (their actions queue or cancel)
+            self._progress = JobProgress("Retargeting...", "Cancel", PROGRESS_STEPS, self, "retargeting")
             self._progress.canceled.connect(self.cancel)
             self._progress.setValue(0)
 
@@ -438,24 +502,26 @@ class CompareMode(QWidget):
     def _solo_changed(self, hand: int) -> None:
         """A retarget shown alone (double-click, Ctrl+M) is the selected one; the source alone changes nothing."""
         if self.comparison is not None and hand >= 1:
-            self.select(self._shown_keys()[hand - 1])
+            self.select(self._shown_keys()[self.view.result_of_hand(hand)])
 
     def _show_selected_curve(self) -> None:
         result = self.selected_result()
         fit = self.comparison.motion.fit if self.comparison is not None else None
-        if self.show_fit_residual and fit is not None:
+        if self.curve_shows == RESIDUAL_CURVE and fit is not None:
             self.curve.set_curve(fit.residual_mm, f"{self.comparison.source.name}",
                                  "tracking fit residual per frame, mm",
                                  f"{int(fit.filled.sum())} frames filled (grey). ")
+        elif self.curve_shows == SIDEWAYS_CURVE:
+            self.curve.set_curve(sideways_curve(result), label(result),
+                                 "worst sideways bend of a curled PIP/DIP per frame, deg")
         else:
             self.curve.set_curve(result.frame_error, label(result))
-        self.heatmap.set_title(f"ASM error, {label(result)}")
-        self.sideways_note.setText(sideways_text(result.scores))
+        self.sideways_note.setText(selected_notes(result))
 
-    def set_fit_residual_shown(self, shown: bool) -> None:
-        """The error curve shows the tracked source's fit residual (mm per frame) instead of the selected
-        retarget's ASM error."""
-        self.show_fit_residual = shown
+    def show_curve(self, quantity: str) -> None:
+        """What the error curve shows: `ASM_CURVE` (the selected retarget's ASM error), `SIDEWAYS_CURVE` (its
+        worst sideways bend) or `RESIDUAL_CURVE` (a tracked source's fit residual, mm per frame)."""
+        self.curve_shows = quantity
         if self.comparison is not None:
             self._show_selected_curve()
             self.curve.set_frame(self.timeline.frame)

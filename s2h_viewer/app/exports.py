@@ -14,7 +14,7 @@ from PySide6.QtCore import QObject, Signal
 from PySide6.QtWidgets import QWidget
 
 from s2h_viewer.app.compare_mode import CompareMode, label
-from s2h_viewer.app.progress_dialog import JobProgressDialog
+from s2h_viewer.app.job_progress import JobProgress
 from s2h_viewer.render.caption import add_caption, caption_text
 from s2h_viewer.render.compare_scene import render_comparison
 from s2h_viewer.retarget.progress import Cancelled
@@ -34,12 +34,26 @@ def suggested_name(mode: CompareMode, suffix: str, frame: int | None = None) -> 
     return f"{stem}{'' if frame is None else f'_f{frame:04d}'}{suffix}"
 
 
-def export_screenshot(mode: CompareMode, path: str) -> Path:
-    """The grid as it is on screen with its caption, written atomically."""
+#: the export sizes File > Export size offers, pixels; None: the view's own
+EXPORT_SIZES: tuple[tuple[int, int] | None, ...] = (None, (1280, 720), (1920, 1080), (2560, 1440), (3840, 2160))
+
+
+def size_text(size: tuple[int, int] | None) -> str:
+    return "as the view" if size is None else f"{size[0]} x {size[1]}"
+
+
+def export_screenshot(mode: CompareMode, path: str, size: tuple[int, int] | None = None) -> Path:
+    """The grid as it is on screen with its caption, written atomically: grabbed from the view, or at ``size``
+    pixels rendered off screen with the view's page of targets, camera, overlays, solo and selection."""
     from PIL import Image
 
     from s2h_viewer.io.atomic import atomic_path
-    image = add_caption(mode.view.grab_rgb(), caption_for(mode, mode.timeline.frame))
+    frame = mode.timeline.frame
+    if size is not None:
+        return render_comparison(mode.view.comparison, path, frame=frame, size=size,
+                                 caption=lambda f: caption_for(mode, f), options=mode.view.options,
+                                 framing=mode.view.framing())
+    image = add_caption(mode.view.grab_rgb(), caption_for(mode, frame))
     with atomic_path(path) as tmp:
         Image.fromarray(image).save(tmp, format="PNG")
     return Path(path)
@@ -60,25 +74,27 @@ class VideoExport(QObject):
     cancelled = Signal()
     failed = Signal(str)
 
-    def __init__(self, mode: CompareMode, path: str, parent: QWidget, frames: range | None = None):
+    def __init__(self, mode: CompareMode, path: str, parent: QWidget, frames: range | None = None,
+                 size: tuple[int, int] | None = None):
         super().__init__(parent)
         comparison, view = mode.comparison, mode.view
         self.path, self.frames = path, range(comparison.n_frames) if frames is None else frames
         self._cancel = threading.Event()
         captions = {f: caption_for(mode, f) for f in self.frames}  # the selection now, not later
-        size = (view.interactor.width(), view.interactor.height()) if view.interactor is not None else (1400, 900)
-        self._job = (comparison, captions, size, view.options)
+        if size is None:  # the view's size
+            size = (view.interactor.width(), view.interactor.height()) if view.interactor is not None else (1400, 900)
+        self._job = (view.comparison, captions, size, view.options, view.framing())  # the page shown
         label = f"Rendering {Path(path).name}\n({frames_text(self.frames, comparison.n_frames)})..."  # the range whole
-        self.dialog = JobProgressDialog(label, "Cancel", len(self.frames), parent,
+        self.strip = JobProgress(label, "Cancel", len(self.frames), parent,
                                         "s2h-viewer: video export")  # non-modal: the timeline stays usable
-        self.dialog.canceled.connect(self.cancel)
-        self.progress.connect(lambda done, _: self.dialog.setValue(done))
+        self.strip.canceled.connect(self.cancel)
+        self.progress.connect(lambda done, _: self.strip.setValue(done))
         for signal in (self.written, self.cancelled, self.failed):
-            signal.connect(self.dialog.close)
+            signal.connect(self.strip.close)
         self.thread = threading.Thread(target=self._run, name="video export", daemon=True)
 
     def start(self) -> "VideoExport":
-        self.dialog.setValue(0)
+        self.strip.setValue(0)
         self.thread.start()
         return self
 
@@ -91,10 +107,11 @@ class VideoExport(QObject):
         self.progress.emit(done, total)
 
     def _run(self) -> None:
-        comparison, captions, size, options = self._job
+        comparison, captions, size, options, framing = self._job
         try:
             path = render_comparison(comparison, self.path, size=size, progress=self._frame_done,
-                                     caption=captions.__getitem__, options=options, frames=self.frames)
+                                     caption=captions.__getitem__, options=options, frames=self.frames,
+                                     framing=framing)
         except Cancelled:
             self.cancelled.emit()
         except (OSError, ValueError) as exc:

@@ -9,14 +9,16 @@ from dataclasses import replace
 from pathlib import Path
 
 from PySide6.QtCore import QSettings, QTimer, Signal
-from PySide6.QtGui import QAction, QKeySequence, QUndoGroup
+from PySide6.QtGui import QAction, QActionGroup, QKeySequence, QUndoGroup
 from PySide6.QtWidgets import QDialog, QFileDialog, QMainWindow, QMessageBox, QTabWidget
 
 from s2h_viewer.app import exports
 from s2h_viewer.app.annotate_mode import AnnotateMode, ask, os_problem
 from s2h_viewer.app.batch_browser import BatchBrowser
-from s2h_viewer.app.compare_mode import CompareMode, CompareSetup, default_setup
+from s2h_viewer.app.compare_mode import (ASM_CURVE, RESIDUAL_CURVE, SIDEWAYS_CURVE, CompareMode, CompareSetup,
+                                         default_setup)
 from s2h_viewer.app.focus import FocusKeeper
+from s2h_viewer.app.job_progress import strip_height
 from s2h_viewer.app.tasks import TaskRunner
 from s2h_viewer.errors import S2HError, TooFewBonesError, UnrecognisedRigError, reading
 from s2h_viewer.hand.model import HandModel
@@ -28,6 +30,7 @@ from s2h_viewer.widgets import annotation_view, compare_view, error_curve, vtk_w
 __all__ = ["CompareSetup", "MainWindow", "default_setup", "run"]
 
 RECENT_FILES = 8
+MIN_SIZE = (1000, 700)  # the smallest window whose panels all hold (the heatmap whole, two score rows, the curve)
 STATUS_MS_CANCELLED = 15_000  # a cancelled export says so this long in the status bar
 #: hand files a target can be (a BVH holds a motion on a skeleton, no mesh to colour: not offered)
 TARGET_HAND_FILTER = "Hands (*.glb *.gltf *.vrm *.fbx *.npz)"
@@ -69,6 +72,8 @@ class MainWindow(QMainWindow):
         self.batch_browser = BatchBrowser(self)
         self._build_menus()
         self.focus_keeper = FocusKeeper(self)  # shortcuts keep working after a dialog closes without a window manager
+        self.setMinimumSize(*MIN_SIZE)
+        self.statusBar().setMinimumHeight(strip_height(self) + 4)  # room for job strips from the start
         geometry = self.settings.value("window/geometry")
         if geometry is not None:
             self.restoreGeometry(geometry)
@@ -161,6 +166,7 @@ class MainWindow(QMainWindow):
         compare_only += [self._action(file_menu, "Export screenshot (PNG)...", self.export_screenshot, "Ctrl+S"),
                          self._action(file_menu, "Export video (MP4, GIF)...", self.export_video, "Ctrl+E"),
                          self._action(file_menu, "Export retargeted motion...", self.export_motion)]
+        self._export_size_menu(file_menu.addMenu("Export size (pictures and videos)"))
         file_menu.addSeparator()
         self._action(file_menu, "Quit", self.close, "Ctrl+Q")
         edit_menu = bar.addMenu("&Edit")
@@ -196,18 +202,24 @@ class MainWindow(QMainWindow):
                                         checkable=True)
         self.skeleton_overlay = self._action(view_menu, "Skeleton overlay (skin see-through)", lambda on: (
             self.view.set_options(skeleton=on)), "Ctrl+K", checkable=True)
-        self.contact_overlay = self._action(view_menu, "Contact overlay (lost contacts in red)", lambda on: (
-            self.view.set_options(contacts=on)), "Ctrl+J", checkable=True)
+        self.contact_overlay = self._action(view_menu, "Contact overlay (kept green, lost red, invented blue)",
+                                            lambda on: self.view.set_options(contacts=on), "Ctrl+J", checkable=True)
         self.keypoint_dots = self._action(view_menu, "Tracked keypoints on the source (recordings)", lambda on: (
             self.view.set_options(keypoints=on)), "Ctrl+D", checkable=True)
         self.keypoint_dots.setChecked(True)
+        self.sideways_curve = self._action(view_menu, "Error curve: sideways flexion per frame (deg)",
+                                           lambda: self._choose_curve(self.sideways_curve), "Ctrl+G", checkable=True)
         self.fit_residual = self._action(view_menu, "Error curve: tracking fit residual (recordings)",
-                                         self.compare.set_fit_residual_shown, "Ctrl+F", checkable=True)
+                                         lambda: self._choose_curve(self.fit_residual), "Ctrl+F", checkable=True)
         view_menu.addSeparator()
         for preset, text, key in (("palm", "Camera: palm", "Ctrl+1"), ("back", "Camera: back", "Ctrl+2"),
                                   ("side", "Camera: side", "Ctrl+3"), ("default", "Camera: reset", "Ctrl+0")):
             self._action(view_menu, text, lambda _=False, p=preset: self.view.set_options(camera=p), key)
         self._action(view_menu, "Solo the selected retarget / back to the grid", self._toggle_solo, "Ctrl+M")
+        self._action(view_menu, "Next page of targets (grid)", lambda: self.view.set_page(self.view.page + 1),
+                     "Ctrl+PgDown")
+        self._action(view_menu, "Previous page of targets (grid)", lambda: self.view.set_page(self.view.page - 1),
+                     "Ctrl+PgUp")
         play = bar.addMenu("&Playback")
         timeline = self.timeline
         self._action(play, "Play / pause", timeline.toggle, "Space")
@@ -306,7 +318,8 @@ class MainWindow(QMainWindow):
         if self.view.solo >= 0 or self.comparison is None:
             self.view.set_solo(-1)
             return
-        self.view.set_solo(1 + self.comparison.results.index(self.compare.selected_result()))
+        selected = self.comparison.results.index(self.compare.selected_result())
+        self.view.set_solo(self.view.hand_of_result(selected))
 
     # --- files ---
     def _last_dir(self) -> str:
@@ -450,6 +463,35 @@ class MainWindow(QMainWindow):
             self.statusBar().showMessage(f"wrote {sidecar}: {Path(path).name} opens with this joint map", 5000)
         return hand
 
+    def _export_size_menu(self, menu) -> None:
+        """One item per size of `exports.EXPORT_SIZES`, one ticked (kept for the next launch): PNG and video
+        exports are rendered at it whatever the window's size."""
+        group = QActionGroup(self)
+        saved = str(self.settings.value("export/size", exports.size_text(None)))
+        self.export_size_actions = {}
+        for size in exports.EXPORT_SIZES:
+            text = exports.size_text(size)
+            action = self._action(menu, text.capitalize(), lambda _=False, t=text: self.settings.setValue(
+                "export/size", t), checkable=True)
+            group.addAction(action)
+            action.setChecked(text == saved)
+            self.export_size_actions[size] = action
+        if group.checkedAction() is None:
+            self.export_size_actions[None].setChecked(True)
+
+    @property
+    def export_size(self) -> tuple[int, int] | None:
+        """The size exports are rendered at (File > Export size); None: the view's."""
+        return next(size for size, action in self.export_size_actions.items() if action.isChecked())
+
+    def _choose_curve(self, chosen: QAction) -> None:
+        """The error curve's View items exclude each other: the one ticked is shown, none ticked the ASM error."""
+        for action in (self.sideways_curve, self.fit_residual):
+            if action is not chosen:
+                action.setChecked(False)
+        self.compare.show_curve(SIDEWAYS_CURVE if self.sideways_curve.isChecked() else
+                                RESIDUAL_CURVE if self.fit_residual.isChecked() else ASM_CURVE)
+
     def _tracking_actions(self) -> None:
         """The recording-only View items are offered while the source is a tracked recording, whose fit's
         report (as `s2h retarget` prints it) the status bar then shows."""
@@ -556,7 +598,7 @@ class MainWindow(QMainWindow):
         try:
             path = self._ask_to_save("Export screenshot", "PNG (*.png)", path, lambda: exports.suggested_name(
                 self.compare, ".png", self.timeline.frame))
-            return self._wrote(exports.export_screenshot(self.compare, path)) if path else None
+            return self._wrote(exports.export_screenshot(self.compare, path, self.export_size)) if path else None
         finally:
             self.timeline.set_playing(playing)
 
@@ -570,11 +612,11 @@ class MainWindow(QMainWindow):
             path, frames = self._ask_video() or (None, None)
         if not path:
             return None
-        job = exports.VideoExport(self.compare, path, self, frames)
+        job = exports.VideoExport(self.compare, path, self, frames, self.export_size)
         what = f" ({exports.frames_text(job.frames, self.comparison.n_frames)})"
         job.written.connect(lambda written: self._wrote(written, what))
         name = Path(path).name
-        job.dialog.canceled.connect(lambda: self.statusBar().showMessage(  # said at once: the job stops after a frame
+        job.strip.canceled.connect(lambda: self.statusBar().showMessage(  # said at once: the job stops after a frame
             f"cancelling the video export: {name} will not be written..."))
         job.cancelled.connect(lambda: self.statusBar().showMessage(
             f"video export cancelled: no file written ({name})", STATUS_MS_CANCELLED))
@@ -688,8 +730,8 @@ class MainWindow(QMainWindow):
             if self.video_export is not job:
                 box.done(0)
             else:
-                box.setText(f"{Path(job.path).name} is still being rendered ({job.dialog.value()} of "
-                            f"{job.dialog.maximum()} frames). Quitting cancels it and writes no file.")
+                box.setText(f"{Path(job.path).name} is still being rendered ({job.strip.value()} of "
+                            f"{job.strip.maximum()} frames). Quitting cancels it and writes no file.")
         refresh()
         live = QTimer(box)
         live.timeout.connect(refresh)

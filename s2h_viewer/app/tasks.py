@@ -1,4 +1,4 @@
-"""Long work off the GUI thread: one job at a time in a QThread behind a progress dialog, which hears
+"""Long work off the GUI thread: one job at a time in a QThread behind a progress strip, which hears
 the job's reports (`retarget.progress`)."""
 
 from __future__ import annotations
@@ -8,11 +8,11 @@ from collections.abc import Callable
 from PySide6.QtCore import QObject, QThread, Signal
 from PySide6.QtWidgets import QWidget
 
-from s2h_viewer.app.progress_dialog import JobProgressDialog
+from s2h_viewer.app.job_progress import JobProgress
 from s2h_viewer.errors import S2HError
 from s2h_viewer.retarget.progress import reporting
 
-#: steps of the progress dialog's bar
+#: steps of the progress strip's bar
 DIALOG_STEPS = 1000
 
 
@@ -44,7 +44,7 @@ class TaskRunner(QObject):
         super().__init__(parent)
         self._parent, self._on_error, self._on_status = parent, on_error, on_status
         self._thread: QThread | None = None
-        self._progress: JobProgressDialog | None = None
+        self._progress: JobProgress | None = None
         self._task: Task | None = None
         self._on_done: Callable[[object], None] | None = None
 
@@ -53,15 +53,15 @@ class TaskRunner(QObject):
         return self._thread is not None
 
     def start(self, fn: Callable[[], object], label: str, on_done: Callable[[object], None]) -> None:
-        """Run ``fn()`` off the GUI thread behind a progress dialog that follows its reports; errors become a
-        dialog."""
+        """Run ``fn()`` off the GUI thread behind a progress strip that follows its reports; errors become an
+        error dialog."""
         if self._thread is not None:
             return
         self._thread = QThread(self)
         task = Task(fn)
         task.moveToThread(self._thread)
         self._thread.started.connect(task.run)
-        self._progress = JobProgressDialog(label, None, DIALOG_STEPS, self._parent, "s2h-viewer")
+        self._progress = JobProgress(label, None, DIALOG_STEPS, self._parent, "s2h-viewer")
         task.progress.connect(self._on_progress)
         self._on_done = on_done
         task.finished.connect(self._on_task_done)  # a bound slot of a GUI-thread object: runs on the GUI thread
@@ -70,10 +70,10 @@ class TaskRunner(QObject):
         self._thread.start()
 
     def finish(self) -> None:
-        """Close the dialog and wait for the thread (on completion, failure or window close)."""
+        """Close the progress strip and wait for the thread (on completion, failure or window close)."""
         if self._progress is not None:
             self._progress.close()
-            self._progress.deleteLater()  # destroyed, its X window goes too (hidden, it stayed mapped under Xvfb)
+            self._progress.deleteLater()
             self._progress = None
         if self._thread is not None:
             self._thread.quit()

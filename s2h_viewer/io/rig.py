@@ -190,6 +190,7 @@ def _check_mesh(mesh: RigMesh, skeleton: RigSkeleton, source: Path) -> None:
 
 def annotate(hand: HandModel, source: Path) -> HandModel:
     """Set ``hand``'s TBS frames and radii: the sidecar of ``source``, else the solver, else the palm plane."""
+    from s2h_viewer.annotate import trust
     from s2h_viewer.annotate.solver import estimate_radii, solve_tbs_frames
 
     side = hand_side(hand)
@@ -202,10 +203,15 @@ def annotate(hand: HandModel, source: Path) -> HandModel:
         annotation = None
     if annotation is not None:
         hand.rest_frames, how = annotation.frames, "sidecar"
+        set_by, confidence = annotation.set_by, annotation.confidence
     elif solution is not None:
         hand.rest_frames, how = solution.frames, "solver"
+        set_by = [trust.GUESS if basis == trust.GUESS else "solver" for basis in solution.basis]
+        confidence = solution.confidence
     else:
         how = "palm plane (no mesh)"
+        set_by, confidence = [trust.GUESS] * topo.N_ARTICULATED, np.full(topo.N_ARTICULATED, np.nan)
+    trust.record(hand, set_by, confidence)
     hand.radii = estimate_radii(hand, solution)
     hand.meta["annotation"] = how
     if solution is not None or refused:

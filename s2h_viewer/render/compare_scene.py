@@ -16,8 +16,9 @@ from pathlib import Path
 import numpy as np
 import pyvista as pv
 import trimesh
-from vtkmodules.vtkRenderingCore import vtkMapper, vtkTextProperty, vtkTextRenderer
+from vtkmodules.vtkRenderingCore import vtkActor2D, vtkMapper, vtkTextProperty, vtkTextRenderer
 
+from s2h_viewer.annotate.trust import frame_warning
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.kinematics import HandPose
 from s2h_viewer.hand.model import HandModel
@@ -38,17 +39,31 @@ MIN_LABEL_PX = 9  # and at least, in small cells: smaller glyphs are no longer r
 LABEL_PAD = 4  # pixels between a label and its cell's top and left edges (and the band's bottom)
 BAND_SHARE = 0.35  # of a cell's height: the font shrinks until the labels' band fits in it
 MAX_BAND_SHARE = 0.45  # at most: a cell too short for every line even at MIN_LABEL_PX leaves out the last ones
-LABEL_LINES = 3  # a retarget's label: method -> target, S_palm, S_finger
+LABEL_LINES = 3  # a retarget's label: method -> target, S_finger, the share of frames keeping the signature
 WIDEST_LINE = "S_finger 0.000"  # the widest line the font shrinks to keep whole (longer ones are elided)
 ELLIPSIS = "\u2026"
 TEXT_DPI = 72  # VTK's render windows' default: a font size in points is then in pixels
+#: contacts in three states, each its own colour (none of them in the skin's plasma colours): kept (the source
+#: makes it too; every contact of the source), lost (the source makes it, the retarget does not) and invented
+#: (the retarget makes it, the source does not: a false touch is not a kept one)
 CONTACT_COLOUR = "#1a9850"
+LOST_COLOUR = "#ff1f1f"
+INVENTED_COLOUR = "#0a84ff"
+CONTACT_STATES = (("kept contact", CONTACT_COLOUR), ("lost: the source touches", LOST_COLOUR),
+                  ("invented: the source does not", INVENTED_COLOUR))
 #: the overlays' pixel sizes (bones, contact links, pad dots) in a cell OVERLAY_CELL pixels on its short side or
-#: more; smaller cells scale them down (at least 1, 2, 5): fixed dots would hide a small cell's fingers
-OVERLAY_PX = (3, 8, 16)
+#: more; smaller cells scale them down (at least `OVERLAY_LEAST`): fixed dots would hide a small cell's fingers.
+#: A dot is narrower than two touching pads' centres are apart (about 18 pixels at 300), so their link shows.
+OVERLAY_PX = (3, 6, 11)
+OVERLAY_LEAST = (1, 2, 4)
 OVERLAY_CELL = 300
 ON_TOP_OFFSET = -1e6  # depth offset (OpenGL polygon-offset units) of the contact overlay: in front of any skin
-LOST_COLOUR = "#ff1f1f"
+#: a target whose frames are unsure or guessed (`annotate.trust`): a banner at its cells' bottom
+BANNER_COLOUR, BANNER_BACKGROUND = "#8a4b00", "#ffe0b2"
+#: the selected retarget's cell is framed in this colour, this many pixels wide
+SELECTED_COLOUR, SELECTED_WIDTH = "#1565c0", 3.0
+#: the contact legend's pixel size (one line per state) and its distance from its cell's bottom left corner
+LEGEND_PX = (170, 54)
 #: each contact pair (``semantics.contacts.CONTACT_PAIRS``) as two indices into ``contact_sites``.
 PAIR_SITES = np.array([[SITES.index(a), SITES.index(b)] for a, b in CONTACT_PAIRS], dtype=np.int64)
 
@@ -85,6 +100,8 @@ class PosedHand:
         self.overlay: Overlays | None = None
         self.keypoints: KeypointDots | None = None  # a tracked source's recorded keypoints
         self.renderer = plotter.renderer  # the subplot it is drawn in
+        self.warned = False  # its target's frames are unsure (`annotate.trust`): framed in the banner's colour
+        self.border: vtkActor2D | None = None
         self.frame, self.playing = 0, False
         self.levels: list[Skin] = []  # the full skin, then the one drawn while playing (if any)
         if hand.mesh is not None:
@@ -171,6 +188,20 @@ class PosedHand:
             skin.error[:] = posed.error
             skin.mesh.GetPointData().GetArray("error").Modified()
 
+    def set_framed(self, selected: bool) -> None:
+        """Frame the cell: in `SELECTED_COLOUR` when it is the selected retarget, else in the banner's colour if
+        its frames are unsure, else not at all."""
+        colour, width = (SELECTED_COLOUR, SELECTED_WIDTH) if selected else (BANNER_COLOUR, 2.0)
+        if not selected and not self.warned:
+            if self.border is not None:
+                self.border.SetVisibility(False)
+            return
+        if self.border is None:
+            self.border = self.renderer.add_border(color=colour, width=width)
+        self.border.GetProperty().SetColor(pv.Color(colour).float_rgb)
+        self.border.GetProperty().SetLineWidth(2 * width)  # pyvista doubles it: half is clipped at the edge
+        self.border.SetVisibility(True)
+
     def set_opacity(self, opacity: float) -> None:
         """See-through below 1; an opaque closed skin skips its back faces (about a third of the drawing)."""
         for level in self.levels:
@@ -217,6 +248,7 @@ class CellLabel:
     actor: pv.Text
     text: str
     fitted: tuple = ()  # the cell's size and the font it was last fitted to
+    bottom: bool = False  # a banner: at the cell's bottom left, one line
 
     def fit(self, width: int, height: int, font: tuple[int, int]) -> None:
         """Draw it in a ``width`` x ``height`` pixel cell with ``font`` (`label_font`'s size and lines kept)."""
@@ -227,7 +259,18 @@ class CellLabel:
         self.actor.prop.font_size = px
         kept = self.text.split("\n")[:lines]
         self.actor.SetInput("\n".join(elide(line, px, width - 2 * LABEL_PAD) for line in kept))
-        self.actor.SetPosition(LABEL_PAD / width, 1.0 - LABEL_PAD / height)
+        self.actor.SetPosition(LABEL_PAD / width, LABEL_PAD / height if self.bottom else 1.0 - LABEL_PAD / height)
+
+
+def add_banner(plotter: pv.Plotter, text: str) -> CellLabel:
+    """A warning at the bottom left of the current subplot, dark on a light orange band, fitted as the labels."""
+    actor = plotter.add_text(text, position=(0.02, 0.02), viewport=True, color=BANNER_COLOUR)
+    actor.prop.font_size = LABEL_PX
+    actor.prop.SetFontFamilyToArial()
+    actor.prop.SetVerticalJustificationToBottom()
+    actor.prop.SetBackgroundColor(pv.Color(BANNER_BACKGROUND).float_rgb)
+    actor.prop.SetBackgroundOpacity(1.0)
+    return CellLabel(plotter.renderer, actor, text, bottom=True)
 
 
 def add_label(plotter: pv.Plotter, text: str) -> CellLabel:
@@ -313,6 +356,9 @@ def fit_cells(plotter: pv.Plotter, hands: list["PosedHand"], labels: list[CellLa
     for hand in shown:
         if hand.overlay is not None:
             hand.overlay.fit(min(cell_pixels(plotter, hand.renderer)))
+    legend = hands[0].overlay.legend if hands and hands[0].overlay is not None else None
+    if legend is not None:
+        legend.fit(*cell_pixels(plotter, legend.renderer))
         if hand.keypoints is not None:
             hand.keypoints.fit(min(cell_pixels(plotter, hand.renderer)))
     if shown:
@@ -343,8 +389,8 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
     for row, target in enumerate(dict.fromkeys(id(r.target) for r in comparison.results)):
         results = [r for r in comparison.results if id(r.target) == target]
         panels += [((row, 1 + k), r.target, r.pose, r.joint_error, source_contacts,
-                    f"{METHODS[r.method].label} -> {r.target.name}\nS_palm {r.scores.s_palm:.3f}\n"
-                    f"S_finger {r.scores.s_finger:.3f}") for k, r in enumerate(results)]
+                    f"{METHODS[r.method].label} -> {r.target.name}\nS_finger {r.scores.s_finger:.3f}\n"
+                    f"kept {r.scores.signature_kept:.3f}") for k, r in enumerate(results)]
     hands, labels = [], []
     for cell, hand, pose, error, expected, label in panels:
         plotter.subplot(*cell)
@@ -359,12 +405,19 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
             posed.keypoints = KeypointDots(plotter, hand, fit.keypoints, fit.filled)
         hands.append(posed)
         labels.append(add_label(plotter, label))
+        warning = frame_warning(hand) if expected is not None else None
+        if warning is not None:  # the banner at the cell's bottom, the cell framed: it is not the next row's
+            labels.append(add_banner(plotter, f"! {warning.banner}"))
+            posed.warned = True
+            posed.set_framed(False)
     below = source_cell_below(comparison)
     if below is not None:
         plotter.subplot(*below)
         plotter.set_background("white")
         labels.append(add_label(plotter, f"clip: {comparison.motion.name}\n{comparison.n_frames} frames at "
                                          f"{comparison.motion.fps:g} fps"))
+    plotter.subplot(*(below or (0, 0)))  # the clip's cell, else the source's: the contact colours' legend
+    hands[0].overlay.legend = ContactLegend(plotter)
     coloured = next((h.error_actor for h in hands if h.error_actor is not None), None)
     plotter.subplot(0, plotter.shape[1] - 1)
     plotter.set_background("white")
@@ -377,6 +430,17 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
     fit_cells(plotter, hands, labels)
     set_camera(plotter, "default", [h.hand for h in hands])
     return hands, labels
+
+
+def show_alone(plotter: pv.Plotter, hands: list[PosedHand], viewports: list[tuple[float, ...]], index: int) -> None:
+    """Hand ``index``'s cell alone over the whole grid (its colour bar beside a retarget), -1: the grid again;
+    ``viewports`` the renderers' grid viewports."""
+    solo = hands[index].renderer if index >= 0 else None
+    for renderer, viewport in zip(plotter.renderers, viewports):
+        renderer.SetViewport(*((0.0, 0.0, 1.0, 1.0) if renderer is solo else viewport))
+        renderer.SetDraw(solo is None or renderer is solo)
+    if index >= 0 and hands[index].error_actor is not None:
+        colour_bar_beside_solo(plotter)  # a retarget alone keeps the colour bar of its error colours
 
 
 def colour_bar_beside_solo(plotter: pv.Plotter) -> None:
@@ -432,22 +496,26 @@ def set_camera(plotter: pv.Plotter, preset: str, hands: list[HandModel]) -> None
 
 
 class Overlays:
-    """A hand's skeleton and its contacts, drawn over the skin when switched on: touching pads linked
-    (green), and on a retarget the contacts the source makes but it misses (lost, red)."""
+    """A hand's skeleton and its contacts, drawn over the skin when switched on: each contact a link between
+    its two pads (round dots), in `CONTACT_STATES`' colours: on a retarget, kept, lost (the source's, missed)
+    and invented (made where the source makes none); on the source, its own (kept)."""
 
     def __init__(self, plotter: pv.Plotter, hand: HandModel, pose: HandPose, expected: np.ndarray | None):
         self.hand, self.pose = hand, pose
         self.contacts = detect_contacts(hand, pose)
         self.lost = None if expected is None else expected & ~self.contacts
+        self.invented = None if expected is None else self.contacts & ~expected
+        self.states = [self.contacts if expected is None else self.contacts & expected, self.lost, self.invented]
+        self.legend: ContactLegend | None = None  # on the source's overlays: the one legend of the grid
         self.sites = to_view(hand, contact_sites(hand, pose))  # (T, 6, 3)
         self.bones = skeleton(hand, pose, 0)
-        self.links, self.lost_links = pv.PolyData(self.sites[0]), pv.PolyData(self.sites[0])
+        self.polys = [pv.PolyData(self.sites[0]) for _ in CONTACT_STATES]
+        self.links, self.lost_links, self.invented_links = self.polys  # kept, lost, invented
         bone, link, dot = OVERLAY_PX
-        self.actors = [plotter.add_mesh(self.bones, color=BONE_COLOUR, line_width=bone, reset_camera=False),
-                       plotter.add_mesh(self.links, color=CONTACT_COLOUR, line_width=link, point_size=dot,
-                                        render_points_as_spheres=False, reset_camera=False),
-                       plotter.add_mesh(self.lost_links, color=LOST_COLOUR, line_width=link, point_size=dot,
-                                        render_points_as_spheres=False, reset_camera=False)]
+        self.actors = [plotter.add_mesh(self.bones, color=BONE_COLOUR, line_width=bone, reset_camera=False)]
+        self.actors += [plotter.add_mesh(poly, color=colour, line_width=link, point_size=dot,
+                                         render_points_as_spheres=True, reset_camera=False)
+                        for poly, (_, colour) in zip(self.polys, CONTACT_STATES)]
         # contacts drawn over the skin: the pads' centres lie inside the fingers (an opaque hand shown alone hid
         # every one). The offsets act only in VTK's polygon-offset mode, which is process-wide (a static).
         vtkMapper.SetResolveCoincidentTopologyToPolygonOffset()
@@ -460,8 +528,9 @@ class Overlays:
     def fit(self, short_side: int) -> None:
         """Bones, links and dots sized for a cell ``short_side`` pixels on its short side (`OVERLAY_PX`)."""
         scale = min(1.0, short_side / OVERLAY_CELL)
-        bone, link, dot = (max(least, round(px * scale)) for px, least in zip(OVERLAY_PX, (1, 2, 5)))
-        for actor, width, size in zip(self.actors, (bone, link, link), (None, dot, dot)):
+        bone, link, dot = (max(least, round(px * scale)) for px, least in zip(OVERLAY_PX, OVERLAY_LEAST))
+        for actor in self.actors:
+            width, size = (bone, None) if actor is self.actors[0] else (link, dot)
             if actor.prop.line_width != width:  # set only when it changes: this runs before every render
                 actor.prop.line_width = width
             if size is not None and actor.prop.point_size != size:
@@ -473,21 +542,44 @@ class Overlays:
 
     def _update_visibility(self) -> None:
         self.actors[0].visibility = self.show_skeleton
-        self.actors[1].visibility = self.actors[2].visibility = self.show_contacts
+        for actor in self.actors[1:]:
+            actor.visibility = self.show_contacts
+        if self.legend is not None:
+            self.legend.actor.SetVisibility(self.show_contacts)
 
     def show(self, frame: int) -> None:
         if self.show_skeleton:
             self.bones.points = to_view(self.hand, self.pose.positions[frame].numpy().astype(np.float64))
         if self.show_contacts:
-            for poly, mask in ((self.links, self.contacts[frame]),
-                               (self.lost_links, None if self.lost is None else self.lost[frame])):
+            for poly, state in zip(self.polys, self.states):
+                mask = None if state is None else state[frame]
                 pairs = PAIR_SITES[mask] if mask is not None and mask.any() else np.zeros((0, 2), dtype=np.int64)
                 poly.points = self.sites[frame]
                 poly.lines = np.column_stack([np.full(len(pairs), 2), pairs]).ravel() if len(pairs) else \
                     np.zeros(0, dtype=np.int64)
-                sites = np.unique(pairs)  # the pads involved, as dots (a touching pair's link is short)
+                sites = np.unique(pairs)  # the pads involved, as dots at either end of the link
                 poly.verts = np.column_stack([np.ones(len(sites), dtype=np.int64), sites]).ravel() if len(sites) \
                     else np.zeros(0, dtype=np.int64)
+
+
+class ContactLegend:
+    """What the contact overlay's colours mean, at the bottom left of the current subplot, `LEGEND_PX` in size
+    whatever the cell's (`fit`); shown with the contact overlay."""
+
+    def __init__(self, plotter: pv.Plotter):
+        self.renderer = plotter.renderer
+        self.actor = plotter.add_legend([[text, colour] for text, colour in CONTACT_STATES], bcolor="white",
+                                        face="circle", size=(0.5, 0.2), loc="lower left")
+        self.actor.SetVisibility(False)
+        self.fitted: tuple = ()
+
+    def fit(self, width: int, height: int) -> None:
+        if (width, height) == self.fitted:
+            return
+        self.fitted = (width, height)
+        w, h = min(1.0, LEGEND_PX[0] / width), min(0.5, LEGEND_PX[1] / height)
+        self.actor.GetPositionCoordinate().SetValue(LABEL_PAD / width, LABEL_PAD / height)
+        self.actor.GetPosition2Coordinate().SetValue(w, h)
 
 
 def contact_sites(hand: HandModel, pose: HandPose) -> np.ndarray:
@@ -523,13 +615,36 @@ def apply_options(plotter: pv.Plotter, hands: list[PosedHand], options: ViewOpti
         set_camera(plotter, options.camera, [h.hand for h in hands])
 
 
+@dataclass(frozen=True)
+class Framing:
+    """What of the window an off-screen render keeps: its camera (position, focal point, up; None: the options'
+    preset), the hand shown alone (-1: the grid) and the selected retarget framed (-1: none)."""
+
+    camera: tuple | None = None
+    solo: int = -1
+    selected: int = -1
+
+    def apply(self, plotter: pv.Plotter, hands: list[PosedHand]) -> None:
+        for index, hand in enumerate(hands[1:]):
+            hand.set_framed(index == self.selected)
+        if self.solo >= 0:
+            show_alone(plotter, hands, [tuple(r.GetViewport()) for r in plotter.renderers], self.solo)
+        if self.camera is not None:
+            camera = plotter.camera
+            camera.position, camera.focal_point, camera.up = self.camera
+            fit_view_angle(plotter, hands[max(self.solo, 0)].renderer)
+            for renderer in plotter.renderers:
+                renderer.ResetCameraClippingRange()
+
+
 def render_comparison(comparison: Comparison, path: str | Path, frame: int | None = None,
                       size: tuple[int, int] = (1400, 900),
                       progress: Callable[[int, int], None] | None = None,
                       caption: Callable[[int], str] | None = None,
-                      options: ViewOptions = ViewOptions(), frames: range | None = None) -> Path:
+                      options: ViewOptions = ViewOptions(), frames: range | None = None,
+                      framing: Framing = Framing()) -> Path:
     """Off screen: one frame as PNG (``frame``, default 0), or ``frames`` (default: every frame) as MP4/GIF
-    (by suffix).
+    (by suffix), ``size`` pixels whatever the window's; ``framing``: the window's camera, solo and selection.
 
     ``caption(frame)`` adds a line under each image (``frame`` the clip's index); ``progress(done, total)``
     counts the images rendered of those asked, is called after every one and may raise
@@ -541,8 +656,10 @@ def render_comparison(comparison: Comparison, path: str | Path, frame: int | Non
     path = Path(path)
     plotter = pv.Plotter(off_screen=True, window_size=size, **grid_layout(comparison))
     plotter.render_window.SetMultiSamples(0)
-    hands, _ = populate(plotter, comparison)
+    hands, labels = populate(plotter, comparison)
     apply_options(plotter, hands, options)
+    framing.apply(plotter, hands)
+    fit_cells(plotter, hands, labels)  # to the cells' sizes now (a solo cell is the whole picture)
     plotter.show(auto_close=False)
 
     video = path.suffix.lower() in VIDEO_SUFFIXES

@@ -86,3 +86,17 @@ def build_comparison(motion: Motion, source: HandModel, targets: list[HandModel]
             results.append(compute_result(motion, source, source_asm, target, method))
     report(1.0, "done")
     return Comparison(source, motion, source_pose, results)
+
+
+def target_ids(comparison: Comparison) -> list[int]:
+    """The comparison's targets (ids), in its rows' order."""
+    return list(dict.fromkeys(id(r.target) for r in comparison.results))
+
+
+def target_page(comparison: Comparison, page: int, rows: int) -> tuple[Comparison, int]:
+    """The comparison of targets ``page * rows`` to ``page * rows + rows - 1`` (the grid's page ``page`` of
+    ``rows`` targets), and the index in ``comparison.results`` of its first result."""
+    shown = set(target_ids(comparison)[page * rows:(page + 1) * rows])
+    indices = [i for i, r in enumerate(comparison.results) if id(r.target) in shown]
+    return (Comparison(comparison.source, comparison.motion, comparison.source_pose,
+                       [comparison.results[i] for i in indices]), indices[0] if indices else 0)

@@ -13,8 +13,10 @@ from s2h_viewer.hand.kinematics import HandPose, forward_kinematics
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.semantics.anatomy import violation_rate
 from s2h_viewer.semantics.asm import semantic_matrix
-from s2h_viewer.semantics.contacts import PAD_PAIRS, PALM_PAIRS, contact_precision_recall, detect_contacts
+from s2h_viewer.semantics.contacts import (CONTACT_PAIRS, PAD_PAIRS, PALM_PAIRS, contact_precision_recall,
+                                           detect_contacts)
 from s2h_viewer.semantics.flexion import sideways_peak
+from s2h_viewer.semantics.signature import loss_masks
 from s2h_viewer.semantics.similarity import masked_cosine
 
 #: frames whose ASMs are built at once when a whole clip is scored ((4096, 20, 29, 3) float64: 57 MiB)
@@ -72,6 +74,14 @@ class RetargetScores:
     sideways_deg: float = float("nan")
     sideways_at: str = ""
     source_sideways_deg: float = float("nan")
+    #: share of frames whose signature (`semantics.signature.loss_masks`: each finger extended, bent or curled,
+    #: the thumb's touches, no finger bending sideways, no invented pad contact) is the source's: it drops where
+    #: one finger is visibly wrong, which the clip-wide S_finger averages away
+    signature_kept: float = float("nan")
+    #: frames where the retarget makes a contact (any of the 15 pairs) the source does not, and the pair
+    #: invented on most frames with its first frame ("thumb-middle@120"; empty if none)
+    invented_contacts: int = 0
+    invented_at: str = ""
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -102,12 +112,26 @@ def score_retarget_frames(source_hand: HandModel, source_q: np.ndarray | torch.T
             ref = forward_kinematics(target_hand, torch.as_tensor(np.asarray(reference_q), dtype=torch.float64))
             mse = joint_position_mse(tgt_pose, ref, target_hand.hand_length)
         peak = sideways_peak(tgt_pose.positions.numpy())
+        kept = loss_masks(source_hand, np.asarray(source_q), target_hand, np.asarray(target_q)) == 0
+        invented = tgt_contacts & ~src_contacts
         scores = RetargetScores(s_palm=s_palm, s_finger=s_finger, s_finger_paper=s_finger_paper,
                                 contact_precision=precision, contact_recall=recall, palm_contact_recall=palm_recall,
                                 violation_rate=violation_rate(tgt_q), jitter=jitter(tgt_pose, target_hand.hand_length),
                                 mse=mse, sideways_deg=peak.degrees, sideways_at=peak.where,
-                                source_sideways_deg=sideways_peak(src_pose.positions.numpy()).degrees)
+                                source_sideways_deg=sideways_peak(src_pose.positions.numpy()).degrees,
+                                signature_kept=float(kept.mean()), invented_contacts=int(invented.any(-1).sum()),
+                                invented_at=most_invented(invented))
         return scores, frame_error
+
+
+def most_invented(invented: np.ndarray) -> str:
+    """The pair a (T, 15) invented-contact mask holds on most frames, with its first frame ("thumb-middle@120"),
+    empty where nothing is invented."""
+    counts = invented.sum(0)
+    if not counts.any():
+        return ""
+    pair = int(np.argmax(counts))
+    return f"{'-'.join(CONTACT_PAIRS[pair])}@{int(np.argmax(invented[:, pair]))}"
 
 
 def _asm_agreement(src_pose: HandPose, tgt_pose: HandPose) -> tuple[tuple[float, float, float], np.ndarray]:

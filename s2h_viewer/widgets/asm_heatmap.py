@@ -12,7 +12,7 @@ import numpy as np
 from matplotlib import colormaps
 from PySide6.QtCore import QRect, Qt
 from PySide6.QtGui import QColor, QFont, QImage, QPainter, QPixmap
-from PySide6.QtWidgets import QLabel, QSizePolicy, QToolTip, QVBoxLayout, QWidget
+from PySide6.QtWidgets import QLabel, QToolTip, QVBoxLayout, QWidget
 
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.render.compare_scene import ERROR_COLOURMAP, ERROR_RANGE
@@ -112,17 +112,16 @@ class AsmHeatmap(QWidget):
         self._pixels = np.zeros((CELLS.height(), CELLS.width(), 4), dtype=np.uint8)
         self.image = QImage(self._pixels.data, CELLS.width(), CELLS.height(), 4 * CELLS.width(),
                             QImage.Format.Format_RGB32)  # a view of ``_pixels``: a frame writes the array only
-        self.title = QLabel("ASM error")
-        self.title.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Fixed)  # a long name: no wider
         self.matrix = _Matrix(self)
-        self.legend = QLabel(f"rows: the {topo.N_FINGER_JOINTS} finger joints; columns: the same 20, then "
-                             f"{topo.N_ANCHORS} palm anchors. Colour: 1 - cos, {ERROR_RANGE[0]:g} (dark) to "
-                             f"{ERROR_RANGE[1]:g}+ (bright); grey: masked. Hover a cell for its joint pair.")
+        self.legend = QLabel(f"ASM error (1 - cos): {ERROR_RANGE[0]:g} dark to {ERROR_RANGE[1]:g}+ bright, grey "
+                             f"masked; rows: the {topo.N_FINGER_JOINTS} finger joints, columns: the same, then "
+                             f"{topo.N_ANCHORS} palm anchors. Hover a cell for its pair.")
         self.legend.setWordWrap(True)  # as wide as the matrix, and as tall as its lines then need: a layout
         self.legend.setFixedWidth(self.matrix.width())  # gives a wrapped label too little height, drawing it
         self.legend.setMinimumHeight(self.legend.heightForWidth(self.matrix.width()))  # over the matrix
         layout = QVBoxLayout(self)
-        for widget in (self.title, self.matrix, self.legend):
+        layout.setContentsMargins(0, 4, 0, 0)
+        for widget in (self.matrix, self.legend):
             layout.addWidget(widget)
 
     def cell_at(self, x: int, y: int) -> tuple[int, int] | None:
@@ -139,11 +138,6 @@ class AsmHeatmap(QWidget):
         value = self.current[cell]
         error = "masked" if np.isnan(value) else f"1 - cos = {value:.3f}"
         return f"{spaced(ROW_NAMES[cell[0]])} to {spaced(COLUMN_NAMES[cell[1]])}: {error}"  # as the axes spell them
-
-    def set_title(self, title: str) -> None:
-        """What the matrix belongs to (the selected retarget); the full text also as the tooltip."""
-        self.title.setText(title)
-        self.title.setToolTip(title)
 
     def show_matrix(self, cell_error: np.ndarray, frame: int) -> None:
         """Show ``cell_error`` (20, 29), the matrix of ``frame``: new cell colours in the same image, a repaint."""

@@ -17,18 +17,20 @@ from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
 import pyvista as pv
-from PySide6.QtCore import QEvent, QObject, Signal
+from PySide6.QtCore import QEvent, QObject, QTimer, Signal
+from PySide6.QtWidgets import QHBoxLayout, QLabel, QToolButton, QVBoxLayout, QWidget
 from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
-from PySide6.QtWidgets import QVBoxLayout, QWidget
 
-from s2h_viewer.render.compare_scene import (PLAYING_FACES, CellLabel, PosedHand, PosedSkin, ViewOptions,
-                                             apply_options, colour_bar_beside_solo, fit_cells, grid_layout,
-                                             populate)
-from s2h_viewer.retarget.comparison import Comparison
+from s2h_viewer.render.compare_scene import (PLAYING_FACES, CellLabel, Framing, PosedHand, PosedSkin, ViewOptions,
+                                             apply_options, fit_cells, grid_layout, populate, show_alone)
+from s2h_viewer.retarget.comparison import Comparison, target_ids, target_page
 from s2h_viewer.widgets.vtk_widget import PlotterWidget, window_plotter
 
 #: the mouse in the grid beyond the camera (`vtk_widget.MOUSE`), for Help's list
 MOUSE = (("double-click a hand", "show it alone and select it; double-click again for the grid"),)
+#: pixels a target's row needs at least (its label band and a hand that reads): more targets than fit page
+MIN_ROW_PX = 130
+REFIT_MS = 200  # after a resize, the rows that fit are counted again once it has settled
 
 
 class CompareView(QWidget):
@@ -36,18 +38,27 @@ class CompareView(QWidget):
 
     drawn = Signal()
     solo_changed = Signal(int)  # the hand shown alone (index into the grid's hands), -1 for the grid
+    page_changed = Signal(int)  # the page of targets shown
 
     def __init__(self, parent: QWidget | None = None):
         super().__init__(parent)
         self._layout = QVBoxLayout(self)
         self._layout.setContentsMargins(0, 0, 0, 0)
+        self._layout.addWidget(self._page_bar())
         self.interactor: PlotterWidget | None = None
         self.plotter: pv.Plotter | None = None
-        self.comparison: Comparison | None = None
+        self.full: Comparison | None = None  # every target's results
+        self.comparison: Comparison | None = None  # the page of them in the grid
+        self.page, self.rows, self.offset = 0, 1, 0  # the page, its targets at most, its first result's index
+        self._refit = QTimer(self)
+        self._refit.setSingleShot(True)
+        self._refit.setInterval(REFIT_MS)
+        self._refit.timeout.connect(self._fit_rows)
         self._hands: list[PosedHand] = []
         self._labels: list[CellLabel] = []
         self.options = ViewOptions()
         self.solo = -1
+        self.selected = -1  # the retarget framed (the comparison's results' order)
         self._viewports: list[tuple[float, ...]] = []
         self.frame = 0
         self.playing = False
@@ -60,8 +71,87 @@ class CompareView(QWidget):
     def opacity(self) -> float:
         return self.options.opacity
 
+    def _page_bar(self) -> QWidget:
+        """"Targets 1-2 of 6" between Previous and Next: shown when more targets than fit share the grid."""
+        self.pager = QWidget()
+        self.page_label = QLabel()
+        self.previous_page, self.next_page = QToolButton(), QToolButton()
+        for button, text, step in ((self.previous_page, "< Previous", -1), (self.next_page, "Next >", 1)):
+            button.setText(text)
+            button.clicked.connect(lambda _=False, d=step: self.set_page(self.page + d))
+        layout = QHBoxLayout(self.pager)
+        layout.setContentsMargins(4, 2, 4, 2)
+        layout.addWidget(self.previous_page)
+        layout.addWidget(self.page_label, 1)
+        layout.addWidget(self.next_page)
+        self.pager.hide()
+        return self.pager
+
+    @property
+    def page_count(self) -> int:
+        return max(1, -(-len(target_ids(self.full)) // self.rows)) if self.full is not None else 1
+
+    def rows_fitting(self) -> int:
+        """The target rows the view's height holds at `MIN_ROW_PX` each (the page bar's height left out)."""
+        return max(1, (self.height() - self.pager.sizeHint().height()) // MIN_ROW_PX)
+
     def set_comparison(self, comparison: Comparison) -> None:
-        """Lay out one subplot per hand: the source, then a row per target, a column per method."""
+        """Show ``comparison``: as many target rows as fit (`rows_fitting`), the rest on further pages."""
+        self.full = comparison
+        self.selected = -1  # an index of the previous results: the mode selects again
+        self.rows = self.rows_fitting()
+        self.page = min(self.page, self.page_count - 1)
+        self._build()
+
+    def set_page(self, page: int) -> None:
+        """Show page ``page`` of the targets (clamped), the selected retarget framed if it is on it."""
+        page = min(max(page, 0), self.page_count - 1)
+        if self.full is None or page == self.page:
+            return
+        self.page = page
+        self._build()
+        self.page_changed.emit(page)
+
+    def _page_of(self, index: int) -> int:
+        """The page holding result ``index`` (of the whole comparison)."""
+        return target_ids(self.full).index(id(self.full.results[index].target)) // self.rows
+
+    def resizeEvent(self, event) -> None:
+        super().resizeEvent(event)
+        if self.full is not None and self.rows_fitting() != self.rows:
+            self._refit.start()
+
+    def _fit_rows(self) -> None:
+        """The window's height changed the rows that fit: the grid again, on the page of the selected retarget
+        (a hand shown alone stays so: the grid is laid out again when it comes back)."""
+        if self.full is None or self.solo >= 0 or self.rows_fitting() == self.rows:
+            return
+        self.rows = self.rows_fitting()
+        self.page = self._page_of(self.selected) if self.selected >= 0 else min(self.page, self.page_count - 1)
+        self._build()
+        self.page_changed.emit(self.page)
+
+    def result_of_hand(self, hand: int) -> int:
+        """The index in the whole comparison's results of the grid's hand ``hand`` (>= 1: a retarget)."""
+        return self.offset + hand - 1
+
+    def hand_of_result(self, index: int) -> int:
+        """The grid's hand showing result ``index`` of the whole comparison, turning to its page first."""
+        self.set_page(self._page_of(index))
+        return 1 + index - self.offset
+
+    def _build(self) -> None:
+        """Lay out one subplot per hand of the page: the source, then a row per target, a column per method."""
+        comparison, self.offset = target_page(self.full, self.page, self.rows)
+        pages = self.page_count
+        self.pager.setVisible(pages > 1)
+        first = self.page * self.rows
+        count = len(target_ids(self.full))
+        last = min(first + self.rows, count)
+        shown = f"target {first + 1}" if last == first + 1 else f"targets {first + 1}-{last}"
+        self.page_label.setText(f"{shown} of {count} (page {self.page + 1} of {pages}: Ctrl+PgUp / Ctrl+PgDown)")
+        self.previous_page.setEnabled(self.page > 0)
+        self.next_page.setEnabled(self.page < pages - 1)
         kept = None
         if self.plotter is not None and self.comparison is not None and self.comparison.source is comparison.source:
             camera = self.plotter.camera  # the user's camera (dragged or a preset) outlives the grid
@@ -89,6 +179,7 @@ class CompareView(QWidget):
             camera.position, camera.focal_point, camera.up = kept
             for renderer in self.plotter.renderers:
                 renderer.ResetCameraClippingRange()
+        self._frame_selected()
         self.show_frame(min(self.frame, comparison.n_frames - 1))
 
     def show_frame(self, frame: int) -> None:
@@ -160,18 +251,34 @@ class CompareView(QWidget):
         renderers = list(self.plotter.renderers)
         return [self._viewports[renderers.index(hand.renderer)] for hand in self._hands]
 
+    def set_selected(self, index: int) -> None:
+        """Frame the cell of retarget ``index`` (the whole comparison's results' order), turning to its page."""
+        self.selected = index
+        if self.full is not None and 0 <= index < len(self.full.results) and self._page_of(index) != self.page:
+            self.set_page(self._page_of(index))
+        self._frame_selected()
+        if self.interactor is not None:
+            self.interactor.update()
+
+    def _frame_selected(self) -> None:
+        for hand_index, hand in enumerate(self._hands[1:]):
+            hand.set_framed(self.result_of_hand(hand_index + 1) == self.selected)
+
+    def framing(self) -> Framing:
+        """The camera, solo and selection now, for an off-screen render of what the view shows."""
+        camera = self.plotter.camera if self.plotter is not None else None
+        return Framing(None if camera is None else (camera.position, camera.focal_point, camera.up), self.solo,
+                       self.selected - self.offset if 0 <= self.selected - self.offset < len(self._hands) - 1 else -1)
+
     def set_solo(self, index: int) -> None:
         """Show hand ``index``'s viewport alone over the whole view; -1 restores the grid."""
         self.solo = index
-        solo = self._hands[index].renderer if index >= 0 else None
-        for renderer, viewport in zip(self.plotter.renderers, self._viewports):
-            renderer.SetViewport(*((0.0, 0.0, 1.0, 1.0) if renderer is solo else viewport))
-            renderer.SetDraw(solo is None or renderer is solo)
-        if index >= 0 and self._hands[index].error_actor is not None:
-            colour_bar_beside_solo(self.plotter)  # a retarget alone keeps the colour bar of its error colours
+        show_alone(self.plotter, self._hands, self._viewports, index)
         self._choose_skins()
         self.solo_changed.emit(index)
         self.interactor.update()
+        if index < 0:
+            self._refit.start()  # the window may have changed size while one hand was shown
 
     def eventFilter(self, watched: QObject, event: QEvent) -> bool:
         if watched is self.interactor and event.type() == QEvent.Type.MouseButtonDblClick:

@@ -27,6 +27,15 @@ def worst_frames(error: np.ndarray, count: int = WORST, spacing: int | None = No
     return np.array(sorted(chosen), dtype=int)
 
 
+def frame_ticks(n_frames: int, width: float, spacing: float = 60.0) -> list[int]:
+    """Frame numbers for the curve's axis: multiples of a 1-2-5 step, at least ``spacing`` pixels apart over
+    ``width`` pixels, the clip's first frame always among them."""
+    last = max(1, n_frames - 1)
+    wanted = max(1.0, last * spacing / max(width, 1.0))  # frames per tick at the closest allowed spacing
+    step = next(m * 10 ** k for k in range(0, 10) for m in (1, 2, 5) if m * 10 ** k >= wanted)
+    return list(range(0, last + 1, step))
+
+
 def next_worst(worst: np.ndarray, frame: int, direction: int) -> int | None:
     """The marked worst frame after ``frame`` (``direction`` +1) or before it (-1), wrapping round the clip;
     None where none is marked (the Playback menu's worst-frame keys)."""
@@ -43,8 +52,8 @@ class ErrorCurve(QWidget):
 
     def __init__(self, parent: QWidget | None = None):
         super().__init__(parent)
-        self.setMinimumHeight(56)
-        self.setMaximumHeight(70)
+        self.setMinimumHeight(76)  # the curve over its frame axis, the axis' numbers and the caption
+        self.setMaximumHeight(96)
         self.error = np.zeros(1)
         self.missing = np.zeros(1, dtype=bool)
         self.worst = np.zeros(0, dtype=int)
@@ -77,18 +86,29 @@ class ErrorCurve(QWidget):
         self._curve = None
         super().resizeEvent(event)
 
+    def _left(self) -> float:
+        """Where frame 0 is drawn: right of the value axis' widest number."""
+        return MARGIN + self.fontMetrics().horizontalAdvance(f"{self.error.max():.3g}") + 4
+
+    def axis_y(self) -> float:
+        """The frame axis' line: the curve's 0, above a row of frame numbers and the caption's row."""
+        return self.height() - 2 * self.fontMetrics().height() - 4
+
     def frame_at(self, x: float) -> int:
-        width = max(1, self.width() - 2 * MARGIN)
-        return int(round(np.clip((x - MARGIN) / width, 0.0, 1.0) * (len(self.error) - 1)))
+        width = max(1.0, self.width() - MARGIN - self._left())
+        return int(round(np.clip((x - self._left()) / width, 0.0, 1.0) * (len(self.error) - 1)))
 
     def _x(self, frame: float) -> float:
-        return MARGIN + frame / max(1, len(self.error) - 1) * (self.width() - 2 * MARGIN)
+        return self._left() + frame / max(1, len(self.error) - 1) * (self.width() - MARGIN - self._left())
 
     def _y(self, value: float) -> float:
-        """The curve above the caption's band (it used to run through the caption)."""
+        """The curve between the top margin and the frame axis (it used to run through the caption)."""
         top = max(float(self.error.max()), 1e-9)
-        bottom = self.height() - MARGIN - self.fontMetrics().height()
-        return bottom - value / top * (bottom - MARGIN)
+        return self.axis_y() - value / top * (self.axis_y() - MARGIN)
+
+    def ticks(self) -> list[int]:
+        """The frames numbered on the axis."""
+        return frame_ticks(len(self.error), self.width() - MARGIN - self._left())
 
     def mousePressEvent(self, event) -> None:
         self.frame_clicked.emit(self.frame_at(event.position().x()))
@@ -111,10 +131,29 @@ class ErrorCurve(QWidget):
             x = self._x(frame)
             painter.drawLine(QPointF(x, MARGIN), QPointF(x, MARGIN + 8))
             painter.drawEllipse(QPointF(x, self._y(self.error[frame])), 3, 3)
-        painter.setPen(QPen(QColor("black"), 1))
+        self._draw_axes(painter)
         painter.drawText(MARGIN + 2, self.height() - 4, f"{self.quantity} ({self.title})   max {self.error.max():.3f}")
         painter.end()
         return pixmap
+
+    def _draw_axes(self, painter: QPainter) -> None:
+        """The value axis (0 and the maximum) on the left, the frame axis with numbered ticks below the curve."""
+        metrics = self.fontMetrics()
+        left, axis, right = self._left(), self.axis_y(), self.width() - MARGIN
+        painter.setPen(QPen(QColor("#808080"), 1))
+        painter.drawLine(QPointF(left, MARGIN), QPointF(left, axis))
+        painter.drawLine(QPointF(left, axis), QPointF(right, axis))
+        for value, y in ((0.0, axis), (float(self.error.max()), float(MARGIN))):
+            text = f"{value:.3g}"
+            painter.drawText(QPointF(left - 3 - metrics.horizontalAdvance(text), y + metrics.ascent() / 2), text)
+        painter.setPen(QPen(QColor("black"), 1))
+        for frame in self.ticks():
+            x = self._x(frame)
+            painter.drawLine(QPointF(x, axis), QPointF(x, axis + 3))
+            text = str(frame)
+            half = metrics.horizontalAdvance(text) / 2
+            painter.drawText(QPointF(min(max(x - half, 0.0), self.width() - 2 * half), axis + 3 + metrics.ascent()),
+                             text)
 
     def paintEvent(self, event) -> None:
         if self._curve is None or self._curve.size() != self.size():
@@ -123,4 +162,4 @@ class ErrorCurve(QWidget):
         painter.drawPixmap(event.rect(), self._curve, event.rect())
         painter.setPen(QPen(QColor("black"), 1))
         x = self._x(self.frame)
-        painter.drawLine(QPointF(x, 0), QPointF(x, self.height()))
+        painter.drawLine(QPointF(x, 0), QPointF(x, self.axis_y()))  # stops at the axis: clear of the caption

@@ -1,4 +1,5 @@
-"""Per-method clip scores (S_palm, S_finger, contacts, violations) for every target, in a table.
+"""Per-method clip scores (S_palm, S_finger, contacts, violations, sideways flexion, signature kept, invented
+contacts) for every target, in a table; a target whose frames are unsure reads "! name" on orange.
 Names longer than ``NAME_WIDTH`` are elided in the middle (the full name in the cell's tooltip; drag a
 header edge to widen a column) and the table asks for the width of all its columns, so a long target
 name never pushes a score out of sight. A score with nothing to count (the precision of a retarget that
@@ -8,10 +9,12 @@ from __future__ import annotations
 
 import math
 
-from PySide6.QtCore import Qt
-from PySide6.QtGui import QPalette
+from PySide6.QtCore import QSize, Qt
+from PySide6.QtGui import QColor, QPalette
 from PySide6.QtWidgets import QHeaderView, QTableWidget, QTableWidgetItem, QWidget
 
+from s2h_viewer.annotate.trust import frame_warning
+from s2h_viewer.render.compare_scene import BANNER_BACKGROUND, BANNER_COLOUR
 from s2h_viewer.retarget.comparison import Comparison
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.semantics.flexion import SidewaysPeak
@@ -25,8 +28,15 @@ COLUMNS = (("Method", None, "retargeting method"), ("Target", None, "target hand
            ("Palm\nR", "palm_contact_recall", "fingertip-on-palm contacts of the source that are kept"),
            ("Viol-\nations", "violation_rate", "share of joint angles over 5 deg outside the anatomical limits"),
            ("Side-\nways", "sideways_deg", "the worst sideways bend of a PIP/DIP at its tightest curls, degrees "
-                                            "(0: a clean curl toward the palm; authored clips reach 8-22)"))
-NAME_WIDTH = 96  # pixels: widest a name column starts (drag the header edge for more)
+                                            "(0: a clean curl toward the palm; authored clips reach 8-22)"),
+           ("Kept", "signature_kept", "share of frames that keep the source's signature: each finger extended, "
+                                      "bent or curled as in the source, the thumb's touches, no finger bending "
+                                      "sideways, no invented pad contact (1: every frame)"),
+           ("Inv-\nented", "invented_contacts", "frames where the retarget makes a contact the source does not "
+                                               "(drawn blue by the contact overlay)"))
+TARGET_COLUMN = 1
+SHOWN_ROWS, MIN_ROWS = 6, 2  # rows the table asks room for, and keeps in view at least
+NAME_WIDTH = 140  # pixels: widest a name column starts (drag the header edge for more)
 #: why a score is n/a (NaN), per score key
 UNDEFINED = {"sideways_deg": "n/a: no finger curls", "contact_precision": "n/a: the retarget makes no pad contact, so no precision to measure",
              "contact_recall": "n/a: the source makes no pad contact, so no recall to measure",
@@ -36,8 +46,12 @@ UNDEFINED = {"sideways_deg": "n/a: no finger curls", "contact_precision": "n/a: 
 def _cell(key: str, values: dict) -> tuple[str, str | None]:
     """A score's text and tooltip (None: the column's)."""
     value = values[key]
-    if math.isnan(value):
+    if isinstance(value, float) and math.isnan(value):
         return "n/a", UNDEFINED.get(key, "n/a")
+    if key == "invented_contacts":
+        pair, _, frame = values["invented_at"].partition("@")
+        return f"{value}", (f"{value} frames with a contact the source does not make; most often {pair}, first at "
+                            f"frame {frame}" if value else "no contact the source does not make")
     if key == "sideways_deg":
         joint, _, frame = values["sideways_at"].partition("@")
         return f"{value:.0f}", SidewaysPeak(value, joint, int(frame)).describe() + f" (the source: " \
@@ -53,6 +67,8 @@ class ScoresTable(QTableWidget):
             self.horizontalHeaderItem(column).setToolTip(tip)
         self.horizontalHeader().setSectionResizeMode(QHeaderView.ResizeMode.Interactive)
         self.verticalHeader().setVisible(False)
+        self.verticalHeader().setDefaultSectionSize(self.fontMetrics().height() + 8)  # one line per retarget
+        self.setWordWrap(False)  # a long name elides: a row never grows to two lines
         self.setTextElideMode(Qt.TextElideMode.ElideMiddle)
         self.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
         # a row is one retarget: select whole rows, one at a time, highlighted even with the focus elsewhere
@@ -63,6 +79,19 @@ class ScoresTable(QTableWidget):
             palette.setColor(QPalette.ColorGroup.Inactive, role, palette.color(QPalette.ColorGroup.Active, role))
         self.setPalette(palette)
 
+    def _height_for(self, rows: int) -> int:
+        return self.horizontalHeader().sizeHint().height() + rows * self.verticalHeader().defaultSectionSize() + \
+            2 * self.frameWidth() + self.horizontalScrollBar().sizeHint().height()
+
+    def sizeHint(self) -> QSize:
+        """Tall enough for its rows, up to `SHOWN_ROWS` (more scroll), and an empty line under them (where the
+        table ends shows), as wide as its columns."""
+        return QSize(self.minimumWidth(), self._height_for(max(1, min(self.rowCount(), SHOWN_ROWS)) + 1))
+
+    def minimumSizeHint(self) -> QSize:
+        """At least two rows stay in view, however short the window (its splitter gives it no less)."""
+        return QSize(self.minimumWidth(), self._height_for(MIN_ROWS))
+
     def mousePressEvent(self, event) -> None:
         """A click in the empty space under the rows keeps the selected retarget (there always is one)."""
         if self.indexAt(event.position().toPoint()).isValid():
@@ -72,12 +101,17 @@ class ScoresTable(QTableWidget):
         self.setRowCount(len(comparison.results))
         for row, result in enumerate(comparison.results):
             values = result.scores.as_dict()
-            cells = [(METHODS[result.method].label,) * 2, (result.target.name,) * 2]
+            warning = frame_warning(result.target)
+            target = (f"! {result.target.name}", warning.describe()) if warning else (result.target.name,) * 2
+            cells = [(METHODS[result.method].label,) * 2, target]
             cells += [_cell(key, values) for _, key, _ in COLUMNS[2:]]
             for col, (text, tip) in enumerate(cells):
                 item = QTableWidgetItem(text)
                 if tip is not None:
                     item.setToolTip(tip)
+                if warning is not None and col == TARGET_COLUMN:  # frames unsure: the target's cell says so
+                    item.setForeground(QColor(BANNER_COLOUR))
+                    item.setBackground(QColor(BANNER_BACKGROUND))
                 self.setItem(row, col, item)
         self.resizeColumnsToContents()
         for column, (_, key, _) in enumerate(COLUMNS):
@@ -86,3 +120,4 @@ class ScoresTable(QTableWidget):
         # wide enough for every column (names capped above): the side panel makes room, no score hides
         self.setMinimumWidth(self.horizontalHeader().length() + 2 * self.frameWidth() +
                              self.verticalScrollBar().sizeHint().width())
+        self.updateGeometry()  # room for its rows now (`sizeHint`)

@@ -1,0 +1,115 @@
+"""The Compare tab's layout from its 1000 x 700 minimum up (issue 25, item 2): every panel whole and apart, the
+scores table across the window with its rows in view, the selected retarget framed in the grid, exports at a
+chosen size whatever the window's."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+import pyvista as pv
+
+pytest.importorskip("pytestqt")
+if not os.environ.get("DISPLAY"):
+    pytest.skip("the Qt viewport needs an X display: `make test` runs the suite under Xvfb", allow_module_level=True)
+
+from PIL import Image  # noqa: E402
+from PySide6.QtCore import QRect  # noqa: E402
+from PySide6.QtWidgets import QScrollArea  # noqa: E402
+
+from compare_window import open_compare_window  # noqa: E402
+from s2h_viewer.app.main_window import MIN_SIZE  # noqa: E402
+from s2h_viewer.render.caption import BAND  # noqa: E402
+from s2h_viewer.render.compare_scene import SELECTED_COLOUR  # noqa: E402
+
+
+@pytest.fixture
+def window(qtbot, sample_hands, tmp_path):
+    return open_compare_window(qtbot, sample_hands, tmp_path, methods=("tbs_copy", "dm"), targets=("iris", "laurel"))
+
+
+def on_screen(widget) -> QRect:
+    return QRect(widget.mapToGlobal(widget.rect().topLeft()), widget.size())
+
+
+def test_the_window_holds_its_panels_whole_and_apart_at_its_minimum_size(window, qtbot):
+    window.resize(700, 450)  # below the minimum: the window stays at it
+    qtbot.waitUntil(lambda: (window.width(), window.height()) == MIN_SIZE, timeout=5000)
+    compare, table = window.compare, window.scores
+    side = compare.heatmap.parentWidget()
+    while not isinstance(side, QScrollArea):
+        side = side.parentWidget()
+    panels = {"grid": window.view, "heatmap": side.viewport(), "table": table, "timeline": compare.timeline,
+              "curve": compare.curve}
+    rects = {name: on_screen(widget) for name, widget in panels.items()}
+    for a in panels:
+        for b in panels:
+            if a < b:
+                assert not rects[a].intersects(rects[b]), (a, b, rects[a], rects[b])
+    assert window.view.width() >= 400 and window.view.height() >= 250
+    heatmap = compare.heatmap
+    assert heatmap.legend.geometry().top() > heatmap.matrix.geometry().bottom()
+    assert heatmap.matrix.size() == heatmap.matrix.labels.size()  # never squeezed: it scrolls instead
+    assert all(table.rowViewportPosition(r) + table.rowHeight(r) <= table.viewport().height() for r in range(2))
+    last = table.columnCount() - 1
+    assert table.columnViewportPosition(last) + table.columnWidth(last) <= table.viewport().width()
+    assert compare.curve.height() >= compare.curve.minimumHeight()
+
+
+def test_the_selected_retarget_is_framed_in_the_grid(window):
+    view = window.view
+    window.scores.selectRow(2)  # TBS Copy -> laurel
+    framed = [i for i, hand in enumerate(view._hands[1:]) if hand.border is not None and hand.border.GetVisibility()]
+    assert framed == [2] == [view.selected]
+    image = view.grab_rgb().astype(int)
+    blue = (np.abs(image - np.array(pv.Color(SELECTED_COLOUR).int_rgb)).max(-1) < 10)
+    x0, y0, x1, y1 = view._hands[3].renderer.GetViewport()
+    height, width = blue.shape
+    inside = blue[round((1 - y1) * height):round((1 - y0) * height), round(x0 * width):round(x1 * width)]
+    assert inside.sum() > 0.8 * blue.sum() > 200  # the frame is that cell's
+    window.heatmap_choice.setCurrentIndex(0)
+    assert [i for i, h in enumerate(view._hands[1:]) if h.border is not None and h.border.GetVisibility()] == [0]
+
+
+def test_pictures_are_exported_at_the_chosen_size_whatever_the_window(window, tmp_path):
+    size = (1280, 720)
+    window.export_size_actions[size].trigger()
+    assert window.export_size == size and window.settings.value("export/size") == "1280 x 720"
+    window.scores.selectRow(1)
+    png = window.export_screenshot(str(tmp_path / "sized.png"))
+    image = np.asarray(Image.open(png).convert("RGB"))
+    assert image.shape[:2] == (size[1] + BAND, size[0])
+    blue = (np.abs(image.astype(int) - np.array(pv.Color(SELECTED_COLOUR).int_rgb)).max(-1) < 10).sum()
+    assert blue > 200  # the selected retarget framed there too
+    window.export_size_actions[None].trigger()
+    png = window.export_screenshot(str(tmp_path / "as_view.png"))
+    shown = np.asarray(Image.open(png)).shape[:2]
+    assert shown == (window.view.interactor.height() + BAND, window.view.interactor.width())
+
+
+def test_targets_past_what_fits_page_and_the_selection_turns_the_page(qtbot, sample_hands, tmp_path):
+    from PySide6.QtCore import Qt
+    from PySide6.QtTest import QTest
+
+    four = ("iris", "laurel", "kale", "juniper")
+    window = open_compare_window(qtbot, sample_hands, tmp_path, methods=("tbs_copy",), targets=four)
+    view = window.view
+    assert view.rows == view.rows_fitting() < 4 and view.page_count == -(-4 // view.rows) > 1
+    assert view.pager.isVisible() and view.page_label.text().startswith(
+        f"targets 1-{view.rows} of 4" if view.rows > 1 else "target 1 of 4")
+    assert [r.target.name for r in view.comparison.results] == list(four[:view.rows])
+    window.activateWindow()
+    qtbot.waitUntil(window.isActiveWindow, timeout=5000)
+    QTest.keyClick(window, Qt.Key.Key_PageDown, Qt.KeyboardModifier.ControlModifier)
+    assert view.page == 1 and view.comparison.results[0].target.name == four[view.rows]
+    window.scores.selectRow(3)  # juniper, on the last page
+    assert view.page == view.page_count - 1 and view.comparison.results[-1].target.name == "juniper"
+    window.scores.selectRow(0)  # iris, on the first page: the grid turns back to it and frames it
+    assert view.page == 0 and view.selected == 0 and view._hands[1].border.GetVisibility()
+    hand = view.hand_of_result(3)
+    assert view._hands[hand].hand.name == "juniper"
+    window.resize(1600, 1000)  # room for every row: one page
+    qtbot.waitUntil(lambda: view.page_count == 1, timeout=10_000)
+    assert not view.pager.isVisible() and len(view._hands) == 5 and view._hands[1].border.GetVisibility()  # iris
+    window.close()

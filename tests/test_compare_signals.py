@@ -1,0 +1,192 @@
+"""Compare mode's signals that catch a bad finger (issue 25, item 1), on the real window with a real character
+(human-female, whose pinky the ray solver cannot read): a warning on every cell and row of a target whose
+frames are unsure, contacts in three states (kept, lost, invented) in the window and in exported PNGs, the
+share of frames keeping the source's signature (a score that drops where one finger is wrong, which S_finger
+averages away), invented contacts counted, and the sideways flexion as an error-curve choice."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+
+import numpy as np
+import pytest
+import pyvista as pv
+from scipy.spatial.transform import Rotation
+
+pytest.importorskip("pytestqt")
+if not os.environ.get("DISPLAY"):
+    pytest.skip("the Qt viewport needs an X display: `make test` runs the suite under Xvfb", allow_module_level=True)
+
+from PIL import Image  # noqa: E402
+from PySide6.QtCore import QSettings  # noqa: E402
+from PySide6.QtGui import QColor  # noqa: E402
+
+from grid_text import text_actors  # noqa: E402
+from s2h_viewer import samples  # noqa: E402
+from s2h_viewer.annotate.trust import frame_warning  # noqa: E402
+from s2h_viewer.app.compare_mode import SIDEWAYS_CURVE, sideways_curve  # noqa: E402
+from s2h_viewer.app.main_window import CompareSetup, MainWindow  # noqa: E402
+from s2h_viewer.hand import topology as topo  # noqa: E402
+from s2h_viewer.hand.model import HandModel  # noqa: E402
+from s2h_viewer.io.files import load_hand_file  # noqa: E402
+from s2h_viewer.render.compare_scene import (BANNER_BACKGROUND, CONTACT_COLOUR, INVENTED_COLOUR,  # noqa: E402
+                                             ViewOptions, render_comparison)
+from s2h_viewer.retarget.comparison import build_comparison  # noqa: E402
+from s2h_viewer.retarget.methods import retarget  # noqa: E402
+from s2h_viewer.samples import ASSETS_DIR  # noqa: E402
+from s2h_viewer.semantics.metrics import score_retarget  # noqa: E402
+
+HUMAN_FEMALE = ASSETS_DIR / "hands" / "real" / "human-female.glb"
+#: fingerspelling frames where TBS Copy makes contacts on human-female that the source does not (its fingertips
+#: on the palm, its thumb on the middle finger: 27-28 and 57-60 make none the source makes)
+SPELLING = slice(20, 71)
+
+
+@pytest.fixture(scope="module")
+def human_female():
+    return load_hand_file(HUMAN_FEMALE)
+
+
+@pytest.fixture(scope="module")
+def spelling():
+    motion = next(m for m in samples.load_sample_motions() if m.name == "fingerspelling")
+    return dataclasses.replace(motion, q_tbs=motion.q_tbs[SPELLING], labels=motion.labels[SPELLING],
+                               name="spelling")
+
+
+@pytest.fixture
+def window(qtbot, sample_hands, tmp_path, human_female, spelling):
+    setup = CompareSetup(spelling, sample_hands["birch"], [human_female, sample_hands["iris"]], ["tbs_copy"])
+    settings = QSettings(str(tmp_path / "settings.ini"), QSettings.Format.IniFormat)
+    settings.setValue("compare/methods", ["tbs_copy"])
+    win = MainWindow(setup, settings)
+    win.resize(1400, 900)
+    qtbot.addWidget(win, before_close_func=lambda w: w.undo_stack.clear())
+    win.show()
+    with qtbot.waitSignal(win.comparison_ready, timeout=120_000):
+        win.start_comparison()
+    return win
+
+
+def colour_pixels(image: np.ndarray, colour: str, tolerance: int = 12) -> int:
+    return int((np.abs(image.astype(int) - np.array(pv.Color(colour).int_rgb)).max(-1) < tolerance).sum())
+
+
+def turned_pinky(hand: HandModel, degrees: float) -> HandModel:
+    """``hand`` with its pinky's three frames turned about their twist axes: frames a solver got wrong."""
+    frames = hand.rest_frames.copy()
+    for k, name in enumerate(topo.ARTICULATED_NAMES):
+        if name.startswith("pinky"):
+            frames[k] = Rotation.from_rotvec(np.radians(degrees) * frames[k][:, 0]).as_matrix() @ frames[k]
+    return HandModel(hand.name, hand.offsets, frames, hand.rig_frames, hand.radii, hand.mesh, hand.source,
+                     dict(hand.meta))
+
+
+def test_the_solver_says_it_cannot_read_the_real_characters_pinky(human_female, sample_hands):
+    warning = frame_warning(human_female)
+    assert warning is not None
+    names = [topo.ARTICULATED_NAMES[j] for j in warning.unsure]
+    assert {"pinky_mcp", "pinky_pip", "pinky_dip"} <= set(names) and warning.lowest < 0.3
+    assert "pinky MCP/PIP/DIP" in warning.banner and "human-female" in warning.describe()
+    assert frame_warning(sample_hands["iris"]) is None  # a procedural hand's frames are its ground truth
+
+
+def test_a_target_with_unsure_frames_is_flagged_on_its_cells_its_rows_and_over_the_curve(window, human_female):
+    view, table = window.view, window.compare.scores
+    image = view.grab_rgb()
+    flagged = 0
+    for hand in view._hands[1:]:
+        banners = [a.GetInput() for a in text_actors(hand.renderer) if a.GetInput().startswith("! frames")]
+        x0, y0, x1, y1 = hand.renderer.GetViewport()
+        height, width = image.shape[:2]
+        cell = image[round((1 - y1) * height):round((1 - y0) * height), round(x0 * width):round(x1 * width)]
+        if hand.hand is human_female or hand.hand.name == "human-female":
+            assert len(banners) == 1 and "pinky" in banners[0], banners
+            assert colour_pixels(cell, BANNER_BACKGROUND, 6) > 200, "the banner's orange band is drawn"
+            flagged += 1
+        else:
+            assert banners == [] and colour_pixels(cell, BANNER_BACKGROUND, 6) == 0
+    assert flagged == 1
+    rows = {table.item(r, 1).text(): r for r in range(table.rowCount())}
+    assert set(rows) == {"! human-female", "iris"}
+    item = table.item(rows["! human-female"], 1)
+    assert "pinky MCP/PIP/DIP" in item.toolTip() and item.background().color() == QColor(BANNER_BACKGROUND)
+    table.selectRow(rows["! human-female"])
+    assert "human-female: frames unsure" in window.compare.sideways_note.text()
+    table.selectRow(rows["iris"])
+    assert "frames unsure" not in window.compare.sideways_note.text()
+
+
+def test_contacts_show_in_three_states_and_invented_ones_are_not_drawn_as_kept(window, tmp_path):
+    window.contact_overlay.trigger()
+    source = window.view._hands[0].overlay
+    hand = next(h for h in window.view._hands[1:] if h.hand.name == "human-female")
+    overlay = hand.overlay
+    np.testing.assert_array_equal(overlay.invented, overlay.contacts & ~source.contacts)
+    np.testing.assert_array_equal(overlay.lost, source.contacts & ~overlay.contacts)
+    only_invented = np.flatnonzero(overlay.invented.any(1) & ~(overlay.contacts & source.contacts).any(1))
+    assert len(only_invented), "TBS Copy makes contacts on human-female the source does not (frame 120)"
+    frame = int(only_invented[0])
+    window.timeline.set_frame(frame)
+    assert overlay.invented_links.n_lines == overlay.invented[frame].sum() > 0 and overlay.links.n_lines == 0
+    assert all(actor.prop.render_points_as_spheres for actor in overlay.actors[1:])  # round pads, not squares
+    window.view.set_solo(window.view._hands.index(hand))
+    image = window.view.grab_rgb()
+    assert colour_pixels(image, INVENTED_COLOUR) > 30 and colour_pixels(image, CONTACT_COLOUR) == 0
+    window.view.set_solo(-1)
+    legend = source.legend
+    assert legend is not None and legend.actor.GetVisibility()
+    assert [legend.actor.GetEntryString(i) for i in range(3)] == [
+        "kept contact", "lost: the source touches", "invented: the source does not"]
+    # the exported picture draws them the same way
+    png = render_comparison(window.comparison, tmp_path / "frame.png", frame=frame, size=(1000, 600),
+                            options=ViewOptions(contacts=True))
+    exported = np.asarray(Image.open(png).convert("RGB"))
+    assert colour_pixels(exported, INVENTED_COLOUR) > 30
+    window.contact_overlay.trigger()
+    assert not overlay.actors[3].visibility and not legend.actor.GetVisibility()
+
+
+def test_the_table_counts_invented_contacts_and_the_frames_that_keep_the_signature(window):
+    table = window.compare.scores
+    headers = [table.horizontalHeaderItem(c).text() for c in range(table.columnCount())]
+    kept, invented = headers.index("Kept"), headers.index("Inv-\nented")
+    for row, result in enumerate(window.comparison.results):
+        assert table.item(row, kept).text() == f"{result.scores.signature_kept:.3f}"
+        assert table.item(row, invented).text() == str(result.scores.invented_contacts)
+    female = next(r for r, result in enumerate(window.comparison.results) if result.target.name == "human-female")
+    scores = window.comparison.results[female].scores
+    assert scores.invented_contacts > 0 and scores.invented_at.partition("@")[0] in table.item(
+        female, invented).toolTip()
+
+
+def test_a_visibly_wrong_pinky_drops_the_kept_score_where_s_finger_hardly_moves(human_female, sample_hands):
+    """The issue's case: the human-female pinky's frames some 20-30 deg off (the solver's before it fell back to
+    the rig's bone axes) scored S_finger 0.971 while every method bent that pinky sideways in a fist."""
+    motion = next(m for m in samples.load_sample_motions() if m.name == "gestures")
+    source = sample_hands["birch"]
+    scores = {}
+    for name, hand in (("today", human_female), ("turned", turned_pinky(human_female, 20.0))):
+        scores[name] = score_retarget(source, motion.q_tbs, hand, retarget(motion, source, hand, "tbs_copy").q_tbs)
+    today, turned = scores["today"], scores["turned"]
+    assert turned.s_finger > 0.95 and today.s_finger - turned.s_finger < 0.03  # averaged away
+    assert turned.sideways_deg > 25.0 and turned.sideways_at.startswith("pinky")
+    assert today.signature_kept > 0.9 and today.signature_kept - turned.signature_kept > 0.25
+
+
+def test_the_error_curve_can_show_the_sideways_flexion(window):
+    result = window.compare.selected_result()
+    window.sideways_curve.trigger()
+    assert window.compare.curve_shows == SIDEWAYS_CURVE and "sideways" in window.compare.curve.quantity
+    np.testing.assert_allclose(window.compare.curve.error, sideways_curve(result))
+    assert window.compare.curve.error.max() > 0
+    window.sideways_curve.trigger()
+    assert window.compare.curve.quantity == "ASM error per frame"
+    np.testing.assert_allclose(window.compare.curve.error, result.frame_error)
+
+
+def test_an_export_of_a_flagged_target_carries_its_banner(human_female, sample_hands, spelling, tmp_path):
+    comparison = build_comparison(spelling, sample_hands["birch"], [human_female], ["tbs_copy"])
+    png = render_comparison(comparison, tmp_path / "flagged.png", frame=0, size=(900, 500))
+    assert colour_pixels(np.asarray(Image.open(png).convert("RGB")), BANNER_BACKGROUND, 6) > 200
