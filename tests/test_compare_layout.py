@@ -113,3 +113,44 @@ def test_targets_past_what_fits_page_and_the_selection_turns_the_page(qtbot, sam
     qtbot.waitUntil(lambda: view.page_count == 1, timeout=10_000)
     assert not view.pager.isVisible() and len(view._hands) == 5 and view._hands[1].border.GetVisibility()  # iris
     window.close()
+
+
+def test_in_and_out_points_mark_a_range_that_playback_loops_and_exports_write(window, qtbot, tmp_path):
+    """Issue 25 item 5: range markers on the timeline, and the motion export's frame range."""
+    from PySide6.QtCore import Qt
+    from PySide6.QtWidgets import QDialog, QFileDialog
+
+    from compare_window import when_shown
+    from s2h_viewer.io.files import load_motion_file
+    from s2h_viewer.widgets.frame_range_dialog import FrameRangeDialog
+    timeline, curve = window.timeline, window.compare.curve
+    window.activateWindow()
+    qtbot.waitUntil(window.isActiveWindow, timeout=5000)
+    timeline.spin.setFocus()  # the keys work with the frame box focused too
+    timeline.set_frame(5)
+    qtbot.keyClick(timeline.spin.lineEdit(), Qt.Key.Key_I)
+    timeline.set_frame(12)
+    qtbot.keyClick(timeline.spin.lineEdit(), Qt.Key.Key_O)
+    assert timeline.marked == range(5, 13) and curve.marked == range(5, 13)
+    seen = []
+    timeline.frame_changed.connect(seen.append)
+    timeline.set_frame(2)  # outside the range: Play starts at its first frame
+    timeline.set_playing(True)
+    qtbot.waitUntil(lambda: len(seen) > 25, timeout=30_000)  # more frames than the range holds: it looped
+    timeline.set_playing(False)
+    played = seen[seen.index(5):]
+    assert set(played) <= set(range(5, 13)) and 12 in played and played.count(5) >= 2
+    offered = []
+
+    def take_the_marked_range(dialog: QDialog) -> None:
+        offered.append((dialog.windowTitle(), dialog.frames()))
+        dialog.accept()
+    when_shown(FrameRangeDialog, take_the_marked_range)
+    path = tmp_path / "part.npz"
+    when_shown(QFileDialog, lambda dialog: (dialog.selectFile(str(path)), dialog.accept()))
+    written = window.export_motion()
+    assert offered == [("Export motion: frames", range(5, 13))] and written == path
+    motion, _ = load_motion_file(path)
+    np.testing.assert_array_equal(motion.q_tbs, window.compare.selected_result().motion.q_tbs[5:13])
+    qtbot.keyClick(timeline.spin.lineEdit(), Qt.Key.Key_I, Qt.KeyboardModifier.AltModifier)
+    assert timeline.marked is None and curve.marked is None

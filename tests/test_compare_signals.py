@@ -190,3 +190,27 @@ def test_an_export_of_a_flagged_target_carries_its_banner(human_female, sample_h
     comparison = build_comparison(spelling, sample_hands["birch"], [human_female], ["tbs_copy"])
     png = render_comparison(comparison, tmp_path / "flagged.png", frame=0, size=(900, 500))
     assert colour_pixels(np.asarray(Image.open(png).convert("RGB")), BANNER_BACKGROUND, 6) > 200
+
+
+def test_the_source_shows_as_a_ghost_over_a_retarget_shown_alone(window, human_female, tmp_path):
+    """Issue 25 item 5: the source's skin over the retarget, aligned at the wrist and scaled to the target."""
+    from s2h_viewer.render.compare_scene import GHOST_COLOUR
+    view = window.view
+    window.ghost.trigger()
+    assert view._ghost is None  # the grid: no ghost
+    female = next(i for i, h in enumerate(view._hands) if h.hand.name == "human-female")
+    view.set_solo(female)
+    ghost = view._ghost
+    assert ghost is not None and ghost.actor.visibility and ghost.renderer is view._hands[female].renderer
+    source = view._hands[0]
+    for frame in (5, 30):
+        window.timeline.set_frame(frame)
+        scale = human_female.hand_length / source.hand.hand_length
+        np.testing.assert_allclose(np.asarray(ghost.mesh.points), np.asarray(source.mesh.points) * scale)
+    png = render_comparison(window.view.comparison, tmp_path / "ghost.png", frame=30, size=(800, 600),
+                            options=view.options, framing=view.framing())  # an export keeps it
+    grey = colour_pixels(np.asarray(Image.open(png).convert("RGB")), GHOST_COLOUR, 40)
+    assert grey > 0
+    window.ghost.trigger()
+    assert view._ghost is None and ghost.renderer.GetActors().IsItemPresent(ghost.actor) == 0
+    view.set_solo(-1)

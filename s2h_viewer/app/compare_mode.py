@@ -201,6 +201,7 @@ class CompareMode(QWidget):
         self.view.drawn.connect(self.timeline.note_drawn)
         self.timeline.play_button.toggled.connect(self._playing_changed)
         self.curve.frame_clicked.connect(self.timeline.set_frame)
+        self.timeline.range_changed.connect(self.curve.set_range)
         self.view.solo_changed.connect(self._solo_changed)
         self.heatmap_choice.currentIndexChanged.connect(self._choice_changed)
         self.scores.currentCellChanged.connect(lambda row, *_: self._select_row(row))

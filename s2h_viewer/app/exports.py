@@ -120,9 +120,16 @@ class VideoExport(QObject):
             self.written.emit(path)
 
 
-def export_motion(mode: CompareMode, path: str) -> Path:
-    """The selected retarget's motion on its target's rig."""
+def export_motion(mode: CompareMode, path: str, frames: range | None = None) -> Path:
+    """The selected retarget's motion on its target's rig: ``frames`` of it (default: the whole clip)."""
+    import dataclasses
+
     from s2h_viewer.io.files import save_motion_file
     result = mode.selected_result()
-    save_motion_file(path, result.motion, result.target)
+    motion = result.motion
+    if frames is not None and len(frames) < motion.n_frames:
+        part = slice(frames.start, frames.stop)
+        motion = dataclasses.replace(motion, q_tbs=motion.q_tbs[part], labels=motion.labels[part], fit=None,
+                                     meta={**motion.meta, "frames": [frames.start, frames[-1]]})
+    save_motion_file(path, motion, result.target)
     return Path(path)

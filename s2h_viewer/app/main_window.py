@@ -204,6 +204,8 @@ class MainWindow(QMainWindow):
             self.view.set_options(skeleton=on)), "Ctrl+K", checkable=True)
         self.contact_overlay = self._action(view_menu, "Contact overlay (kept green, lost red, invented blue)",
                                             lambda on: self.view.set_options(contacts=on), "Ctrl+J", checkable=True)
+        self.ghost = self._action(view_menu, "Ghost of the source over a retarget shown alone",
+                                  lambda on: self.view.set_options(ghost=on), "Ctrl+U", checkable=True)
         self.keypoint_dots = self._action(view_menu, "Tracked keypoints on the source (recordings)", lambda on: (
             self.view.set_options(keypoints=on)), "Ctrl+D", checkable=True)
         self.keypoint_dots.setChecked(True)
@@ -227,6 +229,9 @@ class MainWindow(QMainWindow):
         self._action(play, "Next frame", lambda: timeline.step(1), "Right")
         self._action(play, "First frame", lambda: timeline.set_frame(0), "Home")
         self._action(play, "Last frame", lambda: timeline.set_frame(timeline.n_frames - 1), "End")
+        self._action(play, "Mark in: the range starts here", timeline.mark_in, "I")
+        self._action(play, "Mark out: the range ends here", timeline.mark_out, "O")
+        self._action(play, "Clear the marked range", timeline.clear_range, "Alt+I")
         self._action(play, "Next worst frame (error curve)", lambda: self._to_worst(1), "]")
         self._action(play, "Previous worst frame (error curve)", lambda: self._to_worst(-1), "[")
         help_menu = bar.addMenu("&Help")
@@ -612,6 +617,7 @@ class MainWindow(QMainWindow):
             path, frames = self._ask_video() or (None, None)
         if not path:
             return None
+        frames = frames if frames is not None else self.timeline.marked  # a marked range, else the whole clip
         job = exports.VideoExport(self.compare, path, self, frames, self.export_size)
         what = f" ({exports.frames_text(job.frames, self.comparison.n_frames)})"
         job.written.connect(lambda written: self._wrote(written, what))
@@ -629,7 +635,6 @@ class MainWindow(QMainWindow):
     def _ask_video(self) -> tuple[str, range] | None:
         """The file, then the frames (`FrameRangeDialog`) the user chooses; None if they cancel either. Playback
         pauses meanwhile (the current frame is one of the choices, and must stay the one offered), then plays on."""
-        from s2h_viewer.widgets.frame_range_dialog import FrameRangeDialog
         playing = self.timeline.playing
         self.timeline.set_playing(False)
         try:
@@ -637,16 +642,21 @@ class MainWindow(QMainWindow):
                                      lambda: exports.suggested_name(self.compare, ".mp4"))
             if not path:
                 return None
-            dialog = FrameRangeDialog(Path(path).name, self.comparison.n_frames, self.comparison.motion.fps,
-                                      self.timeline.frame, self)
-            frames = dialog.frames() if dialog.exec() == QDialog.DialogCode.Accepted else None
-            dialog.deleteLater()
-            if frames is None:
-                self.statusBar().showMessage(f"video export cancelled: no file written ({Path(path).name})", 5000)
-                return None
-            return path, frames
+            frames = self._ask_frames(path, "video")
+            return None if frames is None else (path, frames)
         finally:
             self.timeline.set_playing(playing)
+
+    def _ask_frames(self, path: str, what: str) -> range | None:
+        """The frames of an export to ``path`` (`FrameRangeDialog`, the marked range first); None: cancelled."""
+        from s2h_viewer.widgets.frame_range_dialog import FrameRangeDialog
+        dialog = FrameRangeDialog(Path(path).name, self.comparison.n_frames, self.comparison.motion.fps,
+                                  self.timeline.frame, self, what=what, marked=self.timeline.marked)
+        frames = dialog.frames() if dialog.exec() == QDialog.DialogCode.Accepted else None
+        dialog.deleteLater()
+        if frames is None:
+            self.statusBar().showMessage(f"{what} export cancelled: no file written ({Path(path).name})", 5000)
+        return frames
 
     def _video_export_ended(self, *_) -> None:
         self.video_export = None
@@ -655,13 +665,17 @@ class MainWindow(QMainWindow):
         if self.comparison is None:
             return None
         result = self.compare.selected_result()
+        asked = path is None
         path = self._ask_to_save(f"Export {result.method} -> {result.target.name}",
                                  "Motion (*.glb *.bvh *.npz *.fbx)", path,
                                  lambda: exports.suggested_name(self.compare, ".glb"))
         if not path:
             return None
+        frames = self._ask_frames(path, "motion") if asked else self.timeline.marked
+        if asked and frames is None:
+            return None
         try:
-            written = exports.export_motion(self.compare, path)
+            written = exports.export_motion(self.compare, path, frames)
         except S2HError as exc:
             self.error(str(exc))
             return None

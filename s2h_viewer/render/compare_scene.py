@@ -60,6 +60,8 @@ OVERLAY_CELL = 300
 ON_TOP_OFFSET = -1e6  # depth offset (OpenGL polygon-offset units) of the contact overlay: in front of any skin
 #: a target whose frames are unsure or guessed (`annotate.trust`): a banner at its cells' bottom
 BANNER_COLOUR, BANNER_BACKGROUND = "#8a4b00", "#ffe0b2"
+#: the source's ghost over a retarget shown alone (`Ghost`)
+GHOST_COLOUR, GHOST_OPACITY = "#9e9e9e", 0.35
 #: the selected retarget's cell is framed in this colour, this many pixels wide
 SELECTED_COLOUR, SELECTED_WIDTH = "#1565c0", 3.0
 #: the contact legend's pixel size (one line per state) and its distance from its cell's bottom left corner
@@ -582,6 +584,49 @@ class ContactLegend:
         self.actor.GetPosition2Coordinate().SetValue(w, h)
 
 
+class Ghost:
+    """The source drawn see-through over a retarget's cell (what it should look like): its skin as the source's
+    cell poses it (its bones for a skeleton-only source), aligned at the wrist (both hands in view space, the
+    wrist at the origin) and scaled by the hands' lengths, so a finger that goes astray shows beside its ghost."""
+
+    def __init__(self, source: PosedHand, target: PosedHand):
+        self.source = source
+        self.scale = target.hand.hand_length / source.hand.hand_length
+        shape = source.mesh if source.levels else source.bones
+        self.mesh = shape.copy(deep=True)
+        self.actor = pv.Actor(mapper=pv.DataSetMapper(self.mesh))
+        self.actor.prop.color = GHOST_COLOUR
+        self.actor.prop.opacity = GHOST_OPACITY
+        if not source.levels:
+            self.actor.prop.line_width = 4
+        self.renderer = target.renderer
+        self.renderer.add_actor(self.actor, reset_camera=False, render=False)
+        self.actor.visibility = False
+
+    def follow(self) -> None:
+        """Take the source's pose as its cell shows it now (call after the source is posed)."""
+        shape = self.source.mesh if self.source.levels else self.source.bones
+        if shape.n_points != self.mesh.n_points:  # the source's other level of detail: its triangles
+            self.mesh.copy_from(shape, deep=True)
+        self.mesh.points = np.asarray(shape.points) * self.scale
+
+    def set_visible(self, visible: bool) -> None:
+        self.actor.visibility = visible
+
+    def remove(self) -> None:
+        self.renderer.remove_actor(self.actor, reset_camera=False, render=False)
+
+
+def solo_ghost(hands: list[PosedHand], options: ViewOptions, solo: int) -> Ghost | None:
+    """The source's ghost over retarget hand ``solo`` shown alone, if the options ask for one (else None)."""
+    if not options.ghost or solo < 1:
+        return None
+    ghost = Ghost(hands[0], hands[solo])
+    ghost.set_visible(True)
+    ghost.follow()
+    return ghost
+
+
 def contact_sites(hand: HandModel, pose: HandPose) -> np.ndarray:
     """(T, 6, 3) float64: the five fingertip pads and the palm centre, in hand space."""
     positions = pose.positions.detach()
@@ -599,6 +644,7 @@ class ViewOptions:
     contacts: bool = False
     keypoints: bool = True  # a tracked source's recorded keypoints
     opacity: float = 1.0
+    ghost: bool = False  # the source's ghost over a retarget shown alone
 
 
 SKELETON_OPACITY = 0.4  # the skin's opacity at most while the skeleton overlay is on: bones inside show
@@ -659,6 +705,7 @@ def render_comparison(comparison: Comparison, path: str | Path, frame: int | Non
     hands, labels = populate(plotter, comparison)
     apply_options(plotter, hands, options)
     framing.apply(plotter, hands)
+    ghost = solo_ghost(hands, options, framing.solo)
     fit_cells(plotter, hands, labels)  # to the cells' sizes now (a solo cell is the whole picture)
     plotter.show(auto_close=False)
 
@@ -669,6 +716,8 @@ def render_comparison(comparison: Comparison, path: str | Path, frame: int | Non
         for done, f in enumerate(shown, 1):
             for hand in hands:
                 hand.show(f)
+            if ghost is not None:
+                ghost.follow()
             plotter.render()
             rgb = np.asarray(plotter.screenshot(return_img=True))[..., :3]
             if progress:

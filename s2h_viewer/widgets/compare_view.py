@@ -21,8 +21,9 @@ from PySide6.QtCore import QEvent, QObject, QTimer, Signal
 from PySide6.QtWidgets import QHBoxLayout, QLabel, QToolButton, QVBoxLayout, QWidget
 from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
 
-from s2h_viewer.render.compare_scene import (PLAYING_FACES, CellLabel, Framing, PosedHand, PosedSkin, ViewOptions,
-                                             apply_options, fit_cells, grid_layout, populate, show_alone)
+from s2h_viewer.render.compare_scene import (PLAYING_FACES, CellLabel, Framing, Ghost, PosedHand, PosedSkin,
+                                             ViewOptions, apply_options, fit_cells, grid_layout, populate, show_alone,
+                                             solo_ghost)
 from s2h_viewer.retarget.comparison import Comparison, target_ids, target_page
 from s2h_viewer.widgets.vtk_widget import PlotterWidget, window_plotter
 
@@ -59,6 +60,7 @@ class CompareView(QWidget):
         self.options = ViewOptions()
         self.solo = -1
         self.selected = -1  # the retarget framed (the comparison's results' order)
+        self._ghost: Ghost | None = None  # the source's ghost over the retarget shown alone
         self._viewports: list[tuple[float, ...]] = []
         self.frame = 0
         self.playing = False
@@ -168,6 +170,7 @@ class CompareView(QWidget):
             self.interactor.show()
             self._layout.activate()
         self.interactor.Initialize()
+        self._ghost = None  # it was in the grid being replaced
         self._hands, self._labels = populate(self.plotter, comparison, self.options.opacity,
                                              playing_faces=PLAYING_FACES)
         self._viewports = [tuple(r.GetViewport()) for r in self.plotter.renderers]
@@ -187,6 +190,8 @@ class CompareView(QWidget):
         ahead = self._take_ahead(frame)
         for index, hand in enumerate(self._hands):
             hand.show(frame, ahead[index] if ahead else None)
+        if self._ghost is not None:
+            self._ghost.follow()
         if self.interactor is not None:
             self.interactor.update()
 
@@ -232,7 +237,14 @@ class CompareView(QWidget):
         self.options = dataclasses.replace(self.options, **changes)
         if self.interactor is not None:  # the camera moves for a preset only, not for an overlay
             apply_options(self.plotter, self._hands, self.options, camera="camera" in changes)
+            self._show_ghost()
             self.show_frame(self.frame)
+
+    def _show_ghost(self) -> None:
+        """The source's ghost over the retarget shown alone, when the options ask for it; none otherwise."""
+        if self._ghost is not None:
+            self._ghost.remove()
+        self._ghost = solo_ghost(self._hands, self.options, self.solo) if self.interactor is not None else None
 
     def set_mesh_opacity(self, opacity: float) -> None:
         self.set_options(opacity=opacity)
@@ -274,6 +286,7 @@ class CompareView(QWidget):
         """Show hand ``index``'s viewport alone over the whole view; -1 restores the grid."""
         self.solo = index
         show_alone(self.plotter, self._hands, self._viewports, index)
+        self._show_ghost()
         self._choose_skins()
         self.solo_changed.emit(index)
         self.interactor.update()

@@ -12,6 +12,7 @@ WORST = 5  # frames marked
 #: for Help's list
 MOUSE = (("click the error curve", "jump to that frame"),)
 MISSING_COLOUR = QColor("#d9d9d9")
+OUTSIDE_RANGE_COLOUR, RANGE_COLOUR = QColor("#eeeeee"), QColor("#2e7d32")
 MARGIN = 6  # pixels around the curve: a worst frame's ring (radius 3) at either end stays whole
 
 
@@ -59,6 +60,7 @@ class ErrorCurve(QWidget):
         self.worst = np.zeros(0, dtype=int)
         self.frame = 0
         self.title = ""
+        self.marked: range | None = None  # the timeline's in and out points
         self.quantity = "ASM error per frame"
         self._curve: QPixmap | None = None  # the curve and its marks, drawn once per curve and size
 
@@ -74,6 +76,12 @@ class ErrorCurve(QWidget):
         self.setToolTip(f"{title}: {quantity}; worst frames (red): "
                         f"{', '.join(str(f) for f in self.worst)}. {note}Click to jump; ] and [ step between "
                         f"the worst frames.")
+        self.update()
+
+    def set_range(self, marked: range | None) -> None:
+        """Shade the frames outside the timeline's marked range (None: nothing marked)."""
+        self.marked = marked
+        self._curve = None
         self.update()
 
     def set_frame(self, frame: int) -> None:
@@ -122,6 +130,13 @@ class ErrorCurve(QWidget):
             width = max(1.0, (self.width() - 2 * MARGIN) / max(1, len(self.error) - 1))
             for frame in np.flatnonzero(self.missing):
                 painter.fillRect(QRectF(self._x(frame) - width / 2, 0, width, self.height()), MISSING_COLOUR)
+        if self.marked is not None:  # the timeline's marked range: outside it shaded, its ends drawn
+            left, right, axis = self._x(self.marked.start), self._x(self.marked[-1]), self.axis_y()
+            painter.fillRect(QRectF(0, 0, left, axis), OUTSIDE_RANGE_COLOUR)
+            painter.fillRect(QRectF(right, 0, self.width() - right, axis), OUTSIDE_RANGE_COLOUR)
+            painter.setPen(QPen(RANGE_COLOUR, 2))
+            for x in (left, right):
+                painter.drawLine(QPointF(x, 0), QPointF(x, axis))
         step = max(1, len(self.error) // max(1, self.width()))  # at most one point per pixel
         points = [QPointF(self._x(f), self._y(self.error[f])) for f in range(0, len(self.error), step)]
         painter.setPen(QPen(QColor("#3b4cc0"), 1.5))

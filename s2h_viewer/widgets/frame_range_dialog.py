@@ -1,6 +1,6 @@
-"""The frames of a video export: From and To boxes (indices from 0, as the timeline counts; both frames
-exported), the whole clip at first, with quick choices for the whole clip and for the current frame on; Export
-only while From is not after To (the dialog says why)."""
+"""The frames of a video or motion export: From and To boxes (indices from 0, as the timeline counts; both
+frames exported), the timeline's marked range at first (else the whole clip), with quick choices for the whole
+clip, the marked range and the current frame on; Export only while From is not after To (the dialog says why)."""
 
 from __future__ import annotations
 
@@ -12,11 +12,12 @@ class FrameRangeDialog(QDialog):
     """Asks which frames of a clip of ``n_frames`` at ``fps`` go into ``file_name``; ``current`` is the
     timeline's frame."""
 
-    def __init__(self, file_name: str, n_frames: int, fps: float, current: int, parent: QWidget | None = None):
+    def __init__(self, file_name: str, n_frames: int, fps: float, current: int, parent: QWidget | None = None,
+                 what: str = "video", marked: range | None = None):
         super().__init__(parent)
-        self.n_frames, self.fps, self.current = n_frames, fps, current
+        self.n_frames, self.fps, self.current, self.marked = n_frames, fps, current, marked
         self.setObjectName("frame_range_dialog")
-        self.setWindowTitle("Export video: frames")
+        self.setWindowTitle(f"Export {what}: frames")
         layout = QVBoxLayout(self)
         layout.addWidget(QLabel(f"Frames of the clip to write to {file_name}\n"
                                 f"(the clip: frames 0 to {n_frames - 1}; From and To are both written)"))
@@ -31,7 +32,11 @@ class FrameRangeDialog(QDialog):
         quick = QHBoxLayout()
         self.whole_clip = QPushButton("Whole clip")
         self.from_current = QPushButton(f"From the current frame ({current})")
-        for button, slot in ((self.whole_clip, self.choose_whole_clip), (self.from_current, self.choose_from_current)):
+        choices = [(self.whole_clip, self.choose_whole_clip), (self.from_current, self.choose_from_current)]
+        if marked is not None:
+            self.marked_range = QPushButton(f"The marked range ({marked.start} to {marked[-1]})")
+            choices.insert(1, (self.marked_range, self.choose_marked))
+        for button, slot in choices:
             button.setAutoDefault(False)  # Return is OK, not a quick choice
             button.clicked.connect(slot)
             quick.addWidget(button)
@@ -44,7 +49,10 @@ class FrameRangeDialog(QDialog):
         self.buttons.accepted.connect(self.accept)
         self.buttons.rejected.connect(self.reject)
         layout.addWidget(self.buttons)
-        self.choose_whole_clip()
+        if marked is not None:
+            self.choose_marked()
+        else:
+            self.choose_whole_clip()
 
     def frames(self) -> range:
         """The frames chosen, From to To included."""
@@ -53,6 +61,11 @@ class FrameRangeDialog(QDialog):
     def choose_whole_clip(self) -> None:
         self.start.setValue(0)
         self.end.setValue(self.n_frames - 1)
+
+    def choose_marked(self) -> None:
+        """The timeline's in and out points (Playback > Mark in / Mark out)."""
+        self.start.setValue(self.marked.start)
+        self.end.setValue(self.marked[-1])
 
     def choose_from_current(self) -> None:
         """From the timeline's frame to the clip's end."""

@@ -8,7 +8,8 @@ more as soon as a frame is drawn: a view slower than that rate draws back to bac
 ``frame_changed`` fires for every frame shown (the view, the heatmap and the error curve follow each);
 the slider, the frame box and the readouts follow at most WIDGET_RATE times a second while playing, every
 frame otherwise: repainting the slider alone cost a frame drawn at 75 frames/s a twentieth of its time,
-and no eye reads a frame number changing faster. Space, the arrow keys and the Ctrl shortcuts (Ctrl+E, Ctrl+S, ...) stay the
+and no eye reads a frame number changing faster. In and out points (`mark_in`, `mark_out`) mark a range
+playback stays in (looping within it), the exports' frames dialog offers and the error curve shades. Space, the arrow keys and the Ctrl shortcuts (Ctrl+E, Ctrl+S, ...) stay the
 window's shortcuts even when the frame box has the focus (its line edit would take them otherwise)."""
 
 from __future__ import annotations
@@ -25,7 +26,8 @@ SPEEDS = (0.25, 0.5, 1.0, 2.0, 4.0)
 WIDGET_RATE = 30.0  # refreshes per second of the slider, the frame box and the readouts while playing
 MAX_DRAW_WAIT = 0.2  # seconds a tick waits for the view to draw the frame asked before asking anew
 PASSED_KEYS = (Qt.Key.Key_Space, Qt.Key.Key_Left, Qt.Key.Key_Right, Qt.Key.Key_Home, Qt.Key.Key_End,
-               Qt.Key.Key_BracketLeft, Qt.Key.Key_BracketRight)  # the worst-frame keys
+               Qt.Key.Key_BracketLeft, Qt.Key.Key_BracketRight,  # the worst-frame keys
+               Qt.Key.Key_I, Qt.Key.Key_O)  # the in and out points
 
 
 class _LeaveShortcutKeys(QObject):
@@ -57,6 +59,7 @@ class Timeline(QWidget):
     """Emits ``frame_changed(frame)``; the clip's own fps times playback, scaled by the speed."""
 
     frame_changed = Signal(int)
+    range_changed = Signal(object)  # the marked range (a range of frames), or None when cleared
 
     def __init__(self, parent: QWidget | None = None):
         super().__init__(parent)
@@ -90,6 +93,7 @@ class Timeline(QWidget):
         self._timer.setTimerType(Qt.TimerType.PreciseTimer)
         self._timer.timeout.connect(self._tick)
         self._frame = 0
+        self.marked: range | None = None  # the in and out points (both included): playback stays in them
         self._widgets_at = 0.0  # when the slider, the frame box and the readouts were last refreshed
         self._anchor = (0.0, 0)  # (clock, frame) when playback started or last changed speed / was scrubbed
         self._drawn: list[float] = []
@@ -118,8 +122,34 @@ class Timeline(QWidget):
             widget.blockSignals(False)
         fixed_size(self.readout, self._readout_text(self.n_frames - 1))
         self._frame = 0
+        self.clear_range()
         self._show_widgets()
         self.frame_changed.emit(0)
+
+    @property
+    def play_range(self) -> range:
+        """The frames playback runs through: the marked range, else the whole clip."""
+        return self.marked if self.marked is not None else range(self.n_frames)
+
+    def mark_in(self) -> None:
+        """The current frame starts the marked range (its end stays, or is the clip's last frame)."""
+        end = self.marked[-1] if self.marked is not None and self.marked[-1] >= self.frame else self.n_frames - 1
+        self._set_marked(range(self.frame, end + 1))
+
+    def mark_out(self) -> None:
+        """The current frame ends the marked range (its start stays, or is the clip's first frame)."""
+        start = self.marked.start if self.marked is not None and self.marked.start <= self.frame else 0
+        self._set_marked(range(start, self.frame + 1))
+
+    def clear_range(self) -> None:
+        self._set_marked(None)
+
+    def _set_marked(self, marked: range | None) -> None:
+        if marked is not None and len(marked) == self.n_frames:
+            marked = None  # the whole clip: nothing marked
+        if marked != self.marked:
+            self.marked = marked
+            self.range_changed.emit(marked)
 
     def set_frame(self, frame: int) -> None:
         frame = max(0, min(self.n_frames - 1, frame))
@@ -136,8 +166,9 @@ class Timeline(QWidget):
         self.play_button.setText("Pause" if playing else "Play")
         self._drawn.clear()
         if playing:
-            if not self.loop.isChecked() and self.frame == self.n_frames - 1:
-                self.set_frame(0)  # played to the end without looping: Play plays the clip again
+            span = self.play_range
+            if self.frame not in span or (not self.loop.isChecked() and self.frame == span[-1]):
+                self.set_frame(span.start)  # outside the range, or played to its end: Play plays it again
             self._restart_clock()
             self._timer.start(self._tick_interval())
         else:
@@ -207,10 +238,11 @@ class Timeline(QWidget):
         started, first = self._anchor
         speed = SPEEDS[self.speed.currentIndex()]
         due = first + int((time.perf_counter() + ahead - started) * self.clip_fps * speed)
-        if due >= self.n_frames:
+        span = self.play_range
+        if due > span[-1]:
             if not self.loop.isChecked():
                 return None
-            due %= self.n_frames
+            due = span.start + (due - span.start) % len(span) if due >= span.start else span.start
         return due
 
     def next_frame(self) -> int | None:
@@ -222,9 +254,10 @@ class Timeline(QWidget):
         due = self.due_frame(ahead=1.0 / rate if rate else 0.0)
         if due is None or due != self.frame:
             return due
-        if self.frame + 1 < self.n_frames:
+        span = self.play_range
+        if self.frame + 1 <= span[-1]:
             return self.frame + 1
-        return 0 if self.loop.isChecked() else None
+        return span.start if self.loop.isChecked() else None
 
     def _tick(self) -> None:
         if not self.playing:  # a tick queued by the last drawn frame, after a pause
@@ -233,7 +266,7 @@ class Timeline(QWidget):
             return  # the last frame is not drawn yet: a new one now would be skinned and never shown
         due = self.due_frame()
         if due is None:  # the end, not looping
-            self.set_frame(self.n_frames - 1)
+            self.set_frame(self.play_range[-1])
             self.set_playing(False)
             return
         if due != self.frame:
