@@ -29,15 +29,16 @@ from PySide6.QtWidgets import QComboBox, QFrame, QLabel, QMenu, QScrollArea, QSp
 from s2h_viewer.annotate.trust import frame_warning
 from s2h_viewer.app.job_progress import JobProgress
 from s2h_viewer.app.retarget_queue import RetargetQueue
+from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.render.compare_scene import BANNER_COLOUR
 from s2h_viewer.retarget.compare_state import CompareState, ResultKey
 from s2h_viewer.retarget.comparison import Comparison, MethodResult
 from s2h_viewer.retarget.methods import METHODS
-from s2h_viewer.semantics.flexion import SidewaysPeak, flexion_and_sideways
+from s2h_viewer.semantics.flexion import SidewaysPeak, bend_angles, flexion_and_sideways
 from s2h_viewer.semantics.signature import SIDEWAYS_FLEXION, SIDEWAYS_LIMIT
-from s2h_viewer.widgets.asm_heatmap import AsmHeatmap
+from s2h_viewer.widgets.asm_heatmap import AsmHeatmap, spaced
 from s2h_viewer.widgets.compare_view import CompareView
 from s2h_viewer.widgets.error_curve import ErrorCurve
 from s2h_viewer.widgets.scores_table import ScoresTable
@@ -46,7 +47,7 @@ from s2h_viewer.widgets.timeline import Timeline
 PROGRESS_STEPS = 1000
 TABLE_SHARE = 0.25  # of the panels' height: the most the scores table takes until its splitter is dragged
 #: what the error curve can show (`CompareMode.show_curve`)
-ASM_CURVE, SIDEWAYS_CURVE, RESIDUAL_CURVE = "asm", "sideways", "residual"
+ASM_CURVE, SIDEWAYS_CURVE, RESIDUAL_CURVE, ANGLE_CURVE = "asm", "sideways", "residual", "angle"
 #: frames of results (every frame's pose and ASM error) the spare cache of unticked methods holds at most
 SPARE_FRAMES = 100_000
 
@@ -178,7 +179,8 @@ class CompareMode(QWidget):
         self._done_in_batch = 0
         self._resume_playing = False  # the timeline played when retargets paused it: it plays on after
         self._progress: JobProgress | None = None
-        self.curve_shows = ASM_CURVE  # or the sideways flexion, or a tracked source's fit residual (View menu)
+        self.curve_shows = ASM_CURVE  # or the sideways flexion, a joint's angle, a tracked fit's residual (View)
+        self.curve_joint = topo.FINGER_JOINT_NAMES.index("index_pip")  # the heatmap row whose angle it shows
         self.view = CompareView()
         self.timeline = Timeline()
         self.curve = ErrorCurve()
@@ -204,6 +206,7 @@ class CompareMode(QWidget):
         self.timeline.range_changed.connect(self.curve.set_range)
         self.view.solo_changed.connect(self._solo_changed)
         self.heatmap_choice.currentIndexChanged.connect(self._choice_changed)
+        self.heatmap.row_chosen.connect(self._joint_chosen)
         self.scores.currentCellChanged.connect(lambda row, *_: self._select_row(row))
         self.queue.result_ready.connect(self._on_result)
         self.queue.semantics_ready.connect(self._on_semantics)
@@ -512,6 +515,12 @@ class CompareMode(QWidget):
             self.curve.set_curve(fit.residual_mm, f"{self.comparison.source.name}",
                                  "tracking fit residual per frame, mm",
                                  f"{int(fit.filled.sum())} frames filled (grey). ")
+        elif self.curve_shows == ANGLE_CURVE:
+            joint = self.curve_joint + 1  # a heatmap row: the finger joints follow the wrist
+            name = spaced(topo.JOINT_NAMES[joint - 1 if joint in topo.TIP_JOINTS else joint])
+            self.curve.set_curve(bend_angles(result.pose.positions.numpy(), joint), label(result),
+                                 f"{name} bend, deg (grey: the source's)",
+                                 reference=bend_angles(self.comparison.source_pose.positions.numpy(), joint))
         elif self.curve_shows == SIDEWAYS_CURVE:
             self.curve.set_curve(sideways_curve(result), label(result),
                                  "worst sideways bend of a curled PIP/DIP per frame, deg")
@@ -519,9 +528,16 @@ class CompareMode(QWidget):
             self.curve.set_curve(result.frame_error, label(result))
         self.sideways_note.setText(selected_notes(result))
 
+    def _joint_chosen(self, row: int) -> None:
+        """A heatmap row clicked: the joint whose angle the curve shows (at once if it shows angles)."""
+        self.curve_joint = row
+        if self.curve_shows == ANGLE_CURVE:
+            self.show_curve(ANGLE_CURVE)
+
     def show_curve(self, quantity: str) -> None:
         """What the error curve shows: `ASM_CURVE` (the selected retarget's ASM error), `SIDEWAYS_CURVE` (its
-        worst sideways bend) or `RESIDUAL_CURVE` (a tracked source's fit residual, mm per frame)."""
+        worst sideways bend), `ANGLE_CURVE` (the heatmap's chosen joint's bend, the source's beside it) or
+        `RESIDUAL_CURVE` (a tracked source's fit residual, mm per frame)."""
         self.curve_shows = quantity
         if self.comparison is not None:
             self._show_selected_curve()

@@ -15,8 +15,8 @@ from PySide6.QtWidgets import QDialog, QFileDialog, QMainWindow, QMessageBox, QT
 from s2h_viewer.app import exports
 from s2h_viewer.app.annotate_mode import AnnotateMode, ask, os_problem
 from s2h_viewer.app.batch_browser import BatchBrowser
-from s2h_viewer.app.compare_mode import (ASM_CURVE, RESIDUAL_CURVE, SIDEWAYS_CURVE, CompareMode, CompareSetup,
-                                         default_setup)
+from s2h_viewer.app.compare_mode import (ANGLE_CURVE, ASM_CURVE, RESIDUAL_CURVE, SIDEWAYS_CURVE, CompareMode,
+                                         CompareSetup, default_setup)
 from s2h_viewer.app.focus import FocusKeeper
 from s2h_viewer.app.job_progress import strip_height
 from s2h_viewer.app.tasks import TaskRunner
@@ -211,6 +211,8 @@ class MainWindow(QMainWindow):
         self.keypoint_dots.setChecked(True)
         self.sideways_curve = self._action(view_menu, "Error curve: sideways flexion per frame (deg)",
                                            lambda: self._choose_curve(self.sideways_curve), "Ctrl+G", checkable=True)
+        self.angle_curve = self._action(view_menu, "Error curve: the heatmap's joint bend, source and retarget (deg)",
+                                        lambda: self._choose_curve(self.angle_curve), "Ctrl+Shift+G", checkable=True)
         self.fit_residual = self._action(view_menu, "Error curve: tracking fit residual (recordings)",
                                          lambda: self._choose_curve(self.fit_residual), "Ctrl+F", checkable=True)
         view_menu.addSeparator()
@@ -491,11 +493,11 @@ class MainWindow(QMainWindow):
 
     def _choose_curve(self, chosen: QAction) -> None:
         """The error curve's View items exclude each other: the one ticked is shown, none ticked the ASM error."""
-        for action in (self.sideways_curve, self.fit_residual):
+        curves = {self.sideways_curve: SIDEWAYS_CURVE, self.angle_curve: ANGLE_CURVE, self.fit_residual: RESIDUAL_CURVE}
+        for action in curves:
             if action is not chosen:
                 action.setChecked(False)
-        self.compare.show_curve(SIDEWAYS_CURVE if self.sideways_curve.isChecked() else
-                                RESIDUAL_CURVE if self.fit_residual.isChecked() else ASM_CURVE)
+        self.compare.show_curve(next((curve for action, curve in curves.items() if action.isChecked()), ASM_CURVE))
 
     def _tracking_actions(self) -> None:
         """The recording-only View items are offered while the source is a tracked recording, whose fit's

@@ -87,3 +87,15 @@ def finger_peaks(positions: np.ndarray) -> dict[str, SidewaysPeak]:
         frame = int(np.argmax(np.where(tightest, sideways[:, j], -1.0)))
         out[name] = SidewaysPeak(float(sideways[frame, j]), name, frame)
     return out
+
+
+def bend_angles(positions: np.ndarray, joint: int) -> np.ndarray:
+    """(T,) degrees joint ``joint`` (of the 21) bends: the angle between the bone into it and the bone out of it
+    (0 straight), from (T, 21, 3) positions; a fingertip (no bone out) reads its DIP's or the thumb IP's."""
+    positions = np.asarray(positions, dtype=np.float64)
+    if joint in topo.TIP_JOINTS:
+        joint -= 1
+    into = positions[:, joint] - positions[:, topo.PARENTS[joint]]
+    out = positions[:, joint + 1] - positions[:, joint]
+    cos = (into * out).sum(-1) / np.maximum(np.linalg.norm(into, axis=-1) * np.linalg.norm(out, axis=-1), 1e-12)
+    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))

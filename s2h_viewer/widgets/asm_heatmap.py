@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 from matplotlib import colormaps
-from PySide6.QtCore import QRect, Qt
+from PySide6.QtCore import QRect, Qt, Signal
 from PySide6.QtGui import QColor, QFont, QImage, QPainter, QPixmap
 from PySide6.QtWidgets import QLabel, QToolTip, QVBoxLayout, QWidget
 
@@ -90,8 +90,18 @@ class _Matrix(QWidget):
                 painter.drawPixmap(rect, self.labels, rect)
         if heatmap.current is not None:
             painter.drawImage(CELLS.topLeft(), heatmap.image)
+            if heatmap.row is not None:  # the joint chosen (its angle curve): its row outlined
+                painter.setPen(QColor("white"))
+                painter.drawRect(CELLS.left(), TOP + heatmap.row * CELL, CELLS.width() - 1, CELL - 1)
             painter.drawText(QRect(0, 0, LEFT - 3, TOP - 3), Qt.AlignmentFlag.AlignRight |
                              Qt.AlignmentFlag.AlignBottom, f"frame {heatmap.frame}")
+
+    def mousePressEvent(self, event) -> None:
+        cell = self.heatmap.cell_at(int(event.position().x()), int(event.position().y()))
+        if cell is None and LEFT > event.position().x() >= 0 and TOP <= event.position().y() < CELLS.bottom():
+            cell = (int(event.position().y() - TOP) // CELL, 0)  # a row's name
+        if cell is not None:
+            self.heatmap.choose_row(cell[0])
 
     def mouseMoveEvent(self, event) -> None:
         text = self.heatmap.cell_text(int(event.position().x()), int(event.position().y()))
@@ -102,11 +112,15 @@ class _Matrix(QWidget):
 
 
 class AsmHeatmap(QWidget):
-    """Rows: the 20 finger joints; columns: 20 finger joints then 9 palm anchors."""
+    """Rows: the 20 finger joints; columns: 20 finger joints then 9 palm anchors. A click on a row (its cells
+    or its name) chooses that joint: ``row_chosen(row)`` (the error curve's joint angle follows it)."""
+
+    row_chosen = Signal(int)
 
     def __init__(self, parent: QWidget | None = None):
         super().__init__(parent)
         self.current: np.ndarray | None = None  # the matrix shown
+        self.row: int | None = None  # the joint chosen, outlined
         self.frame = -1  # the frame it belongs to
         self._colours = screen_order(colour_table())
         self._pixels = np.zeros((CELLS.height(), CELLS.width(), 4), dtype=np.uint8)
@@ -115,7 +129,8 @@ class AsmHeatmap(QWidget):
         self.matrix = _Matrix(self)
         self.legend = QLabel(f"ASM error (1 - cos): {ERROR_RANGE[0]:g} dark to {ERROR_RANGE[1]:g}+ bright, grey "
                              f"masked; rows: the {topo.N_FINGER_JOINTS} finger joints, columns: the same, then "
-                             f"{topo.N_ANCHORS} palm anchors. Hover a cell for its pair.")
+                             f"{topo.N_ANCHORS} palm anchors. Hover a cell for its pair; click a row: its "
+                             f"joint's bend on the curve (Ctrl+Shift+G).")
         self.legend.setWordWrap(True)  # as wide as the matrix, and as tall as its lines then need: a layout
         self.legend.setFixedWidth(self.matrix.width())  # gives a wrapped label too little height, drawing it
         self.legend.setMinimumHeight(self.legend.heightForWidth(self.matrix.width()))  # over the matrix
@@ -138,6 +153,11 @@ class AsmHeatmap(QWidget):
         value = self.current[cell]
         error = "masked" if np.isnan(value) else f"1 - cos = {value:.3f}"
         return f"{spaced(ROW_NAMES[cell[0]])} to {spaced(COLUMN_NAMES[cell[1]])}: {error}"  # as the axes spell them
+
+    def choose_row(self, row: int) -> None:
+        self.row = row
+        self.matrix.update(CELLS)
+        self.row_chosen.emit(row)
 
     def show_matrix(self, cell_error: np.ndarray, frame: int) -> None:
         """Show ``cell_error`` (20, 29), the matrix of ``frame``: new cell colours in the same image, a repaint."""

@@ -13,6 +13,7 @@ WORST = 5  # frames marked
 MOUSE = (("click the error curve", "jump to that frame"),)
 MISSING_COLOUR = QColor("#d9d9d9")
 OUTSIDE_RANGE_COLOUR, RANGE_COLOUR = QColor("#eeeeee"), QColor("#2e7d32")
+REFERENCE_COLOUR = QColor("#9e9e9e")
 MARGIN = 6  # pixels around the curve: a worst frame's ring (radius 3) at either end stays whole
 
 
@@ -61,17 +62,20 @@ class ErrorCurve(QWidget):
         self.frame = 0
         self.title = ""
         self.marked: range | None = None  # the timeline's in and out points
+        self.reference: np.ndarray | None = None
         self.quantity = "ASM error per frame"
         self._curve: QPixmap | None = None  # the curve and its marks, drawn once per curve and size
 
     def set_curve(self, error: np.ndarray, title: str, quantity: str = "ASM error per frame",
-                  note: str = "") -> None:
+                  note: str = "", reference: np.ndarray | None = None) -> None:
         """``error`` (T,); NaN frames (none measured there: a recording's filled frames) are shaded grey, drawn
         at 0 and never marked worst."""
         values = np.asarray(error, dtype=float)
         self.missing = ~np.isfinite(values)
         self.error, self.title, self.quantity = np.nan_to_num(values), title, quantity
-        self.worst = worst_frames(self.error)
+        #: a curve to read it against (the source's joint angle beside the retarget's), grey, on the same axis
+        self.reference = None if reference is None else np.nan_to_num(np.asarray(reference, dtype=float))
+        self.worst = worst_frames(self.error if self.reference is None else np.abs(self.error - self.reference))
         self._curve = None
         self.setToolTip(f"{title}: {quantity}; worst frames (red): "
                         f"{', '.join(str(f) for f in self.worst)}. {note}Click to jump; ] and [ step between "
@@ -96,7 +100,7 @@ class ErrorCurve(QWidget):
 
     def _left(self) -> float:
         """Where frame 0 is drawn: right of the value axis' widest number."""
-        return MARGIN + self.fontMetrics().horizontalAdvance(f"{self.error.max():.3g}") + 4
+        return MARGIN + self.fontMetrics().horizontalAdvance(f"{self.top:.3g}") + 4
 
     def axis_y(self) -> float:
         """The frame axis' line: the curve's 0, above a row of frame numbers and the caption's row."""
@@ -106,12 +110,17 @@ class ErrorCurve(QWidget):
         width = max(1.0, self.width() - MARGIN - self._left())
         return int(round(np.clip((x - self._left()) / width, 0.0, 1.0) * (len(self.error) - 1)))
 
+    @property
+    def top(self) -> float:
+        """The value axis' top: the curve's maximum, or its reference's where higher."""
+        return float(max(self.error.max(), 0.0 if self.reference is None else self.reference.max()))
+
     def _x(self, frame: float) -> float:
         return self._left() + frame / max(1, len(self.error) - 1) * (self.width() - MARGIN - self._left())
 
     def _y(self, value: float) -> float:
         """The curve between the top margin and the frame axis (it used to run through the caption)."""
-        top = max(float(self.error.max()), 1e-9)
+        top = max(self.top, 1e-9)
         return self.axis_y() - value / top * (self.axis_y() - MARGIN)
 
     def ticks(self) -> list[int]:
@@ -138,6 +147,10 @@ class ErrorCurve(QWidget):
             for x in (left, right):
                 painter.drawLine(QPointF(x, 0), QPointF(x, axis))
         step = max(1, len(self.error) // max(1, self.width()))  # at most one point per pixel
+        if self.reference is not None:
+            painter.setPen(QPen(REFERENCE_COLOUR, 1.5))
+            painter.drawPolyline(QPolygonF([QPointF(self._x(f), self._y(self.reference[f]))
+                                            for f in range(0, len(self.reference), step)]))
         points = [QPointF(self._x(f), self._y(self.error[f])) for f in range(0, len(self.error), step)]
         painter.setPen(QPen(QColor("#3b4cc0"), 1.5))
         painter.drawPolyline(QPolygonF(points))
@@ -158,7 +171,7 @@ class ErrorCurve(QWidget):
         painter.setPen(QPen(QColor("#808080"), 1))
         painter.drawLine(QPointF(left, MARGIN), QPointF(left, axis))
         painter.drawLine(QPointF(left, axis), QPointF(right, axis))
-        for value, y in ((0.0, axis), (float(self.error.max()), float(MARGIN))):
+        for value, y in ((0.0, axis), (self.top, float(MARGIN))):
             text = f"{value:.3g}"
             painter.drawText(QPointF(left - 3 - metrics.horizontalAdvance(text), y + metrics.ascent() / 2), text)
         painter.setPen(QPen(QColor("black"), 1))
