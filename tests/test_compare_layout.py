@@ -181,3 +181,21 @@ def test_a_click_on_a_heatmap_row_puts_that_joints_bend_on_the_curve_beside_the_
     np.testing.assert_array_equal(curve.worst, worst_frames(np.abs(curve.error - curve.reference)))  # where they part
     window.sideways_curve.trigger()  # the choices exclude each other
     assert not window.angle_curve.isChecked() and curve.reference is None
+
+
+def test_a_last_page_keeps_the_row_height_and_a_new_result_keeps_the_page(qtbot, sample_hands, tmp_path):
+    """A fresh-eyes run: page 2 of fewer targets stretched its rows (hands twice as big), and ticking a method
+    on page 2 sent the grid back to page 1 (where the selection was)."""
+    three = ("iris", "laurel", "kale")
+    window = open_compare_window(qtbot, sample_hands, tmp_path, methods=("tbs_copy",), targets=three)
+    view = window.view
+    assert view.rows == 2 and view.page_count == 2
+    first = tuple(view.hand_viewports()[1])
+    view.set_page(1)
+    assert [r.target.name for r in view.comparison.results] == ["kale"]
+    last = tuple(view.hand_viewports()[1])
+    assert np.isclose(last[3] - last[1], first[3] - first[1])  # the same cell height: the same scale
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.method_actions["dm"].trigger()
+    assert view.page == 1 and [r.target.name for r in view.comparison.results] == ["kale", "kale"]
+    window.close()

@@ -323,8 +323,9 @@ class CompareMode(QWidget):
         self.timeline.set_playing(False)
         self._sync()
 
-    def select(self, key: ResultKey) -> None:
-        """One retarget for the heatmap, the error curve, the scores' highlight and the exports."""
+    def select(self, key: ResultKey, turn_page: bool = True) -> None:
+        """One retarget for the heatmap, the error curve, the scores' highlight and the exports; the grid turns
+        to its page unless ``turn_page`` is False."""
         self.state.selected = key
         if self.comparison is not None:
             keys = self._shown_keys()
@@ -335,7 +336,7 @@ class CompareMode(QWidget):
                     widget.blockSignals(True)
                     setter()
                     widget.blockSignals(False)
-                self.view.set_selected(index)
+                self.view.set_selected(index, turn_page)
             self._show_selected_curve()
             self.show_frame(self.timeline.frame)
 
@@ -459,7 +460,7 @@ class CompareMode(QWidget):
         self.heatmap_choice.blockSignals(False)
         if new_clip:
             self.timeline.set_clip(comparison.n_frames, comparison.motion.fps)
-        self.select(self._same_retarget(self.state.selected))
+        self.select(self._same_retarget(self.state.selected), turn_page=False)  # the user's page stays
         self.status(f"{comparison.motion.name}: {comparison.n_frames} frames, {len(comparison.results)} retargets")
         self.comparison_ready.emit()
 

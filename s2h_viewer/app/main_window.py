@@ -31,7 +31,7 @@ __all__ = ["CompareSetup", "MainWindow", "default_setup", "run"]
 
 RECENT_FILES = 8
 MIN_SIZE = (1000, 700)  # the smallest window whose panels all hold (the heatmap whole, two score rows, the curve)
-STATUS_MS_CANCELLED = 15_000  # a cancelled export says so this long in the status bar
+STATUS_MS_EXPORT = 15_000  # a written or cancelled export says so this long in the status bar
 #: hand files a target can be (a BVH holds a motion on a skeleton, no mesh to colour: not offered)
 TARGET_HAND_FILTER = "Hands (*.glb *.gltf *.vrm *.fbx *.npz)"
 RIG_FILTER = "Rigs (*.glb *.gltf *.vrm *.fbx)"  # hand files with bones to map
@@ -594,7 +594,7 @@ class MainWindow(QMainWindow):
 
     def _wrote(self, path: Path, what: str = "") -> Path:
         self.settings.setValue("files/export_dir", str(Path(path).resolve().parent))
-        self.statusBar().showMessage(f"wrote {path}{what}", 5000)
+        self.statusBar().showMessage(f"wrote {path}{what}", STATUS_MS_EXPORT)
         return path
 
     def export_screenshot(self, path: str | None = None) -> Path | None:
@@ -627,7 +627,7 @@ class MainWindow(QMainWindow):
         job.strip.canceled.connect(lambda: self.statusBar().showMessage(  # said at once: the job stops after a frame
             f"cancelling the video export: {name} will not be written..."))
         job.cancelled.connect(lambda: self.statusBar().showMessage(
-            f"video export cancelled: no file written ({name})", STATUS_MS_CANCELLED))
+            f"video export cancelled: no file written ({name})", STATUS_MS_EXPORT))
         job.failed.connect(self.error)
         for signal in (job.written, job.cancelled, job.failed):
             signal.connect(self._video_export_ended)

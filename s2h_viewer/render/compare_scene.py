@@ -217,12 +217,14 @@ def is_closed_outward(mesh: pv.PolyData) -> bool:
     return bool(closed.is_watertight and closed.is_winding_consistent and closed.volume > 0)
 
 
-def grid_layout(comparison: Comparison) -> dict:
-    """Plotter keywords for the grid: a row per target, a column per method after the source's column
+def grid_layout(comparison: Comparison, rows: int | None = None) -> dict:
+    """Plotter keywords for the grid: a row per target (``rows`` at least: a last page of fewer targets keeps
+    its pages' row height, so its hands keep their scale), a column per method after the source's column
     (the source drawn once, top left, in a cell the size of the others so every hand has the same
     scale), and a narrow last column, merged over the rows, for the colour bar (it covers no hand)."""
-    rows = len(dict.fromkeys(id(r.target) for r in comparison.results)) or 1
-    columns = 1 + len(comparison.results) // rows
+    targets = len(dict.fromkeys(id(r.target) for r in comparison.results)) or 1
+    columns = 1 + len(comparison.results) // targets
+    rows = max(targets, rows or 0)
     groups = [(np.s_[:], columns)] + ([(np.s_[1:], 0)] if rows > 2 else [])
     return {"shape": (rows, columns + 1), "groups": groups, "border": False,
             "col_weights": [1.0] * columns + [columns * COLOUR_BAR_SHARE / (1.0 - COLOUR_BAR_SHARE)]}
@@ -374,6 +376,8 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
     cells' labels, fitted to the window's size now (`fit_cells` again when it changes).
     ``playing_faces``: each skin also at that many faces, drawn while playing (`PosedHand.set_playing`)."""
     plain_text()
+    for renderer in plotter.renderers:  # white everywhere: a last page's rows past its targets stay empty
+        renderer.set_background("white")
     lighter: dict[tuple[int, int | None], HandModel] = {}
 
     def light(hand: HandModel, faces: int | None) -> HandModel:

@@ -160,7 +160,7 @@ class CompareView(QWidget):
             kept = (camera.position, camera.focal_point, camera.up)
         self.comparison = comparison
         self.close_grid()  # pyvista fixes the subplot layout at construction: start afresh
-        self.plotter = window_plotter(**grid_layout(comparison))
+        self.plotter = window_plotter(**grid_layout(comparison, self.rows if pages > 1 else None))
         self.interactor = PlotterWidget(self.plotter, self)
         self.interactor.installEventFilter(self)
         self.plotter.render_window.AddObserver("StartEvent", lambda *_: self._render_starts())
@@ -263,10 +263,12 @@ class CompareView(QWidget):
         renderers = list(self.plotter.renderers)
         return [self._viewports[renderers.index(hand.renderer)] for hand in self._hands]
 
-    def set_selected(self, index: int) -> None:
-        """Frame the cell of retarget ``index`` (the whole comparison's results' order), turning to its page."""
+    def set_selected(self, index: int, turn_page: bool = True) -> None:
+        """Frame the cell of retarget ``index`` (the whole comparison's results' order), turning to its page
+        unless ``turn_page`` is False (the grid shown again after a change keeps the page the user is on)."""
         self.selected = index
-        if self.full is not None and 0 <= index < len(self.full.results) and self._page_of(index) != self.page:
+        if turn_page and self.full is not None and 0 <= index < len(self.full.results) and \
+                self._page_of(index) != self.page:
             self.set_page(self._page_of(index))
         self._frame_selected()
         if self.interactor is not None:
