@@ -57,6 +57,10 @@ def test_the_recorded_keypoints_show_on_the_source_and_toggle(window, qtbot):
     assert dots is not None and dots.actor.visibility
     np.testing.assert_allclose(dots.points.points, to_view(source.hand, fit.keypoints[45]), atol=1e-6)
     assert _keypoint_pixels(window) > 50
+    from s2h_viewer.render.compare_scene import cell_pixels
+    from s2h_viewer.render.keypoint_dots import CELL_PX, KEYPOINT_PX
+    short = min(cell_pixels(window.compare.view.plotter, source.renderer))
+    assert short < CELL_PX and dots.actor.prop.point_size == max(4, round(KEYPOINT_PX * short / CELL_PX))  # fitted
     window.keypoint_dots.trigger()  # View > Tracked keypoints off
     assert not dots.actor.visibility and _keypoint_pixels(window) == 0
     window.keypoint_dots.trigger()

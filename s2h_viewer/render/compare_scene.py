@@ -360,11 +360,11 @@ def fit_cells(plotter: pv.Plotter, hands: list["PosedHand"], labels: list[CellLa
     for hand in shown:
         if hand.overlay is not None:
             hand.overlay.fit(min(cell_pixels(plotter, hand.renderer)))
+        if hand.keypoints is not None:
+            hand.keypoints.fit(min(cell_pixels(plotter, hand.renderer)))
     legend = hands[0].overlay.legend if hands and hands[0].overlay is not None else None
     if legend is not None:
         legend.fit(*cell_pixels(plotter, legend.renderer))
-        if hand.keypoints is not None:
-            hand.keypoints.fit(min(cell_pixels(plotter, hand.renderer)))
     if shown:
         fit_view_angle(plotter, shown[0].renderer)
 
