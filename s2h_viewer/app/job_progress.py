@@ -67,7 +67,6 @@ class JobProgress(QFrame):
     def setLabelText(self, text: str) -> None:
         """The label, each line elided in the middle to the strip's label room (the strip never grows)."""
         self.setToolTip(text)
-        self._text = text
         room = WIDTH // 2 - GAP
         self._label.setText("\n".join(self.fontMetrics().elidedText(line, Qt.TextElideMode.ElideMiddle, room)
                                       for line in text.split("\n")))

@@ -64,7 +64,7 @@ BANNER_COLOUR, BANNER_BACKGROUND = "#8a4b00", "#ffe0b2"
 GHOST_COLOUR, GHOST_OPACITY = "#9e9e9e", 0.35
 #: the selected retarget's cell is framed in this colour, this many pixels wide
 SELECTED_COLOUR, SELECTED_WIDTH = "#1565c0", 3.0
-#: the contact legend's pixel size (one line per state) and its distance from its cell's bottom left corner
+#: the contact legend's size in pixels (one line per state), LABEL_PAD from its cell's bottom left corner
 LEGEND_PX = (170, 54)
 #: each contact pair (``semantics.contacts.CONTACT_PAIRS``) as two indices into ``contact_sites``.
 PAIR_SITES = np.array([[SITES.index(a), SITES.index(b)] for a, b in CONTACT_PAIRS], dtype=np.int64)
@@ -376,7 +376,7 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
     cells' labels, fitted to the window's size now (`fit_cells` again when it changes).
     ``playing_faces``: each skin also at that many faces, drawn while playing (`PosedHand.set_playing`)."""
     plain_text()
-    for renderer in plotter.renderers:  # white everywhere: a last page's rows past its targets stay empty
+    for renderer in plotter.renderers:  # every cell white: the hands', the legends', a last page's empty rows
         renderer.set_background("white")
     lighter: dict[tuple[int, int | None], HandModel] = {}
 
@@ -400,7 +400,6 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
     hands, labels = [], []
     for cell, hand, pose, error, expected, label in panels:
         plotter.subplot(*cell)
-        plotter.set_background("white")
         plotter.renderer.remove_all_lights()  # one light that follows the camera: a quarter of the
         plotter.renderer.add_light(pv.Light(light_type="headlight"))  # shading cost of pyvista's five-light kit
         posed = PosedHand(plotter, light(hand, display_faces), pose, error, opacity,
@@ -419,14 +418,12 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
     below = source_cell_below(comparison)
     if below is not None:
         plotter.subplot(*below)
-        plotter.set_background("white")
         labels.append(add_label(plotter, f"clip: {comparison.motion.name}\n{comparison.n_frames} frames at "
                                          f"{comparison.motion.fps:g} fps"))
     plotter.subplot(*(below or (0, 0)))  # the clip's cell, else the source's: the contact colours' legend
     hands[0].overlay.legend = ContactLegend(plotter)
     coloured = next((h.error_actor for h in hands if h.error_actor is not None), None)
     plotter.subplot(0, plotter.shape[1] - 1)
-    plotter.set_background("white")
     if coloured is not None:
         bar = plotter.add_scalar_bar("1 - cos", mapper=coloured.mapper, vertical=True, position_x=0.25,
                                      position_y=0.1, height=0.8, width=0.4, title_font_size=10, label_font_size=9,
