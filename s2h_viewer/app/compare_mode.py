@@ -36,8 +36,8 @@ from s2h_viewer.render.compare_scene import BANNER_COLOUR
 from s2h_viewer.retarget.compare_state import CompareState, ResultKey
 from s2h_viewer.retarget.comparison import Comparison, MethodResult
 from s2h_viewer.retarget.methods import METHODS
-from s2h_viewer.semantics.flexion import SidewaysPeak, bend_angles, flexion_and_sideways
-from s2h_viewer.semantics.signature import SIDEWAYS_FLEXION, SIDEWAYS_LIMIT
+from s2h_viewer.semantics.flexion import SidewaysPeak, bend_angles
+from s2h_viewer.semantics.signature import SIDEWAYS_LIMIT, frame_sideways
 from s2h_viewer.widgets.asm_heatmap import AsmHeatmap, spaced
 from s2h_viewer.widgets.compare_view import CompareView
 from s2h_viewer.widgets.error_curve import ErrorCurve
@@ -92,10 +92,8 @@ def selected_notes(result: MethodResult) -> str:
 
 
 def sideways_curve(result: MethodResult) -> np.ndarray:
-    """(T,) the worst sideways bend (degrees) of the PIP/DIP joints flexed past `SIDEWAYS_FLEXION` each frame,
-    0 where none is: the error curve's sideways choice."""
-    flexion, sideways = flexion_and_sideways(result.pose.positions.numpy())
-    return np.where(flexion >= SIDEWAYS_FLEXION, np.nan_to_num(sideways), 0.0).max(axis=1)
+    """(T,) the error curve's sideways choice: `semantics.signature.frame_sideways` of the retarget."""
+    return frame_sideways(result.pose.positions.numpy())
 
 
 def label(result: MethodResult) -> str:

@@ -23,17 +23,21 @@ HINGE_JOINTS: tuple[tuple[str, int], ...] = tuple(
     for finger in topo.FINGERS[1:] for level in ("pip", "dip"))
 
 
+def _bend(positions: np.ndarray, joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(T, J, 3) flexion axes (bone into each joint x bone out of it) and (T, J) their bends in degrees (0 straight)
+    of ``joints`` (indices into the 21, each with a child) from (T, 21, 3) float64 positions."""
+    into = positions[:, joints] - positions[:, topo.PARENTS[joints]]
+    out = positions[:, joints + 1] - positions[:, joints]
+    axis = np.cross(into, out)
+    return axis, np.degrees(np.arctan2(np.linalg.norm(axis, axis=-1), (into * out).sum(-1)))
+
+
 def flexion_and_sideways(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(T, 8) flexion and sideways angles in degrees of `HINGE_JOINTS` from (T, 21, 3) joint positions;
     sideways is NaN where the joint flexes less than `MIN_FLEXION_DEG` (no axis to speak of)."""
     positions = np.asarray(positions, dtype=np.float64)
-    joints = np.array([j for _, j in HINGE_JOINTS])
-    parent = positions[:, joints] - positions[:, topo.PARENTS[joints]]
-    child = positions[:, joints + 1] - positions[:, joints]
-    axis = np.cross(parent, child)
+    axis, flexion = _bend(positions, np.array([j for _, j in HINGE_JOINTS]))
     sin = np.linalg.norm(axis, axis=-1)
-    cos = (parent * child).sum(-1)
-    flexion = np.degrees(np.arctan2(sin, cos))
     index_mcp, pinky_mcp = topo.JOINT_NAMES.index("index_mcp"), topo.JOINT_NAMES.index("pinky_mcp")
     across = positions[:, pinky_mcp] - positions[:, index_mcp]
     across /= np.maximum(np.linalg.norm(across, axis=-1, keepdims=True), 1e-12)
@@ -92,10 +96,6 @@ def finger_peaks(positions: np.ndarray) -> dict[str, SidewaysPeak]:
 def bend_angles(positions: np.ndarray, joint: int) -> np.ndarray:
     """(T,) degrees joint ``joint`` (of the 21) bends: the angle between the bone into it and the bone out of it
     (0 straight), from (T, 21, 3) positions; a fingertip (no bone out) reads its DIP's or the thumb IP's."""
-    positions = np.asarray(positions, dtype=np.float64)
     if joint in topo.TIP_JOINTS:
         joint -= 1
-    into = positions[:, joint] - positions[:, topo.PARENTS[joint]]
-    out = positions[:, joint + 1] - positions[:, joint]
-    cos = (into * out).sum(-1) / np.maximum(np.linalg.norm(into, axis=-1) * np.linalg.norm(out, axis=-1), 1e-12)
-    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+    return _bend(np.asarray(positions, dtype=np.float64), np.array([joint]))[1][:, 0]

@@ -16,7 +16,7 @@ from s2h_viewer.semantics.asm import semantic_matrix
 from s2h_viewer.semantics.contacts import (CONTACT_PAIRS, PAD_PAIRS, PALM_PAIRS, contact_precision_recall,
                                            detect_contacts)
 from s2h_viewer.semantics.flexion import sideways_peak
-from s2h_viewer.semantics.signature import loss_masks
+from s2h_viewer.semantics.signature import pose_loss_masks
 from s2h_viewer.semantics.similarity import masked_cosine
 
 #: frames whose ASMs are built at once when a whole clip is scored ((4096, 20, 29, 3) float64: 57 MiB)
@@ -112,7 +112,7 @@ def score_retarget_frames(source_hand: HandModel, source_q: np.ndarray | torch.T
             ref = forward_kinematics(target_hand, torch.as_tensor(np.asarray(reference_q), dtype=torch.float64))
             mse = joint_position_mse(tgt_pose, ref, target_hand.hand_length)
         peak = sideways_peak(tgt_pose.positions.numpy())
-        kept = loss_masks(source_hand, np.asarray(source_q), target_hand, np.asarray(target_q)) == 0
+        kept = pose_loss_masks(source_hand, src_pose, target_hand, tgt_pose) == 0
         invented = tgt_contacts & ~src_contacts
         scores = RetargetScores(s_palm=s_palm, s_finger=s_finger, s_finger_paper=s_finger_paper,
                                 contact_precision=precision, contact_recall=recall, palm_contact_recall=palm_recall,

@@ -10,7 +10,7 @@ import numpy as np
 import torch
 
 from s2h_viewer.hand import topology as topo
-from s2h_viewer.hand.kinematics import forward_kinematics
+from s2h_viewer.hand.kinematics import HandPose, forward_kinematics
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.semantics.contacts import CONTACT_PAIRS, contact_gaps
 from s2h_viewer.semantics.flexion import HINGE_JOINTS, flexion_and_sideways
@@ -115,25 +115,38 @@ def pose_differences(source_hand: HandModel, source_q: np.ndarray, target_hand: 
 STATE_BITS, TOUCH_BITS, SIDEWAYS_BIT, INVENTED_BIT = 0, 4, 8, 9
 
 
-def _frame_features(hand: HandModel, q_tbs: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(T, 4) curls, (T, 4) thumb touches, (T,) worst sideways of the joints flexed past `SIDEWAYS_FLEXION`
-    (0 where none is), (T, 10) pad contacts at the metric's tolerance."""
+def frame_sideways(positions: np.ndarray) -> np.ndarray:
+    """(T,) degrees: each frame's worst sideways bend of the PIP/DIP joints flexed past `SIDEWAYS_FLEXION`, 0 where
+    none is (the signature's sideways part, and the viewer's sideways curve), from (T, 21, 3) positions."""
+    flexion, sideways = flexion_and_sideways(positions)
+    return np.where(flexion >= SIDEWAYS_FLEXION, np.nan_to_num(sideways), 0.0).max(axis=1)
+
+
+def _frame_features(hand: HandModel, pose: HandPose) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(T, 4) curls, (T, 4) thumb touches, (T,) `frame_sideways`, (T, 10) pad contacts at the metric's tolerance."""
     from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, PAD_PAIRS
     with torch.no_grad():
-        pose = forward_kinematics(hand, torch.as_tensor(np.asarray(q_tbs), dtype=torch.float64))
         gaps = contact_gaps(hand, pose).numpy() / hand.hand_length
     positions = pose.positions.numpy()
-    flexion, sideways = flexion_and_sideways(positions)
-    worst = np.where(flexion >= SIDEWAYS_FLEXION, np.nan_to_num(sideways), 0.0).max(axis=1)
-    return finger_curls(positions), gaps[:, list(THUMB_PAIRS)] < THUMB_TOUCH, worst, gaps[:, PAD_PAIRS] < CONTACT_TOLERANCE
+    return (finger_curls(positions), gaps[:, list(THUMB_PAIRS)] < THUMB_TOUCH, frame_sideways(positions),
+            gaps[:, PAD_PAIRS] < CONTACT_TOLERANCE)
 
 
 def loss_masks(source_hand: HandModel, source_q: np.ndarray, target_hand: HandModel, target_q: np.ndarray
                ) -> np.ndarray:
     """(T,) int: per frame, a bit for each part of the source's signature the target loses (`differences`,
     frame by frame), and `INVENTED_BIT` for a pad contact the source does not make."""
-    src_curl, src_touch, src_side, src_pads = _frame_features(source_hand, source_q)
-    tgt_curl, tgt_touch, tgt_side, tgt_pads = _frame_features(target_hand, target_q)
+    with torch.no_grad():
+        poses = [forward_kinematics(hand, torch.as_tensor(np.asarray(q), dtype=torch.float64))
+                 for hand, q in ((source_hand, source_q), (target_hand, target_q))]
+    return pose_loss_masks(source_hand, poses[0], target_hand, poses[1])
+
+
+def pose_loss_masks(source_hand: HandModel, source_pose: HandPose, target_hand: HandModel, target_pose: HandPose
+                    ) -> np.ndarray:
+    """`loss_masks` from FK already done (float64 poses): scoring a retarget has both."""
+    src_curl, src_touch, src_side, src_pads = _frame_features(source_hand, source_pose)
+    tgt_curl, tgt_touch, tgt_side, tgt_pads = _frame_features(target_hand, target_pose)
 
     def states(curl: np.ndarray) -> np.ndarray:
         return np.where(curl < EXTENDED_BELOW, 0, np.where(curl > CURLED_ABOVE, 2, 1))
