@@ -25,10 +25,17 @@ def open_compare_window(qtbot, sample_hands, tmp_path, methods: tuple[str, ...] 
         motion = dataclasses.replace(motion, q_tbs=np.tile(motion.q_tbs, (repeats, 1, 1)),
                                      labels=np.tile(motion.labels, repeats))
     setup = CompareSetup(motion, sample_hands["birch"], [sample_hands[name] for name in targets], list(methods))
+    return open_window(qtbot, setup, tmp_path, compute=compute)
+
+
+def open_window(qtbot, setup: CompareSetup, tmp_path, size: tuple[int, int] = (1000, 700),
+                compute: bool = True) -> MainWindow:
+    """The window on ``setup``, its settings in a temporary file ticking the setup's methods, shown at ``size``
+    and with its first comparison computed (unless ``compute`` is False)."""
     settings = QSettings(str(tmp_path / "settings.ini"), QSettings.Format.IniFormat)
-    settings.setValue("compare/methods", list(methods))
+    settings.setValue("compare/methods", list(setup.methods))
     win = MainWindow(setup, settings)
-    win.resize(1000, 700)
+    win.resize(*size)
     qtbot.addWidget(win, before_close_func=lambda w: w.undo_stack.clear())  # closed without a "save?" question
     win.show()
     if not compute:

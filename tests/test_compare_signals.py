@@ -19,14 +19,14 @@ if not os.environ.get("DISPLAY"):
     pytest.skip("the Qt viewport needs an X display: `make test` runs the suite under Xvfb", allow_module_level=True)
 
 from PIL import Image  # noqa: E402
-from PySide6.QtCore import QSettings  # noqa: E402
 from PySide6.QtGui import QColor  # noqa: E402
 
+from compare_window import open_window  # noqa: E402
 from grid_text import text_actors  # noqa: E402
 from s2h_viewer import samples  # noqa: E402
 from s2h_viewer.annotate.trust import frame_warning  # noqa: E402
 from s2h_viewer.app.compare_mode import SIDEWAYS_CURVE, sideways_curve  # noqa: E402
-from s2h_viewer.app.main_window import CompareSetup, MainWindow  # noqa: E402
+from s2h_viewer.app.main_window import CompareSetup  # noqa: E402
 from s2h_viewer.hand import topology as topo  # noqa: E402
 from s2h_viewer.hand.model import HandModel  # noqa: E402
 from s2h_viewer.io.files import load_hand_file  # noqa: E402
@@ -58,15 +58,7 @@ def spelling():
 @pytest.fixture
 def window(qtbot, sample_hands, tmp_path, human_female, spelling):
     setup = CompareSetup(spelling, sample_hands["birch"], [human_female, sample_hands["iris"]], ["tbs_copy"])
-    settings = QSettings(str(tmp_path / "settings.ini"), QSettings.Format.IniFormat)
-    settings.setValue("compare/methods", ["tbs_copy"])
-    win = MainWindow(setup, settings)
-    win.resize(1400, 900)
-    qtbot.addWidget(win, before_close_func=lambda w: w.undo_stack.clear())
-    win.show()
-    with qtbot.waitSignal(win.comparison_ready, timeout=120_000):
-        win.start_comparison()
-    return win
+    return open_window(qtbot, setup, tmp_path, size=(1400, 900))
 
 
 def colour_pixels(image: np.ndarray, colour: str, tolerance: int = 12) -> int:

@@ -13,9 +13,8 @@ pytest.importorskip("pytestqt")
 if not os.environ.get("DISPLAY"):
     pytest.skip("the Qt viewport needs an X display: `make test` runs the suite under Xvfb", allow_module_level=True)
 
-from PySide6.QtCore import QSettings  # noqa: E402
-
-from s2h_viewer.app.main_window import CompareSetup, MainWindow  # noqa: E402
+from compare_window import open_window  # noqa: E402
+from s2h_viewer.app.main_window import CompareSetup  # noqa: E402
 from s2h_viewer.io.files import load_motion_file  # noqa: E402
 from s2h_viewer.io.mediapipe_hand import save_mediapipe_hand  # noqa: E402
 from s2h_viewer.render.keypoint_dots import KEYPOINT_COLOUR  # noqa: E402
@@ -27,15 +26,7 @@ from s2h_viewer.tracking.synthetic import synthetic_recording  # noqa: E402
 @pytest.fixture
 def window(qtbot, sample_hands, tmp_path):
     motion, source = load_motion_file(ASSETS_DIR / "recordings" / "webxr_hand_poses_right.json")
-    settings = QSettings(str(tmp_path / "settings.ini"), QSettings.Format.IniFormat)
-    settings.setValue("compare/methods", ["tbs_copy"])
-    win = MainWindow(CompareSetup(motion, source, [sample_hands["iris"]], ["tbs_copy"]), settings)
-    win.resize(1000, 700)
-    qtbot.addWidget(win, before_close_func=lambda w: w.undo_stack.clear())
-    win.show()
-    with qtbot.waitSignal(win.comparison_ready, timeout=120_000):
-        win.start_comparison()
-    return win
+    return open_window(qtbot, CompareSetup(motion, source, [sample_hands["iris"]], ["tbs_copy"]), tmp_path)
 
 
 def _keypoint_pixels(win) -> int:
