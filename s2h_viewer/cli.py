@@ -4,6 +4,7 @@ Errors print one line naming the file and the problem, never a traceback."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 import traceback
 from collections.abc import Iterator
@@ -231,11 +232,36 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
     with _progress_bar(f"retarget ({args.method})", motion.n_frames, "frame",
                        disable=args.quiet or None):  # None: no bar when not on a terminal
         retargeted = retarget(motion, source, target, args.method)
+    fixes = _corrections(args, retargeted, target) if args.corrections else None
+    if fixes is not None:
+        retargeted = dataclasses.replace(retargeted, q_tbs=fixes.corrections.apply(retargeted.q_tbs),
+                                         meta={**retargeted.meta, "corrections": fixes.corrections.describe()})
     path = save_motion_file(args.out, retargeted, target)
     sidecar = export_sidecar(path, target)
     print(f"{motion.name}: {motion.n_frames} frames, {source.name} -> {target.name} ({args.method}) -> {path}"
           + (f" (TBS frames: {sidecar})" if sidecar else ""))
+    if fixes is not None:
+        from s2h_viewer.io.corrections import save_corrections, sidecar_path
+        record = save_corrections(sidecar_path(path), dataclasses.replace(
+            fixes, clip=motion.name, fps=motion.fps, source=source.name, target=target.name, method=args.method))
+        print(f"applied {fixes.corrections.n_keys} correction keys ({fixes.corrections.describe()}); "
+              f"recorded in {record}")
     return 0
+
+
+def _corrections(args: argparse.Namespace, retargeted, target):
+    """``--corrections FILE`` read and checked against the retargeted clip (`io.corrections`); a note where it
+    was made on another target or method (its keys are per joint, so they still apply)."""
+    from s2h_viewer.errors import InputFileError
+    from s2h_viewer.io.corrections import load_corrections
+    fixes = load_corrections(args.corrections)
+    problem = fixes.mismatch(retargeted.n_frames)
+    if problem is not None:
+        raise InputFileError(args.corrections, problem)
+    if (fixes.target, fixes.method) != (target.name, args.method):
+        print(f"{args.corrections}: made on {fixes.method} -> {fixes.target}; applied to {args.method} -> "
+              f"{target.name}")
+    return fixes
 
 
 def _cmd_check(args: argparse.Namespace) -> int:
@@ -425,6 +451,9 @@ def build_parser() -> argparse.ArgumentParser:
     rt.add_argument("--method", default="asrn", help="copy, tbs_copy, dm, asrn or asm_opt")
     rt.add_argument("--out", required=True, help="output file: .glb (on the target rig), .bvh, .npz, or .fbx (through "
                                                        "Blender: `make blender`)")
+    rt.add_argument("--corrections", metavar="FILE", help="a corrections sidecar (<name>.corrections.json, written by "
+                    "the viewer's motion export or Fix > Save corrections): its per-joint offset keys applied to the "
+                    "retarget before it is written, and recorded beside the output")
     rt.add_argument("--quiet", action="store_true", help="no progress bar")
     _add_rig_options(rt)
     rt.set_defaults(func=_cmd_retarget)

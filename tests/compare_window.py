@@ -36,7 +36,8 @@ def open_window(qtbot, setup: CompareSetup, tmp_path, size: tuple[int, int] = (1
     settings.setValue("compare/methods", list(setup.methods))
     win = MainWindow(setup, settings)
     win.resize(*size)
-    qtbot.addWidget(win, before_close_func=lambda w: w.undo_stack.clear())  # closed without a "save?" question
+    qtbot.addWidget(win, before_close_func=lambda w: (  # closed without a "save?" question
+        w.undo_stack.clear(), w.compare.fixing.forget_unsaved()))
     win.show()
     if not compute:
         return win

@@ -34,6 +34,7 @@ import pygltflib
 from s2h_viewer.errors import InputFileError
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
+from s2h_viewer.io.corrections import CorrectionsFile
 
 OUTCOMES = ("ok", "clean", "unclear", "memory", "traceback", "hang", "nan")
 BAD_OUTCOMES = ("unclear", "memory", "traceback", "hang", "nan")
@@ -404,6 +405,8 @@ def _finite(result) -> bool:
         return all(np.isfinite(a).all() for a in arrays)
     if isinstance(result, Motion):
         return bool(np.isfinite(result.q_tbs).all() and np.isfinite(result.fps) and result.fps > 0)
+    if isinstance(result, CorrectionsFile):
+        return all(np.isfinite(k.rotvec).all() for c in result.corrections.joints for k in c.keys)
     raise TypeError(f"unexpected loader result {type(result).__name__}")
 
 

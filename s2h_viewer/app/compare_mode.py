@@ -15,6 +15,7 @@ the results they had, nothing recomputed."""
 
 from __future__ import annotations
 
+import dataclasses
 import html
 import math
 from collections.abc import Callable
@@ -28,13 +29,15 @@ from PySide6.QtWidgets import QComboBox, QFrame, QLabel, QMenu, QScrollArea, QSp
 
 from s2h_viewer.annotate.trust import frame_warning
 from s2h_viewer.app.job_progress import JobProgress
+from s2h_viewer.app.retarget_fixing import RetargetFixing
 from s2h_viewer.app.retarget_queue import RetargetQueue
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.render.compare_scene import BANNER_COLOUR
 from s2h_viewer.retarget.compare_state import CompareState, ResultKey
-from s2h_viewer.retarget.comparison import Comparison, MethodResult
+from s2h_viewer.retarget.comparison import Comparison, MethodResult, corrected_result
+from s2h_viewer.retarget.corrections import Corrections
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.semantics.flexion import SidewaysPeak, bend_angles
 from s2h_viewer.semantics.signature import SIDEWAYS_LIMIT, frame_sideways
@@ -97,7 +100,8 @@ def sideways_curve(result: MethodResult) -> np.ndarray:
 
 
 def label(result: MethodResult) -> str:
-    return f"{METHODS[result.method].label} -> {result.target.name}"
+    """'TBS Copy -> iris', '(fixed)' after it where corrections are applied."""
+    return f"{METHODS[result.method].label} -> {result.target.name}" + (" (fixed)" if result.corrections else "")
 
 
 class SetMethodsCommand(QUndoCommand):
@@ -161,6 +165,7 @@ class CompareMode(QWidget):
 
     comparison_ready = Signal()
     state_changed = Signal()
+    result_changed = Signal()  # a retarget on screen replaced by its corrected self (`show_result`)
 
     def __init__(self, setup: CompareSetup, error: Callable[[str], None], status: Callable[[str], None],
                  parent: QWidget | None = None):
@@ -211,6 +216,7 @@ class CompareMode(QWidget):
         self.queue.progress.connect(self._on_progress)
         self.queue.failed.connect(self._on_failure)
         self.queue.idle.connect(self._on_idle)
+        self.fixing = RetargetFixing(self)
 
     def _panels(self) -> QSplitter:
         """The grid beside the heatmap, over the scores table the whole width (its columns need more than a side
@@ -461,6 +467,34 @@ class CompareMode(QWidget):
         self.select(self._same_retarget(self.state.selected), turn_page=False)  # the user's page stays
         self.status(f"{comparison.motion.name}: {comparison.n_frames} frames, {len(comparison.results)} retargets")
         self.comparison_ready.emit()
+
+    # --- corrections (`app.retarget_fixing`) ---
+    def corrected(self, result: MethodResult, corrections: Corrections) -> MethodResult:
+        """``result``'s method retarget with ``corrections`` instead of its own, measured against the clip shown."""
+        comparison = self.comparison
+        source_asm = self.state.semantics[(id(comparison.motion), id(comparison.source))][1]
+        return corrected_result(result, corrections, comparison.motion, comparison.source, source_asm)
+
+    def show_result(self, key: ResultKey, result: MethodResult) -> None:
+        """``result`` in place of the retarget ``key`` (a correction, its undo or redo): its cell, the scores, the
+        heatmap and the curves follow at once. A retarget not on screen keeps it for when it comes back (an
+        unticked method's, a removed target's)."""
+        if key in self._spare:
+            self._spare[key] = result
+        if key in self.state.results:
+            self.state.results[key] = result
+        keys = self._shown_keys()
+        if key not in keys:
+            return
+        index = keys.index(key)
+        results = list(self.comparison.results)
+        results[index] = result
+        self.comparison = dataclasses.replace(self.comparison, results=results)
+        self.view.replace_result(index, self.comparison)
+        self.scores.show_comparison(self.comparison)
+        self.heatmap_choice.setItemText(index, label(result))
+        self.select(self.state.selected if self.state.selected in keys else key, turn_page=False)
+        self.result_changed.emit()
 
     # --- progress ---
     def _show_progress(self) -> None:

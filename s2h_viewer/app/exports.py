@@ -23,7 +23,8 @@ from s2h_viewer.retarget.progress import Cancelled
 def caption_for(mode: CompareMode, frame: int) -> str:
     comparison, result = mode.comparison, mode.selected_result()
     return caption_text(comparison.motion.name, frame, comparison.n_frames, comparison.motion.fps,
-                        label(result).split(" -> ")[0], result.target.name)
+                        label(result).split(" -> ")[0] + (" (fixed)" if result.corrections else ""),
+                        result.target.name)
 
 
 def suggested_name(mode: CompareMode, suffix: str, frame: int | None = None) -> str:
@@ -133,3 +134,17 @@ def export_motion(mode: CompareMode, path: str, frames: range | None = None) -> 
                                      meta={**motion.meta, "frames": [frames.start, frames[-1]]})
     save_motion_file(path, motion, result.target)
     return Path(path)
+
+
+def export_corrections(mode: CompareMode, motion_path: str | Path) -> Path | None:
+    """Beside a motion just exported from the selected retarget: the sidecar of its corrections (`io.corrections`),
+    or, without corrections, none (an earlier export's sidecar there is removed: it would tell of corrections
+    the motion no longer has). Returns the sidecar written, or None."""
+    from s2h_viewer.io.corrections import is_corrections_file, sidecar_path
+    result = mode.selected_result()
+    sidecar = sidecar_path(motion_path)
+    if not result.corrections:
+        if is_corrections_file(sidecar):
+            sidecar.unlink(missing_ok=True)
+        return None
+    return mode.fixing.save(sidecar, result)

@@ -12,7 +12,7 @@ from PySide6.QtCore import QSettings, QTimer, Signal
 from PySide6.QtGui import QAction, QActionGroup, QKeySequence, QUndoGroup
 from PySide6.QtWidgets import QDialog, QFileDialog, QMainWindow, QMessageBox, QTabWidget
 
-from s2h_viewer.app import exports
+from s2h_viewer.app import exports, retarget_fixing
 from s2h_viewer.app.annotate_mode import AnnotateMode, ask, os_problem
 from s2h_viewer.app.batch_browser import BatchBrowser
 from s2h_viewer.app.compare_mode import (ANGLE_CURVE, ASM_CURVE, RESIDUAL_CURVE, SIDEWAYS_CURVE, CompareMode,
@@ -38,7 +38,7 @@ RIG_FILTER = "Rigs (*.glb *.gltf *.vrm *.fbx)"  # hand files with bones to map
 #: Help's mouse sections, (heading, (gesture, what it does)...), each list kept by the widget the mouse acts on
 #: (the keys are read from the menus' own actions, `MainWindow.shortcut_lines`)
 MOUSE_SECTIONS = (("Mouse, in the 3D views of both tabs", vtk_widget.MOUSE),
-                  ("Mouse, in Compare", compare_view.MOUSE + error_curve.MOUSE),
+                  ("Mouse, in Compare", compare_view.MOUSE + retarget_fixing.MOUSE + error_curve.MOUSE),
                   ("Mouse, in Annotate", annotation_view.MOUSE))
 
 
@@ -224,6 +224,11 @@ class MainWindow(QMainWindow):
                      "Ctrl+PgDown")
         self._action(view_menu, "Previous page of targets (grid)", lambda: self.view.set_page(self.view.page - 1),
                      "Ctrl+PgUp")
+        fix_menu = bar.addMenu("Fi&x")
+        self.compare.fixing.fill_menu(fix_menu)
+        fix_menu.addSeparator()
+        self._action(fix_menu, "Save corrections of the selected retarget...", self.save_corrections)
+        self._action(fix_menu, "Load corrections onto the selected retarget...", self.load_corrections)
         play = bar.addMenu("&Playback")
         timeline = self.timeline
         self._action(play, "Play / pause", timeline.toggle, "Space")
@@ -239,7 +244,7 @@ class MainWindow(QMainWindow):
         help_menu = bar.addMenu("&Help")
         self._action(help_menu, "Keyboard shortcuts", self.show_shortcuts, "F1")
         # a disabled menu's actions are greyed and their shortcuts off (the targets menu: in `_follow_mode`)
-        self._compare_only = [*compare_only, methods_menu, view_menu, play]
+        self._compare_only = [*compare_only, methods_menu, view_menu, fix_menu, play]
         keys = open_hand.shortcut().toString(QKeySequence.SequenceFormat.NativeText)
         self.annotate.view.set_hint(f"Open a hand to annotate: Annotate > {open_hand.text().rstrip('.')} ({keys}), "
                                     f"or drop a GLB, glTF or FBX file here.")
@@ -527,6 +532,8 @@ class MainWindow(QMainWindow):
     def load_motion(self, path: str) -> None:
         from s2h_viewer.io.files import load_motion_file
         from s2h_viewer.samples import load_sample_hand
+        if not self.compare.fixing.confirm_discard(f"opening {Path(path).name}"):
+            return
         try:
             motion, rig = load_motion_file(path, options=self.open_options)
             unit = self._chosen_unit(path, rig) if rig is not None else ""
@@ -678,11 +685,48 @@ class MainWindow(QMainWindow):
             return None
         try:
             written = exports.export_motion(self.compare, path, frames)
+            fixes = exports.export_corrections(self.compare, written)
         except S2HError as exc:
             self.error(str(exc))
             return None
+        except OSError as exc:
+            self.error(f"{path}: could not write its corrections sidecar ({exc.strerror or exc})")
+            return None
         sidecar = export_sidecar(written, result.target)
-        return self._wrote(written, f" and its TBS frames {sidecar.name}" if sidecar else "")
+        parts = ([f"its TBS frames {sidecar.name}"] if sidecar is not None else []) + (
+            [f"its corrections {fixes.name}"] if fixes is not None else [])
+        return self._wrote(written, f" and {' and '.join(parts)}" if parts else "")
+
+    def save_corrections(self, path: str | None = None) -> Path | None:
+        """Fix > Save corrections: the selected retarget's corrections as a sidecar (`io.corrections`)."""
+        if self.comparison is None:
+            return None
+        result = self.compare.selected_result()
+        if not result.corrections:
+            self.statusBar().showMessage(f"{exports.label(result)} has no corrections to save", STATUS_MS_EXPORT)
+            return None
+        path = self._ask_to_save(f"Save corrections of {exports.label(result)}", "Corrections (*.corrections.json)",
+                                 path, lambda: exports.suggested_name(self.compare, ".corrections.json"))
+        if not path:
+            return None
+        try:
+            return self._wrote(self.compare.fixing.save(path))
+        except OSError as exc:
+            self.error(f"{path}: could not write ({exc.strerror or exc})")
+            return None
+
+    def load_corrections(self, path: str | None = None) -> None:
+        """Fix > Load corrections: a sidecar's corrections applied to the selected retarget (undoable)."""
+        if self.comparison is None:
+            return
+        if path is None:
+            self._ask_to_open("Load corrections onto the selected retarget", "Corrections (*.corrections.json)",
+                              self.load_corrections, str(self._export_dir()))
+            return
+        try:
+            self.compare.fixing.load(path)
+        except S2HError as exc:
+            self.error(str(exc))
 
     # --- annotate mode's entry points ---
     def open_hand_to_annotate(self) -> None:
@@ -763,7 +807,8 @@ class MainWindow(QMainWindow):
         return True
 
     def closeEvent(self, event) -> None:
-        if not self.annotate.confirm_discard("quitting") or not self._confirm_quit_during_export():
+        if not self.annotate.confirm_discard("quitting") or not self.compare.fixing.confirm_discard("quitting") or \
+                not self._confirm_quit_during_export():
             event.ignore()
             return
         self.settings.setValue("window/geometry", self.saveGeometry())

@@ -55,4 +55,5 @@ def scripted_window(size: tuple[int, int] = (1400, 900)) -> Iterator[MainWindow]
             yield window
         finally:
             window.undo_stack.clear()  # a script's annotation edits are throwaway: no "save?" question
+            window.compare.fixing.forget_unsaved()  # and so are its corrections
             window.close()

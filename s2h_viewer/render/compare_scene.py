@@ -25,7 +25,7 @@ from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.skinning import skin_vertices
 from s2h_viewer.render.keypoint_dots import KeypointDots
 from s2h_viewer.render.scene import BONE_COLOUR, SKIN_COLOUR, display_hand, skeleton, surface, to_view
-from s2h_viewer.retarget.comparison import Comparison
+from s2h_viewer.retarget.comparison import Comparison, MethodResult
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.semantics.contacts import CONTACT_PAIRS, SITES, detect_contacts, pad_centres
 
@@ -103,6 +103,7 @@ class PosedHand:
         self.keypoints: KeypointDots | None = None  # a tracked source's recorded keypoints
         self.renderer = plotter.renderer  # the subplot it is drawn in
         self.warned = False  # its target's frames are unsure (`annotate.trust`): framed in the banner's colour
+        self.label: CellLabel | None = None  # its cell's text
         self.border: vtkActor2D | None = None
         self.frame, self.playing = 0, False
         self.levels: list[Skin] = []  # the full skin, then the one drawn while playing (if any)
@@ -190,6 +191,15 @@ class PosedHand:
             skin.error[:] = posed.error
             skin.mesh.GetPointData().GetArray("error").Modified()
 
+    def set_result(self, pose: HandPose, joint_error: np.ndarray | None, text: str) -> None:
+        """Another motion on the same hand (a corrected retarget): posed, coloured and labelled from it now."""
+        self.pose, self.joint_error = pose, joint_error
+        if self.overlay is not None:
+            self.overlay.set_pose(pose)
+        if self.label is not None:
+            self.label.set_text(text)
+        self.show(self.frame)
+
     def set_framed(self, selected: bool) -> None:
         """Frame the cell: in `SELECTED_COLOUR` when it is the selected retarget, else in the banner's colour if
         its frames are unsure, else not at all."""
@@ -253,6 +263,10 @@ class CellLabel:
     text: str
     fitted: tuple = ()  # the cell's size and the font it was last fitted to
     bottom: bool = False  # a banner: at the cell's bottom left, one line
+
+    def set_text(self, text: str) -> None:
+        """New text, fitted to its cell at the next `fit_cells`."""
+        self.text, self.fitted = text, ()
 
     def fit(self, width: int, height: int, font: tuple[int, int]) -> None:
         """Draw it in a ``width`` x ``height`` pixel cell with ``font`` (`label_font`'s size and lines kept)."""
@@ -369,6 +383,14 @@ def fit_cells(plotter: pv.Plotter, hands: list["PosedHand"], labels: list[CellLa
         fit_view_angle(plotter, shown[0].renderer)
 
 
+def result_label(result: MethodResult) -> str:
+    """A retarget's cell text: method and target, its S_finger and kept scores (and its corrections, if any)."""
+    fixed = f", {result.corrections.n_keys} fix{'es' * (result.corrections.n_keys != 1)}" if result.corrections \
+        else ""
+    return (f"{METHODS[result.method].label} -> {result.target.name}\nS_finger {result.scores.s_finger:.3f}\n"
+            f"kept {result.scores.signature_kept:.3f}{fixed}")
+
+
 def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
              display_faces: int | None = DISPLAY_FACES,
              playing_faces: int | None = None) -> tuple[list[PosedHand], list[CellLabel]]:
@@ -394,9 +416,8 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
                                                      f"\ntracked: fit residual {np.nanmean(fit.residual_mm):.1f} mm"))]
     for row, target in enumerate(dict.fromkeys(id(r.target) for r in comparison.results)):
         results = [r for r in comparison.results if id(r.target) == target]
-        panels += [((row, 1 + k), r.target, r.pose, r.joint_error, source_contacts,
-                    f"{METHODS[r.method].label} -> {r.target.name}\nS_finger {r.scores.s_finger:.3f}\n"
-                    f"kept {r.scores.signature_kept:.3f}") for k, r in enumerate(results)]
+        panels += [((row, 1 + k), r.target, r.pose, r.joint_error, source_contacts, result_label(r))
+                   for k, r in enumerate(results)]
     hands, labels = [], []
     for cell, hand, pose, error, expected, label in panels:
         plotter.subplot(*cell)
@@ -409,7 +430,8 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
         if cell == (0, 0) and fit is not None:
             posed.keypoints = KeypointDots(plotter, hand, fit.keypoints, fit.filled)
         hands.append(posed)
-        labels.append(add_label(plotter, label))
+        posed.label = add_label(plotter, label)
+        labels.append(posed.label)
         warning = frame_warning(hand) if expected is not None else None
         if warning is not None:  # the banner at the cell's bottom, the cell framed: it is not the next row's
             labels.append(add_banner(plotter, f"! {warning.banner}"))
@@ -504,13 +526,9 @@ class Overlays:
     and invented (made where the source makes none); on the source, its own (kept)."""
 
     def __init__(self, plotter: pv.Plotter, hand: HandModel, pose: HandPose, expected: np.ndarray | None):
-        self.hand, self.pose = hand, pose
-        self.contacts = detect_contacts(hand, pose)
-        self.lost = None if expected is None else expected & ~self.contacts
-        self.invented = None if expected is None else self.contacts & ~expected
-        self.states = [self.contacts if expected is None else self.contacts & expected, self.lost, self.invented]
+        self.hand, self.expected = hand, expected
+        self.set_pose(pose)
         self.legend: ContactLegend | None = None  # on the source's overlays: the one legend of the grid
-        self.sites = to_view(hand, contact_sites(hand, pose))  # (T, 6, 3)
         self.bones = skeleton(hand, pose, 0)
         self.polys = [pv.PolyData(self.sites[0]) for _ in CONTACT_STATES]
         self.links, self.lost_links, self.invented_links = self.polys  # kept, lost, invented
@@ -527,6 +545,15 @@ class Overlays:
             actor.mapper.SetRelativeCoincidentTopologyLineOffsetParameters(0.0, ON_TOP_OFFSET)
         self.show_skeleton = self.show_contacts = False
         self._update_visibility()
+
+    def set_pose(self, pose: HandPose) -> None:
+        """The contacts in their states and the pads of ``pose`` (every frame)."""
+        self.pose, expected = pose, self.expected
+        self.contacts = detect_contacts(self.hand, pose)
+        self.lost = None if expected is None else expected & ~self.contacts
+        self.invented = None if expected is None else self.contacts & ~expected
+        self.states = [self.contacts if expected is None else self.contacts & expected, self.lost, self.invented]
+        self.sites = to_view(self.hand, contact_sites(self.hand, pose))  # (T, 6, 3)
 
     def fit(self, short_side: int) -> None:
         """Bones, links and dots sized for a cell ``short_side`` pixels on its short side (`OVERLAY_PX`)."""

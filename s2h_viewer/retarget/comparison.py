@@ -6,7 +6,8 @@ Pure computation (no Qt): the app runs `build_comparison` off the GUI thread and
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import dataclasses
+from dataclasses import dataclass, field
 
 import numpy as np
 import torch
@@ -14,6 +15,7 @@ import torch
 from s2h_viewer.hand.kinematics import HandPose, forward_kinematics
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
+from s2h_viewer.retarget.corrections import Corrections
 from s2h_viewer.retarget.methods import retarget
 from s2h_viewer.retarget.progress import report, stage
 from s2h_viewer.semantics.asm import semantic_matrix
@@ -22,7 +24,7 @@ from s2h_viewer.semantics.metrics import RetargetScores, per_joint_cosine, score
 
 @dataclass
 class MethodResult:
-    """One method's retarget onto one target hand."""
+    """One method's retarget onto one target hand (with a person's corrections on top, if any)."""
 
     method: str
     target: HandModel
@@ -30,6 +32,12 @@ class MethodResult:
     pose: HandPose  # FK of every frame (float32, no grad)
     cell_error: np.ndarray  # (T, 20, 29) 1 - cosine per ASM cell, NaN where masked
     scores: RetargetScores
+    corrections: Corrections = field(default_factory=Corrections)  # applied to ``motion`` (and all above)
+    base: "MethodResult | None" = None  # the method's own retarget, before the corrections (None: this is it)
+
+    @property
+    def uncorrected(self) -> "MethodResult":
+        return self.base if self.base is not None else self
 
     @property
     def joint_error(self) -> np.ndarray:
@@ -67,12 +75,32 @@ def compute_result(motion: Motion, source: HandModel, source_asm: torch.Tensor, 
     with stage(0.0, 0.9):
         moved = retarget(motion, source, target, method)
     report(0.9)
+    result = _measured(motion, source, source_asm, target, method, moved)
+    report(1.0)
+    return result
+
+
+def _measured(motion: Motion, source: HandModel, source_asm: torch.Tensor, target: HandModel, method: str,
+              moved: Motion) -> MethodResult:
+    """``moved`` (``motion`` retargeted onto ``target``) with its FK, ASM error and scores against the source."""
     with torch.no_grad():
         pose = forward_kinematics(target, moved.q_tbs)
         cell_error = 1.0 - per_joint_cosine(source_asm, semantic_matrix(pose)).numpy()
     scores = score_retarget(source, motion.q_tbs, target, moved.q_tbs)
-    report(1.0)
     return MethodResult(method, target, moved, pose, cell_error, scores)
+
+
+def corrected_result(result: MethodResult, corrections: Corrections, motion: Motion, source: HandModel,
+                     source_asm: torch.Tensor) -> MethodResult:
+    """The method's retarget under ``result`` (before any correction) with ``corrections`` applied, measured
+    again against the source (``motion`` on ``source``, its ASM ``source_asm``); no corrections: that retarget."""
+    base = result.uncorrected
+    if not corrections:
+        return base
+    moved = dataclasses.replace(base.motion, q_tbs=corrections.apply(base.motion.q_tbs),
+                                meta={**base.motion.meta, "corrections": corrections.describe()})
+    measured = _measured(motion, source, source_asm, base.target, base.method, moved)
+    return dataclasses.replace(measured, corrections=corrections, base=base)
 
 
 def build_comparison(motion: Motion, source: HandModel, targets: list[HandModel], methods: list[str]) -> Comparison:

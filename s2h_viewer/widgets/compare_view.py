@@ -22,8 +22,8 @@ from PySide6.QtWidgets import QHBoxLayout, QLabel, QToolButton, QVBoxLayout, QWi
 from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
 
 from s2h_viewer.render.compare_scene import (PLAYING_FACES, CellLabel, Framing, Ghost, PosedHand, PosedSkin,
-                                             ViewOptions, apply_options, fit_cells, grid_layout, populate, show_alone,
-                                             solo_ghost)
+                                             ViewOptions, apply_options, fit_cells, grid_layout, populate,
+                                             result_label, show_alone, solo_ghost)
 from s2h_viewer.retarget.comparison import Comparison, target_ids, target_page
 from s2h_viewer.widgets.vtk_widget import PlotterWidget, window_plotter
 
@@ -40,6 +40,7 @@ class CompareView(QWidget):
     drawn = Signal()
     solo_changed = Signal(int)  # the hand shown alone (index into the grid's hands), -1 for the grid
     page_changed = Signal(int)  # the page of targets shown
+    grid_built = Signal()  # a new render window and widget hold the grid (a new comparison, page or size)
 
     def __init__(self, parent: QWidget | None = None):
         super().__init__(parent)
@@ -184,6 +185,29 @@ class CompareView(QWidget):
                 renderer.ResetCameraClippingRange()
         self._frame_selected()
         self.show_frame(min(self.frame, comparison.n_frames - 1))
+        self.grid_built.emit()
+
+    def add_bar(self, bar: QWidget) -> None:
+        """A bar over the 3D view, under the page bar (its owner shows and hides it)."""
+        self._layout.insertWidget(1, bar)
+
+    def replace_result(self, index: int, comparison: Comparison) -> None:
+        """Result ``index`` of ``comparison`` (the one shown, with that result changed: a corrected retarget) drawn
+        in place, in its cell if it is on the page shown; nothing else is rebuilt."""
+        self.full = comparison
+        self.comparison, self.offset = target_page(comparison, self.page, self.rows)
+        hand = 1 + index - self.offset
+        if 1 <= hand < len(self._hands):
+            result = comparison.results[index]
+            self._hands[hand].set_result(result.pose, result.joint_error, result_label(result))
+            if self._ghost is not None:
+                self._ghost.follow()
+            if self.interactor is not None:
+                self.interactor.update()
+
+    def solo_hand(self) -> PosedHand | None:
+        """The retarget shown alone, or None (the grid, or the source alone)."""
+        return self._hands[self.solo] if self.solo >= 1 and self.solo < len(self._hands) else None
 
     def show_frame(self, frame: int) -> None:
         self.frame = frame

@@ -41,14 +41,15 @@ class Grab:
 
 
 class RotationRing(QObject):
-    """The ring in ``widget``'s plotter (a `widgets.vtk_widget.PlotterWidget`): ``on_begin()``,
-    ``on_turn(degrees since the grab)``, ``on_end()`` for a drag,
-    ``on_click(x, y)`` (VTK display pixels) for a click that missed the ring."""
+    """The ring in ``widget``'s plotter (a `widgets.vtk_widget.PlotterWidget`), in ``renderer`` (default: the
+    plotter's current one; a cell of a grid): ``on_begin()``, ``on_turn(degrees since the grab)``, ``on_end()``
+    for a drag, ``on_click(x, y)`` (VTK display pixels) for a click that missed the ring."""
 
     def __init__(self, widget, on_begin: Callable[[], None], on_turn: Callable[[float], None],
-                 on_end: Callable[[], None], on_click: Callable[[int, int], None]):
+                 on_end: Callable[[], None], on_click: Callable[[int, int], None], renderer=None):
         super().__init__(widget)
         self.widget, self.plotter = widget, widget.plotter
+        self.renderer = renderer if renderer is not None else widget.plotter.renderer
         self.on_begin, self.on_turn, self.on_end, self.on_click = on_begin, on_turn, on_end, on_click
         self.mesh = pv.PolyData()
         self.actor = None
@@ -82,12 +83,18 @@ class RotationRing(QObject):
         return handler(round(position.x() * scale), round((self.widget.height() - position.y() - 1) * scale))
 
     def attach(self) -> None:
-        """Add the ring's actor to the plotter (again after ``plotter.clear()``)."""
-        self.actor = self.plotter.add_mesh(self.mesh, color=RING_COLOUR, name="rotation_ring", reset_camera=False,
-                                           smooth_shading=True)
+        """Add the ring's actor to its renderer (again after ``plotter.clear()``)."""
+        self.actor = pv.Actor(mapper=pv.DataSetMapper(self.mesh))  # the tube's own normals: smooth shading
+        self.actor.prop.color = RING_COLOUR
+        self.renderer.add_actor(self.actor, name="rotation_ring", reset_camera=False, render=False)
         self._picker.InitializePickList()
         self._picker.AddPickList(self.actor)
         self._hovered = False
+
+    def set_visible(self, visible: bool) -> None:
+        """Shown and grabbable, or neither."""
+        if self.actor is not None:
+            self.actor.visibility = visible
 
     def place(self, centre: np.ndarray, frame: np.ndarray, radius: float) -> None:
         """Put the ring about ``frame``'s twist axis (column 0) at ``centre``."""
@@ -99,7 +106,7 @@ class RotationRing(QObject):
     # --- geometry of the pointer ---
     def _ray(self, x: int, y: int) -> tuple[np.ndarray, np.ndarray]:
         """The ray under display pixel (x, y): its origin on the near plane and its direction."""
-        renderer = self.plotter.renderer
+        renderer = self.renderer
         ends = []
         for depth in (0.0, 1.0):
             renderer.SetDisplayPoint(x, y, depth)
@@ -109,7 +116,7 @@ class RotationRing(QObject):
         return ends[0], ends[1] - ends[0]
 
     def _to_display(self, point: np.ndarray) -> np.ndarray:
-        renderer = self.plotter.renderer
+        renderer = self.renderer
         renderer.SetWorldPoint(*point, 1.0)
         renderer.WorldToDisplay()
         return np.array(renderer.GetDisplayPoint()[:2])
@@ -137,7 +144,7 @@ class RotationRing(QObject):
 
     def _over_ring(self, x: int, y: int) -> bool:
         return self.actor is not None and self.actor.GetVisibility() and \
-            bool(self._picker.Pick(x, y, 0.0, self.plotter.renderer)) and self._picker.GetActor() is self.actor
+            bool(self._picker.Pick(x, y, 0.0, self.renderer)) and self._picker.GetActor() is self.actor
 
     def _highlight(self, on: bool) -> None:
         if on != self._hovered and self.actor is not None:

@@ -103,7 +103,10 @@ class ScoresTable(QTableWidget):
             values = result.scores.as_dict()
             warning = frame_warning(result.target)
             target = (f"! {result.target.name}", warning.describe()) if warning else (result.target.name,) * 2
-            cells = [(METHODS[result.method].label,) * 2, target]
+            method = METHODS[result.method].label
+            fixes = result.corrections
+            cells = [(f"{method} (fixed)", f"{method}, corrected: {fixes.describe()}") if fixes else (method,) * 2,
+                     target]
             cells += [_cell(key, values) for _, key, _ in COLUMNS[2:]]
             for col, (text, tip) in enumerate(cells):
                 item = QTableWidgetItem(text)

@@ -1,0 +1,375 @@
+"""Fixing a retarget in Compare (the Fix menu): in a retarget shown alone, click a joint and drag its ring to
+turn it about its bend, splay or twist axis at the current frame. Each drag is a key on the joint's offset
+curve (`retarget.corrections`) blended over the marked range (else the ease frames around it), undoable on
+Compare's undo stack; the cell, scores, heatmap and curves follow while the ring is dragged. Every motion
+export of the retarget carries its corrections, with a sidecar beside it recording them (`io.corrections`),
+which Fix > Load corrections and ``s2h retarget --corrections`` read back."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import shiboken6
+from PySide6.QtCore import QObject, QTimer
+from PySide6.QtGui import QAction, QKeySequence, QUndoCommand
+from PySide6.QtWidgets import QMenu, QMessageBox
+from vtkmodules.vtkRenderingCore import vtkRenderer
+
+from s2h_viewer.app.annotate_mode import ask
+from s2h_viewer.hand import topology as topo
+from s2h_viewer.io.corrections import CorrectionsFile, load_corrections, save_corrections
+from s2h_viewer.render.compare_scene import ON_TOP_OFFSET
+from s2h_viewer.render.scene import to_view
+from s2h_viewer.retarget.compare_state import ResultKey
+from s2h_viewer.retarget.comparison import MethodResult
+from s2h_viewer.retarget.corrections import AXES, Corrections, spaced_joint, turn_about
+from s2h_viewer.retarget.methods import METHODS
+from s2h_viewer.widgets.correction_bar import CorrectionBar
+from s2h_viewer.widgets.rotation_handle import RotationRing
+
+#: while the ring is dragged the whole clip is measured again at most this often (ms)
+LIVE_MS = 40
+#: a click this many pixels from a joint on screen, or nearer, picks it
+PICK_PIXELS = 24
+#: the ring's radius as a share of the hand's length, and at least this many pixels on screen when placed
+RING_RADIUS, RING_PX = 0.09, 48
+#: the mouse in a retarget shown alone, for Help's list
+MOUSE = (("click a joint of a retarget shown alone", "pick it for fixing (its ring appears)"),
+         ("drag the ring", "turn the joint at this frame: a correction key (Fix menu)"))
+#: each joint a click can pick (tips pick the joint that moves them): (joint index, articulated index)
+PICKABLE = [(int(j), a) for a, j in enumerate(topo.ARTICULATED_JOINTS)] + \
+    [(int(t), topo.ARTICULATED_NAMES.index(topo.JOINT_NAMES[t - 1])) for t in topo.TIP_JOINTS]
+
+
+class FixCommand(QUndoCommand):
+    """One change of a retarget's corrections (a drag, a deleted key, a range): undo and redo show the retarget
+    measured before and after, nothing recomputed."""
+
+    def __init__(self, fixing: "RetargetFixing", key: ResultKey, before: MethodResult, after: MethodResult,
+                 text: str):
+        super().__init__(text)
+        self.fixing, self.key, self.before, self.after = fixing, key, before, after
+
+    def redo(self) -> None:
+        self.fixing.mode.show_result(self.key, self.after)
+
+    def undo(self) -> None:
+        self.fixing.mode.show_result(self.key, self.before)
+
+
+@dataclass
+class Drag:
+    """A drag of the ring under way: what it turns, from what, over which frames; the turn so far."""
+
+    key: ResultKey
+    before: MethodResult
+    joint: int
+    frame: int
+    axis: str
+    frames: tuple[int, int]  # a new curve's start and end
+    sense: float  # +1, or -1 where the view mirrors the hand (a turn on screen is the other way in hand space)
+    degrees: float = 0.0
+
+    def corrections(self) -> Corrections:
+        turn = turn_about(self.axis, self.sense * self.degrees)
+        return self.before.corrections.with_turn(self.joint, self.frame, turn, *self.frames)
+
+
+class RetargetFixing(QObject):
+    """The fixing of Compare mode ``mode``'s retargets: the bar over a retarget shown alone, the ring, the Fix
+    menu's actions, the corrections' saving and loading."""
+
+    def __init__(self, mode):
+        super().__init__(mode)
+        self.mode = mode
+        self.bar = CorrectionBar()
+        mode.view.add_bar(self.bar)
+        self.joint: int | None = None  # the articulated joint picked
+        self.ring: RotationRing | None = None
+        self._drag: Drag | None = None
+        self._saved: dict[ResultKey, Corrections] = {}  # the corrections last exported or saved, per retarget
+        self._live = QTimer(self)
+        self._live.setSingleShot(True)
+        self._live.setInterval(LIVE_MS)
+        self._live.timeout.connect(self._measure_drag)
+        mode.view.grid_built.connect(self._follow_solo)
+        mode.view.solo_changed.connect(self._follow_solo)
+        mode.timeline.frame_changed.connect(lambda _: self._place())
+        mode.result_changed.connect(self._place)
+        self.bar.axis_choice.currentIndexChanged.connect(lambda _: self._place())
+        self.bar.delete_key.connect(self.delete_key)
+        self.bar.clear_joint.connect(self.clear_joint)
+
+    # --- what is being fixed ---
+    def _solo(self) -> tuple[ResultKey, MethodResult] | None:
+        """The retarget shown alone and its key, or None (the grid, the source alone, nothing computed)."""
+        view = self.mode.view
+        if view.solo_hand() is None or self.mode.comparison is None:
+            return None
+        index = view.result_of_hand(view.solo)
+        return self.mode._shown_keys()[index], self.mode.comparison.results[index]
+
+    def _follow_solo(self, *_) -> None:
+        """A retarget shown alone gets the bar and a ring in its cell; the grid neither."""
+        hand = self.mode.view.solo_hand()
+        self._drop_ring()
+        self.bar.setVisible(hand is not None)
+        if hand is None:
+            return
+        self.ring = RotationRing(self.mode.view.interactor, self._begin, self._turn, self._end, self._clicked,
+                                 renderer=hand.renderer)
+        self.ring.attach()
+        mapper = self.ring.actor.mapper  # drawn over the skin, like the contact overlay
+        mapper.SetRelativeCoincidentTopologyPolygonOffsetParameters(0.0, ON_TOP_OFFSET)
+        self._place()
+
+    def _drop_ring(self) -> None:
+        """The ring out of its cell (its grid may be gone already: then it went with it)."""
+        ring, self.ring, self._drag = self.ring, None, None
+        if ring is None or not shiboken6.isValid(ring):
+            return
+        ring.widget.removeEventFilter(ring)
+        if ring.actor is not None and ring.plotter is self.mode.view.plotter:
+            ring.renderer.remove_actor(ring.actor, reset_camera=False, render=False)
+        ring.deleteLater()
+
+    def _place(self, *_) -> None:
+        """The ring about the picked joint's axis as the retarget poses it at the current frame (hidden without a
+        joint); the bar says what the joint's corrections are."""
+        shown = self._solo()
+        if self.ring is None or shown is None or self._drag is not None:
+            return
+        key, result = shown
+        if self.joint is None:
+            self.ring.set_visible(False)
+            self.bar.say(self._hint(result))
+        else:
+            frame = self.mode.timeline.frame
+            joint = int(topo.ARTICULATED_JOINTS[self.joint])
+            target = result.target
+            centre = to_view(target, result.pose.positions[frame, joint].numpy().astype(np.float64))
+            axes = to_view(target, result.pose.frames[frame, joint].numpy().astype(np.float64).T).T
+            first = AXES.index(self.bar.axis)
+            self.ring.place(centre, axes[:, [first, (first + 1) % 3, (first + 2) % 3]], self.ring_radius(centre, target))
+            self.ring.set_visible(True)
+            self.bar.say(self._joint_text(result))
+        self.mode.view.interactor.update()
+
+    def ring_radius(self, centre: np.ndarray, target) -> float:
+        """`RING_RADIUS` of the hand's length, or `RING_PX` on screen at ``centre`` if that is more: a ring to
+        grab however small the hand is drawn."""
+        renderer, length = self.ring.renderer, target.hand_length
+        up = np.asarray(renderer.GetActiveCamera().GetViewUp())
+        ends = []
+        for point in (centre, centre + length * up):
+            renderer.SetWorldPoint(*point, 1.0)
+            renderer.WorldToDisplay()
+            ends.append(np.asarray(renderer.GetDisplayPoint()[:2]))
+        per_unit = np.linalg.norm(ends[1] - ends[0]) / length  # display pixels per unit of length there
+        return max(RING_RADIUS * length, RING_PX / per_unit if per_unit > 0 else 0.0)
+
+    def _hint(self, result: MethodResult) -> str:
+        from s2h_viewer.widgets.correction_bar import HINT
+        fixes = result.corrections
+        return HINT + (f". Fixed: {fixes.describe()}" if fixes else "")
+
+    def _joint_text(self, result: MethodResult) -> str:
+        name = spaced_joint(topo.ARTICULATED_NAMES[self.joint])
+        correction = result.corrections.of(self.joint)
+        if correction is None:
+            return f"{name}: no corrections; drag its ring to turn it about its {self.bar.axis} axis at this frame"
+        frames = ", ".join(str(k.frame) for k in correction.keys)
+        return (f"{name}: keys at {frames}, blended over frames {correction.start}-{correction.end}; now "
+                f"{np.degrees(correction.offset_at(self.mode.timeline.frame).magnitude()):.0f} deg off the method's")
+
+    # --- the mouse ---
+    def _clicked(self, x: int, y: int) -> None:
+        """A click in the cell (VTK display pixels) picks the joint nearest to it on screen, or none."""
+        shown = self._solo()
+        if shown is None:
+            return
+        _, result = shown
+        positions = to_view(result.target, result.pose.positions[self.mode.timeline.frame].numpy().astype(np.float64))
+        renderer: vtkRenderer = self.ring.renderer
+        on_screen = []
+        for joint, _ in PICKABLE:
+            renderer.SetWorldPoint(*positions[joint], 1.0)
+            renderer.WorldToDisplay()
+            on_screen.append(renderer.GetDisplayPoint()[:2])
+        distance = np.linalg.norm(np.asarray(on_screen) - (x, y), axis=1)
+        self.joint = PICKABLE[int(distance.argmin())][1] if distance.min() <= PICK_PIXELS else None
+        self._place()
+
+    def pick(self, joint: str) -> None:
+        """Pick ``joint`` (an articulated joint's name) as a click on it would (keyboard users, scripts)."""
+        self.joint = topo.ARTICULATED_NAMES.index(joint)
+        self._place()
+
+    def _key_frames(self, frame: int) -> tuple[int, int]:
+        """A new key's curve: the marked range if it holds ``frame``, else the ease frames around it."""
+        marked = self.mode.timeline.marked
+        if marked is not None and frame in marked:
+            return marked.start, marked[-1]
+        last = self.mode.comparison.n_frames - 1
+        return max(0, frame - self.bar.ease_in.value()), min(last, frame + self.bar.ease_out.value())
+
+    def _begin(self) -> None:
+        shown = self._solo()
+        if shown is None or self.joint is None:
+            return
+        self.mode.timeline.set_playing(False)
+        key, result = shown
+        frame = self.mode.timeline.frame
+        sense = float(np.sign(np.linalg.det(result.target.palm_frame)))
+        self._drag = Drag(key, result, self.joint, frame, self.bar.axis, self._key_frames(frame), sense)
+
+    def _turn(self, degrees: float) -> None:
+        if self._drag is not None:
+            self._drag.degrees = degrees
+            if not self._live.isActive():
+                self._live.start()
+
+    def _measure_drag(self) -> None:
+        """The clip measured with the turn so far: the cell, scores and curves show it while dragging."""
+        drag = self._drag
+        if drag is not None:
+            self.mode.show_result(drag.key, self.mode.corrected(drag.before, drag.corrections()))
+            self.bar.say(f"{spaced_joint(topo.ARTICULATED_NAMES[drag.joint])}: {drag.axis} "
+                         f"{drag.sense * drag.degrees:+.0f} deg at frame {drag.frame} (blended over frames "
+                         f"{drag.frames[0]}-{drag.frames[1]})")
+
+    def _end(self) -> None:
+        drag, self._drag = self._drag, None
+        self._live.stop()
+        if drag is None:
+            return
+        if abs(drag.degrees) < 0.5:
+            self.mode.show_result(drag.key, drag.before)  # nothing turned: no key
+            self._place()
+            return
+        after = self.mode.corrected(drag.before, drag.corrections())
+        self._push(drag.key, drag.before, after, f"fix {spaced_joint(topo.ARTICULATED_NAMES[drag.joint])}: "
+                                                 f"{drag.axis} {drag.sense * drag.degrees:+.0f} deg at frame "
+                                                 f"{drag.frame}")
+
+    def _push(self, key: ResultKey, before: MethodResult, after: MethodResult, text: str) -> None:
+        self.mode.undo_stack.push(FixCommand(self, key, before, after, text))
+        self._place()
+
+    # --- the Fix menu ---
+    def _change(self, change, text: str, needs_joint: bool = True) -> None:
+        """Apply ``change(corrections, joint)`` to the retarget shown alone (undoable), or say why not."""
+        shown = self._solo()
+        if shown is None:
+            self.mode.status("Fix: show a retarget alone first (double-click it, or Ctrl+M)")
+            return
+        if needs_joint and self.joint is None:
+            self.mode.status("Fix: click a joint of the hand first")
+            return
+        key, result = shown
+        corrections = change(result.corrections, self.joint)
+        if corrections == result.corrections:
+            self.mode.status(f"Fix: nothing to {text}")
+            return
+        self._push(key, result, self.mode.corrected(result, corrections), text)
+
+    def delete_key(self) -> None:
+        """The picked joint's key at the current frame taken away."""
+        frame = self.mode.timeline.frame
+        self._change(lambda c, j: c.without_key(j, frame), f"delete the key at frame {frame}")
+
+    def clear_joint(self) -> None:
+        self._change(lambda c, j: c.without_joint(j), "clear the joint's corrections")
+
+    def clear_all(self) -> None:
+        self._change(lambda c, j: Corrections(), "remove the retarget's corrections", needs_joint=False)
+
+    def use_marked_range(self) -> None:
+        marked = self.mode.timeline.marked
+        if marked is None:
+            self.mode.status("Fix: mark a range first (Playback > Mark in I, Mark out O)")
+            return
+        self._change(lambda c, j: c.with_range(j, marked.start, marked[-1]),
+                     f"blend over frames {marked.start}-{marked[-1]}")
+
+    def next_axis(self) -> None:
+        self.bar.next_axis()
+
+    def fill_menu(self, menu: QMenu) -> list[QAction]:
+        """The Fix menu's entries that act on the retarget shown alone, returned."""
+        actions = []
+        for text, slot, shortcut in (("Next ring axis (bend, splay, twist)", self.next_axis, "R"),
+                                     ("Delete the joint's key at this frame", self.delete_key, "Shift+K"),
+                                     ("Clear the joint's corrections", self.clear_joint, "Ctrl+Shift+K"),
+                                     ("Blend the joint's corrections over the marked range", self.use_marked_range,
+                                      None),
+                                     ("Remove every correction of the retarget", self.clear_all, None)):
+            action = QAction(text, menu)
+            if shortcut:
+                action.setShortcut(QKeySequence(shortcut))
+            action.triggered.connect(lambda _=False, run=slot: run())
+            menu.addAction(action)
+            actions.append(action)
+        return actions
+
+    # --- files ---
+    def corrections_file(self, result: MethodResult) -> CorrectionsFile:
+        comparison = self.mode.comparison
+        return CorrectionsFile(result.corrections, comparison.motion.name, comparison.n_frames, comparison.motion.fps,
+                               comparison.source.name, result.target.name, result.method)
+
+    def save(self, path: str | Path, result: MethodResult | None = None) -> Path:
+        """The selected retarget's corrections (or ``result``'s) written to ``path``; they count as saved."""
+        result = result or self.mode.selected_result()
+        written = save_corrections(path, self.corrections_file(result))
+        self.mark_saved(result)
+        return written
+
+    def mark_saved(self, result: MethodResult) -> None:
+        keys = self.mode._shown_keys()
+        index = next((i for i, r in enumerate(self.mode.comparison.results) if r is result), None)
+        if index is not None:
+            self._saved[keys[index]] = result.corrections
+
+    def load(self, path: str | Path) -> None:
+        """A corrections sidecar applied to the selected retarget (undoable); `InputFileError` if it does not fit."""
+        from s2h_viewer.errors import InputFileError
+        file = load_corrections(path)
+        problem = file.mismatch(self.mode.comparison.n_frames)
+        if problem is not None:
+            raise InputFileError(path, problem)
+        result = self.mode.selected_result()
+        key = self.mode._shown_keys()[self.mode.comparison.results.index(result)]
+        self._push(key, result, self.mode.corrected(result, file.corrections),
+                   f"load corrections from {Path(path).name}")
+        self._saved[key] = file.corrections
+
+    def unsaved(self) -> list[MethodResult]:
+        """The retargets on screen whose corrections were changed since they were last exported or saved."""
+        if self.mode.comparison is None:
+            return []
+        keys = self.mode._shown_keys()
+        return [r for k, r in zip(keys, self.mode.comparison.results)
+                if r.corrections != self._saved.get(k, Corrections())]
+
+    def forget_unsaved(self) -> None:
+        """Whatever is on screen counts as saved: nothing to ask about when the window closes (a discard)."""
+        if self.mode.comparison is not None:
+            self._saved.update({k: r.corrections for k, r in zip(self.mode._shown_keys(),
+                                                                  self.mode.comparison.results)})
+
+    def confirm_discard(self, doing: str) -> bool:
+        """True when no corrections would be lost by ``doing``, or the user chose to discard them."""
+        unsaved = self.unsaved()
+        if not unsaved:
+            return True
+        names = ", ".join(f"{METHODS[r.method].label} -> {r.target.name}" for r in unsaved)
+        choice = ask(self.mode.window(), "s2h-viewer: unsaved corrections",
+                     f"The corrections of {names} are not exported or saved. Discard them before {doing}?",
+                     [("Discard", QMessageBox.ButtonRole.DestructiveRole),
+                      ("Cancel", QMessageBox.ButtonRole.RejectRole)],
+                     "File > Export retargeted motion writes the corrected motion and a sidecar of its corrections; "
+                     "Fix > Save corrections writes the sidecar alone.")
+        return choice == 0

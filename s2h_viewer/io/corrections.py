@@ -1,0 +1,159 @@
+"""The corrections sidecar: a retarget's per-joint offset keys (`retarget.corrections`) as JSON, written
+beside every motion exported with corrections (``<motion file stem>.corrections.json``) and read back by
+the viewer (Fix > Load corrections) and ``s2h retarget --corrections FILE``.
+
+Schema (version 1)::
+
+    {"format": "s2h-corrections", "version": 1,
+     "clip": "gestures", "frames": 378, "fps": 30.0, "source": "birch", "target": "iris", "method": "tbs_copy",
+     "joints": [{"joint": "index_pip", "start": 20, "end": 60,
+                 "keys": [{"frame": 40, "rotation_deg": [0.0, 25.0, 0.0]}]}]}
+
+``rotation_deg``: the key's offset as a rotation vector in degrees in the joint's TBS frame (its components
+about twist, bend, splay). A file is hostile until checked: every count, name, frame and number is."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+from s2h_viewer.errors import InputFileError, reading, require_readable_file
+from s2h_viewer.hand import topology as topo
+from s2h_viewer.retarget.corrections import Corrections, JointCorrection, OffsetKey
+
+FORMAT, VERSION = "s2h-corrections", 1
+SUFFIX = ".corrections.json"
+MAX_BYTES = 16 * 1024 ** 2  # a sidecar of every joint keyed at every frame of a long clip is far smaller
+MAX_DEGREES = 360.0  # a key's offset: more is a file's mistake, not a correction
+
+
+@dataclass(frozen=True)
+class CorrectionsFile:
+    """Corrections and what they were made on: the clip (name, frames, fps), its source, target and method."""
+
+    corrections: Corrections
+    clip: str
+    frames: int
+    fps: float
+    source: str
+    target: str
+    method: str
+
+    def mismatch(self, clip_frames: int) -> str | None:
+        """Why these corrections cannot apply to a clip of ``clip_frames`` frames, or None."""
+        if clip_frames != self.frames:
+            return (f"its corrections were made on a clip of {self.frames} frames ({self.clip!r}); this one has "
+                    f"{clip_frames}")
+        return None
+
+
+def sidecar_path(motion_file: str | Path) -> Path:
+    """``<stem>.corrections.json`` beside ``motion_file``."""
+    motion_file = Path(motion_file)
+    return motion_file.with_name(motion_file.stem + SUFFIX)
+
+
+def save_corrections(path: str | Path, file: CorrectionsFile) -> Path:
+    """Write ``file`` atomically (temp file, then rename)."""
+    from s2h_viewer.io.atomic import atomic_path
+    document = {
+        "format": FORMAT, "version": VERSION, "clip": file.clip, "frames": file.frames, "fps": file.fps,
+        "source": file.source, "target": file.target, "method": file.method,
+        "joints": [{"joint": c.name, "start": c.start, "end": c.end,
+                    "keys": [{"frame": k.frame, "rotation_deg": [round(math.degrees(v), 6) for v in k.rotvec]}
+                             for k in c.keys]} for c in file.corrections.joints]}
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(document, indent=1) + "\n")
+    return Path(path)
+
+
+def is_corrections_file(path: str | Path) -> bool:
+    """True if ``path`` reads as a corrections sidecar (whatever its content's validity): what an export may
+    replace or remove beside its motion, never another file."""
+    try:
+        with open(path, "rb") as stream:
+            head = stream.read(4096)
+        return f'"format": "{FORMAT}"'.encode() in head
+    except OSError:
+        return False
+
+
+def load_corrections(path: str | Path) -> CorrectionsFile:
+    """Read and check a corrections sidecar; one `InputFileError` naming the file and the problem."""
+    path = require_readable_file(path, MAX_BYTES)
+    with reading(path, "a corrections sidecar"):
+        try:
+            document = json.loads(path.read_text(encoding="utf-8"))
+        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+            raise InputFileError(path, f"is not JSON ({exc})") from None
+        return _parse(path, document)
+
+
+def _fail(path: Path, problem: str) -> InputFileError:
+    return InputFileError(path, f"is not a valid corrections sidecar: {problem}")
+
+
+def _integer(path: Path, value, what: str, low: int, high: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise _fail(path, f"{what} is {value!r}, not a whole number")
+    if not low <= value <= high:
+        raise _fail(path, f"{what} is {value}, outside {low}..{high}")
+    return value
+
+
+def _text(path: Path, document: dict, key: str) -> str:
+    value = document.get(key, "")
+    if not isinstance(value, str):
+        raise _fail(path, f'"{key}" is {value!r}, not text')
+    return value
+
+
+def _parse(path: Path, document) -> CorrectionsFile:
+    if not isinstance(document, dict) or document.get("format") != FORMAT:
+        raise _fail(path, f'no "format": "{FORMAT}"')
+    if document.get("version") != VERSION:
+        raise _fail(path, f"version {document.get('version')!r}; this s2h reads version {VERSION}")
+    frames = _integer(path, document.get("frames"), '"frames"', 1, 10 ** 8)
+    fps = document.get("fps", 30.0)
+    if isinstance(fps, bool) or not isinstance(fps, (int, float)) or not math.isfinite(fps) or fps <= 0:
+        raise _fail(path, f'"fps" is {fps!r}, not a positive number')
+    joints = document.get("joints")
+    if not isinstance(joints, list):
+        raise _fail(path, '"joints" is not a list')
+    corrections, seen = [], set()
+    for n, entry in enumerate(joints):
+        where = f"joints[{n}]"
+        if not isinstance(entry, dict):
+            raise _fail(path, f"{where} is not an object")
+        name = entry.get("joint")
+        if name not in topo.ARTICULATED_NAMES:
+            raise _fail(path, f"{where}: joint {name!r} is not one of {', '.join(topo.ARTICULATED_NAMES)}")
+        if name in seen:
+            raise _fail(path, f"{where}: joint {name} is corrected twice")
+        seen.add(name)
+        start = _integer(path, entry.get("start"), f"{where} ({name}) start", 0, frames - 1)
+        end = _integer(path, entry.get("end"), f"{where} ({name}) end", start, frames - 1)
+        keys = entry.get("keys")
+        if not isinstance(keys, list) or not keys:
+            raise _fail(path, f"{where} ({name}) has no keys")
+        parsed = []
+        for k, key in enumerate(keys):
+            what = f"{where} ({name}) key {k}"
+            if not isinstance(key, dict):
+                raise _fail(path, f"{what} is not an object")
+            frame = _integer(path, key.get("frame"), f"{what} frame", start, end)
+            if parsed and frame <= parsed[-1].frame:
+                raise _fail(path, f"{what}: frame {frame} does not follow frame {parsed[-1].frame}")
+            rotation = key.get("rotation_deg")
+            if not (isinstance(rotation, list) and len(rotation) == 3 and all(
+                    isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in rotation)):
+                raise _fail(path, f"{what}: rotation_deg is {rotation!r}, not three finite numbers")
+            if math.hypot(*rotation) > MAX_DEGREES:
+                raise _fail(path, f"{what}: a turn of {math.hypot(*rotation):.0f} deg (at most {MAX_DEGREES:.0f})")
+            parsed.append(OffsetKey(frame, tuple(math.radians(v) for v in rotation)))
+        corrections.append(JointCorrection(topo.ARTICULATED_NAMES.index(name), tuple(parsed), start, end))
+    return CorrectionsFile(Corrections(tuple(sorted(corrections, key=lambda c: c.joint))),
+                           _text(path, document, "clip"), frames, float(fps), _text(path, document, "source"),
+                           _text(path, document, "target"), _text(path, document, "method"))

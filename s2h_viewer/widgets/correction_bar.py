@@ -1,0 +1,72 @@
+"""The bar over a retarget shown alone, for fixing it: what a drag of the ring does (the joint, the axis it
+turns about, the frames a new key blends over) and what the joint's corrections are. The work is the
+owner's (`app.retarget_fixing`); this only shows and asks."""
+
+from __future__ import annotations
+
+from PySide6.QtCore import Signal
+from PySide6.QtWidgets import (QComboBox, QHBoxLayout, QLabel, QSizePolicy, QSpinBox, QToolButton, QVBoxLayout,
+                               QWidget)
+
+from s2h_viewer.retarget.corrections import AXES
+
+#: frames a new key eases in over before it and out over after it, unless a marked range holds the frame
+DEFAULT_EASE = 10
+HINT = ("Fix this retarget: click a joint of the hand, drag its ring (R: the next axis); a key blends over the "
+        "marked range, else the ease frames (Fix menu: Alt+X)")
+
+
+class CorrectionBar(QWidget):
+    """``axis`` (one of `AXES`), ``ease_in`` / ``ease_out`` (frames); ``delete_key`` and ``clear_joint`` are the
+    buttons' requests (the Fix menu has them too)."""
+
+    delete_key = Signal()
+    clear_joint = Signal()
+
+    def __init__(self, parent: QWidget | None = None):
+        super().__init__(parent)
+        self.readout = QLabel(HINT)
+        # one line whatever it says (the whole text in its tooltip): a bar that grew would shrink the 3D view under
+        # the ring being dragged
+        self.readout.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Fixed)
+        self.axis_choice = QComboBox()
+        self.axis_choice.addItems(list(AXES))
+        self.axis_choice.setCurrentIndex(AXES.index("bend"))
+        self.axis_choice.setToolTip("the joint's own axis the ring turns it about (R: the next one)")
+        self.ease_in, self.ease_out = QSpinBox(), QSpinBox()
+        for box, text in ((self.ease_in, "eases in over this many frames before it"),
+                          (self.ease_out, "eases out over this many frames after it")):
+            box.setRange(0, 100_000)
+            box.setValue(DEFAULT_EASE)
+            box.setToolTip(f"a new key {text} (unless the marked range holds its frame: then over the range)")
+        buttons = []
+        for text, signal, tip in (("Delete key", self.delete_key, "the joint's key at this frame (Shift+K)"),
+                                  ("Clear joint", self.clear_joint, "every correction of the joint (Ctrl+Shift+K)")):
+            button = QToolButton()
+            button.setText(text)
+            button.setToolTip(tip)
+            button.clicked.connect(signal)
+            buttons.append(button)
+        controls = QHBoxLayout()
+        controls.setContentsMargins(0, 0, 0, 0)
+        for widget in (QLabel("turn about"), self.axis_choice, QLabel("ease in"), self.ease_in, QLabel("out"),
+                       self.ease_out, QLabel("frames"), *buttons):
+            controls.addWidget(widget)
+        controls.addStretch(1)
+        layout = QVBoxLayout(self)  # two rows: the controls fit the view's width at the window's smallest
+        layout.setContentsMargins(4, 2, 4, 2)
+        layout.setSpacing(2)
+        layout.addWidget(self.readout)
+        layout.addLayout(controls)
+        self.hide()
+
+    @property
+    def axis(self) -> str:
+        return AXES[self.axis_choice.currentIndex()]
+
+    def next_axis(self) -> None:
+        self.axis_choice.setCurrentIndex((self.axis_choice.currentIndex() + 1) % len(AXES))
+
+    def say(self, text: str) -> None:
+        self.readout.setText(text)
+        self.readout.setToolTip(text)

@@ -1,0 +1,234 @@
+"""Fixing a retarget in Compare (issue 25, item 3), on the real window with real mouse and keys: in a retarget shown
+alone a click picks a joint, a drag of its ring turns it at the current frame into a key of a per-joint offset
+curve, blended over the ease frames or the marked range; the cell, the table and the error curve follow while
+dragging; undo and redo; every motion export carries the corrections with a sidecar beside it, which
+``s2h retarget --corrections`` and Fix > Load corrections apply the same way; unsaved corrections are asked
+about."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+
+pytest.importorskip("pytestqt")
+if not os.environ.get("DISPLAY"):
+    pytest.skip("the Qt viewport needs an X display: `make test` runs the suite under Xvfb", allow_module_level=True)
+
+from PySide6.QtCore import QPoint, Qt  # noqa: E402
+from PySide6.QtTest import QTest  # noqa: E402
+from vtkmodules.vtkRenderingCore import vtkCoordinate  # noqa: E402
+
+from compare_window import open_compare_window  # noqa: E402
+from test_annotate_window import answer, choose_file, click, keyboard_to  # noqa: E402
+from s2h_viewer.app.retarget_fixing import RING_RADIUS  # noqa: E402
+from s2h_viewer.cli import main  # noqa: E402
+from s2h_viewer.hand import topology as topo  # noqa: E402
+from s2h_viewer.io.corrections import load_corrections  # noqa: E402
+from s2h_viewer.io.files import load_motion_file  # noqa: E402
+from s2h_viewer.io.npz import save_motion  # noqa: E402
+from s2h_viewer.render.scene import to_view  # noqa: E402
+from s2h_viewer.retarget.corrections import AXES  # noqa: E402
+
+JOINT = "index_pip"
+ARTICULATED = topo.ARTICULATED_NAMES.index(JOINT)
+JOINT_INDEX = topo.JOINT_NAMES.index(JOINT)
+FRAME = 40
+
+
+@pytest.fixture
+def window(qtbot, sample_hands, tmp_path):
+    win = open_compare_window(qtbot, sample_hands, tmp_path, methods=("tbs_copy",))
+    keyboard_to(qtbot, win.view.interactor)
+    QTest.keyClick(win, Qt.Key.Key_3, Qt.KeyboardModifier.ControlModifier)  # the side camera: bend rings face it
+    win.timeline.set_frame(FRAME)
+    with qtbot.waitSignal(win.view.drawn):  # drawn alone: the positions on screen below are the ones drawn
+        QTest.keyClick(win, Qt.Key.Key_M, Qt.KeyboardModifier.ControlModifier)  # the selected retarget alone
+    assert win.compare.fixing.ring is not None
+    return win
+
+
+def on_screen(win, point: np.ndarray) -> QPoint:
+    """Where a view-space point is drawn in the solo cell, in the 3D widget's Qt pixels."""
+    coordinate = vtkCoordinate()
+    coordinate.SetCoordinateSystemToWorld()
+    coordinate.SetValue(*point)
+    x, y = coordinate.GetComputedDoubleDisplayValue(win.view.solo_hand().renderer)
+    widget = win.view.interactor
+    scale = widget.devicePixelRatioF()
+    return QPoint(round(x / scale), round(widget.height() - 1 - y / scale))
+
+
+def joint_frame(win, result=None, frame: int = FRAME) -> tuple[np.ndarray, np.ndarray]:
+    """The joint's centre and TBS frame (columns) in view space at ``frame``, as the retarget poses it."""
+    result = result or win.compare.selected_result()
+    centre = to_view(result.target, result.pose.positions[frame, JOINT_INDEX].numpy().astype(float))
+    return centre, to_view(result.target, result.pose.frames[frame, JOINT_INDEX].numpy().astype(float).T).T
+
+
+def ring_path(win, degrees: float) -> list[QPoint]:
+    """11 pointer positions along the joint's bend ring, ``degrees`` round it (right-handed about the bend axis
+    in view space), from where that turn moves the pointer well apart on screen."""
+    centre, axes = joint_frame(win)
+    radius = win.compare.fixing.ring.radius
+    assert radius >= RING_RADIUS * win.compare.selected_result().target.hand_length
+    bend = AXES.index("bend")
+    u, v = axes[:, (bend + 1) % 3], axes[:, (bend + 2) % 3]
+
+    def point(a: float) -> QPoint:
+        return on_screen(win, centre + radius * (np.cos(np.radians(a)) * u + np.sin(np.radians(a)) * v))
+    start = next(a for a in range(0, 360, 15) if (point(a) - point(a + degrees)).manhattanLength() > 25)
+    return [point(start + t) for t in np.linspace(0, degrees, 11)]
+
+
+def turned(before: np.ndarray, after: np.ndarray) -> float:
+    """Degrees about ``before``'s bend axis (view space) that take its twist axis to ``after``'s."""
+    axis = before[:, AXES.index("bend")]
+    return float(np.degrees(np.arctan2(np.dot(axis, np.cross(before[:, 0], after[:, 0])),
+                                       np.dot(before[:, 0], after[:, 0]))))
+
+
+def pick_joint(qtbot, win) -> None:
+    centre, _ = joint_frame(win)
+    with qtbot.waitSignal(win.view.drawn):  # the ring drawn where the path below finds it
+        QTest.mouseClick(win.view.interactor, Qt.MouseButton.LeftButton, pos=on_screen(win, centre))
+    assert win.compare.fixing.joint == ARTICULATED
+    assert win.compare.fixing.ring.actor.GetVisibility()
+
+
+def drag(qtbot, win, degrees: float, halfway=None) -> None:
+    """Drag the picked joint's ring ``degrees`` round; ``halfway()`` runs with the button held half way."""
+    path = ring_path(win, degrees)
+    widget = win.view.interactor
+    QTest.mousePress(widget, Qt.MouseButton.LeftButton, pos=path[0])
+    assert win.compare.fixing.ring.dragging  # the ring took the press, not the camera
+    for point in path[1:6]:
+        QTest.mouseMove(widget, point)
+        qtbot.wait(15)
+    if halfway is not None:
+        halfway()
+    for point in path[6:]:
+        QTest.mouseMove(widget, point)
+        qtbot.wait(15)
+    QTest.mouseRelease(widget, Qt.MouseButton.LeftButton, pos=path[-1])
+
+
+def test_a_ring_drag_in_solo_keys_the_joint_live_and_undo_brings_back_the_methods_retarget(window, qtbot):
+    win, mode = window, window.compare
+    assert mode.fixing.bar.isVisible()
+    method = mode.selected_result()
+    _, before = joint_frame(win, method)
+    pick_joint(qtbot, win)
+    live = []
+
+    def while_held() -> None:  # the clip measured again while the button is still down, to the turn so far
+        qtbot.waitUntil(lambda: abs(turned(before, joint_frame(win)[1]) - 20.0) < 3.0, timeout=5000)
+        result = mode.selected_result()
+        live.append((turned(before, joint_frame(win, result)[1]), list(mode.curve.error), result.scores.s_finger,
+                     mode.scores.item(0, 0).text()))
+    drag(qtbot, win, 40.0, while_held)
+    angle, curve, s_finger, method_cell = live[0]
+    assert abs(angle - 20.0) < 3.0 and s_finger != method.scores.s_finger  # half the turn, live
+    assert curve[FRAME] > method.frame_error[FRAME]  # the curve too
+    assert method_cell == "TBS Copy (fixed)"
+    fixed = mode.selected_result()
+    assert turned(before, joint_frame(win, fixed)[1]) == pytest.approx(40.0, abs=3.0)
+    correction = fixed.corrections.of(ARTICULATED)
+    assert [k.frame for k in correction.keys] == [FRAME] and (correction.start, correction.end) == (30, 50)
+    np.testing.assert_allclose(fixed.pose.positions[:30], method.pose.positions[:30], atol=1e-6)  # outside: unchanged
+    np.testing.assert_allclose(fixed.pose.positions[51:], method.pose.positions[51:], atol=1e-6)
+    others = [j for j in range(topo.N_JOINTS) if j not in (JOINT_INDEX + 1, JOINT_INDEX + 2)]
+    np.testing.assert_allclose(fixed.pose.positions[:, others], method.pose.positions[:, others], atol=1e-5)
+    np.testing.assert_allclose(mode.curve.error, fixed.frame_error)  # the curve shows the corrected retarget
+    assert fixed.frame_error[FRAME] > method.frame_error[FRAME]  # turned off the source: the error says so
+    assert mode.scores.item(0, 0).text() == "TBS Copy (fixed)" and "index PIP" in mode.scores.item(0, 0).toolTip()
+    hand = win.view.solo_hand()
+    assert hand.pose is fixed.pose and "1 fix" in hand.label.text  # the cell draws and says the corrected one
+    assert win.heatmap_choice.currentText() == "TBS Copy -> iris (fixed)"
+    assert mode.undo_stack.undoText().startswith("fix index PIP: bend +4") or \
+        mode.undo_stack.undoText().startswith("fix index PIP: bend +3")
+
+    QTest.keyClick(win, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
+    assert mode.selected_result() is method and win.view.solo_hand().pose is method.pose
+    assert mode.scores.item(0, 0).text() == "TBS Copy"
+    np.testing.assert_allclose(mode.curve.error, method.frame_error)
+    QTest.keyClick(win, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier)
+    assert mode.selected_result() is fixed
+
+
+def test_a_key_blends_over_the_marked_range_and_the_fix_keys_delete_and_clear(window, qtbot):
+    win, mode = window, window.compare
+    win.timeline.set_frame(20)
+    QTest.keyClick(win, Qt.Key.Key_I)
+    win.timeline.set_frame(60)
+    QTest.keyClick(win, Qt.Key.Key_O)
+    win.timeline.set_frame(FRAME)
+    pick_joint(qtbot, win)
+    drag(qtbot, win, 30.0)
+    correction = mode.selected_result().corrections.of(ARTICULATED)
+    assert (correction.start, correction.end) == (20, 60)  # the marked range, not the ease frames
+    QTest.keyClick(win, Qt.Key.Key_K, Qt.KeyboardModifier.ShiftModifier)  # Fix > Delete the joint's key here
+    assert not mode.selected_result().corrections
+    QTest.keyClick(win, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
+    assert mode.selected_result().corrections.n_keys == 1
+    QTest.keyClick(win, Qt.Key.Key_R)  # the next axis: the ring turns about the splay axis now
+    assert mode.fixing.bar.axis == "splay"
+    _, axes = joint_frame(win)
+    np.testing.assert_allclose(mode.fixing.ring.axis, axes[:, AXES.index("splay")], atol=1e-9)
+    QTest.keyClick(win, Qt.Key.Key_K, Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier)
+    assert not mode.selected_result().corrections  # Fix > Clear the joint's corrections
+
+
+def test_every_motion_export_carries_the_corrections_and_s2h_retarget_applies_the_sidecar_alike(window, qtbot,
+                                                                                                tmp_path):
+    win, mode = window, window.compare
+    pick_joint(qtbot, win)
+    drag(qtbot, win, -35.0)
+    fixed = mode.selected_result()
+    for suffix in (".npz", ".glb", ".bvh"):
+        path = tmp_path / f"take{suffix}"
+        assert win.export_motion(str(path)) == path
+        sidecar = tmp_path / "take.corrections.json"
+        record = load_corrections(sidecar)
+        assert record.corrections.n_keys == 1 and record.corrections.of(ARTICULATED) is not None
+        np.testing.assert_allclose(record.corrections.apply(mode.comparison.motion.q_tbs),
+                                   fixed.corrections.apply(mode.comparison.motion.q_tbs), atol=1e-6)
+        assert (record.target, record.method, record.frames) == ("iris", "tbs_copy", mode.comparison.n_frames)
+        exported, _ = load_motion_file(path)
+        dots = np.abs(np.einsum("tjk,tjk->tj", exported.q_tbs, fixed.motion.q_tbs))
+        assert dots.min() > 1 - 1e-4, suffix  # the corrected motion, on the target's rig
+        assert "its corrections take.corrections.json" in win.statusBar().currentMessage()
+    # the command line, given the sidecar, writes the same motion
+    clip = save_motion(mode.comparison.motion, tmp_path / "clip.npz")
+    assert main(["retarget", "--motion", str(clip), "--source", "birch", "--target", "iris", "--method", "tbs_copy",
+                 "--corrections", str(tmp_path / "take.corrections.json"), "--out", str(tmp_path / "cli.npz"),
+                 "--quiet"]) == 0
+    from_cli, _ = load_motion_file(tmp_path / "cli.npz")
+    np.testing.assert_allclose(from_cli.q_tbs, fixed.motion.q_tbs, atol=1e-5)
+    # the corrections undone, an export over the same name leaves no sidecar telling of them
+    QTest.keyClick(win, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
+    win.export_motion(str(tmp_path / "take.npz"))
+    assert not (tmp_path / "take.corrections.json").exists()
+    # Fix > Load corrections puts them back (undoable); a damaged sidecar is refused naming the file
+    mode.fixing.forget_unsaved()
+    win.load_corrections(str(tmp_path / "cli.corrections.json"))
+    assert mode.selected_result().corrections == load_corrections(tmp_path / "cli.corrections.json").corrections
+    bad = tmp_path / "bad.corrections.json"
+    bad.write_text((tmp_path / "cli.corrections.json").read_text().replace('"index_pip"', '"index_pi"'))
+    shown = answer(click("OK"))
+    win.load_corrections(str(bad))
+    assert "bad.corrections.json" in shown[0] and "index_pi" in shown[0]
+    assert mode.undo_stack.undoText() == "load corrections from cli.corrections.json"
+
+
+def test_closing_with_unsaved_corrections_asks_and_cancel_keeps_them(window, qtbot, tmp_path):
+    win, mode = window, window.compare
+    pick_joint(qtbot, win)
+    drag(qtbot, win, 30.0)
+    shown = answer(click("Cancel"))
+    win.close()
+    assert win.isVisible() and "TBS Copy -> iris" in shown[0]
+    assert mode.selected_result().corrections  # kept
+    assert win.export_motion(str(tmp_path / "kept.npz"))  # exported: nothing unsaved any more
+    assert mode.fixing.unsaved() == []
