@@ -214,6 +214,7 @@ def _cmd_annotate(args: argparse.Namespace) -> int:
 
 
 def _cmd_retarget(args: argparse.Namespace) -> int:
+    from s2h_viewer.annotate.trust import frame_warning
     from s2h_viewer.io.files import export_sidecar, load_hand_file, load_motion_file, save_motion_file
     from s2h_viewer.retarget import retarget
 
@@ -227,6 +228,9 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
     for hand, path in ((source, args.source or args.motion), (target, args.target)):
         if hand.meta.get("unit_note"):
             print(f"{path}: {hand.meta['unit_note']}")
+    warning = frame_warning(target)
+    if warning is not None:  # what the viewer's banner says on the target's cells
+        print(f"{args.target}: {warning.describe()}")
     if motion.fit is not None:
         print(f"{args.motion}: {motion.fit.describe()}")
     with _progress_bar(f"retarget ({args.method})", motion.n_frames, "frame",
@@ -261,6 +265,9 @@ def _corrections(args: argparse.Namespace, retargeted, target):
     if (fixes.target, fixes.method) != (target.name, args.method):
         print(f"{args.corrections}: made on {fixes.method} -> {fixes.target}; applied to {args.method} -> "
               f"{target.name}")
+    if abs(fixes.fps - retargeted.fps) > 1e-6:
+        print(f"{args.corrections}: made on a clip at {fixes.fps:g} fps; this one is at {retargeted.fps:g} fps (its "
+              f"keys are frame numbers: applied at the same frames)")
     return fixes
 
 

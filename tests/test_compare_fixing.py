@@ -18,6 +18,7 @@ if not os.environ.get("DISPLAY"):
 
 from PySide6.QtCore import QPoint, Qt  # noqa: E402
 from PySide6.QtTest import QTest  # noqa: E402
+from PySide6.QtWidgets import QMessageBox  # noqa: E402
 from vtkmodules.vtkRenderingCore import vtkCoordinate  # noqa: E402
 
 from compare_window import open_compare_window  # noqa: E402
@@ -30,6 +31,7 @@ from s2h_viewer.io.files import load_motion_file  # noqa: E402
 from s2h_viewer.io.npz import save_motion  # noqa: E402
 from s2h_viewer.render.scene import to_view  # noqa: E402
 from s2h_viewer.retarget.corrections import AXES  # noqa: E402
+from s2h_viewer.widgets.error_curve import KEY_COLOUR  # noqa: E402
 
 JOINT = "index_pip"
 ARTICULATED = topo.ARTICULATED_NAMES.index(JOINT)
@@ -97,6 +99,12 @@ def pick_joint(qtbot, win) -> None:
     assert win.compare.fixing.ring.actor.GetVisibility()
 
 
+def menu_action(win, text: str):
+    """The window's menu entry ``text`` (what a user clicks)."""
+    from PySide6.QtGui import QAction
+    return next(a for a in win.findChildren(QAction) if a.text() == text)
+
+
 def drag(qtbot, win, degrees: float, halfway=None) -> None:
     """Drag the picked joint's ring ``degrees`` round; ``halfway()`` runs with the button held half way."""
     path = ring_path(win, degrees)
@@ -135,7 +143,7 @@ def test_a_ring_drag_in_solo_keys_the_joint_live_and_undo_brings_back_the_method
     fixed = mode.selected_result()
     assert turned(before, joint_frame(win, fixed)[1]) == pytest.approx(40.0, abs=3.0)
     correction = fixed.corrections.of(ARTICULATED)
-    assert [k.frame for k in correction.keys] == [FRAME] and (correction.start, correction.end) == (30, 50)
+    assert [(k.frame, k.start, k.end) for k in correction.keys] == [(FRAME, 30, 50)]  # the ease frames: 10, 10
     np.testing.assert_allclose(fixed.pose.positions[:30], method.pose.positions[:30], atol=1e-6)  # outside: unchanged
     np.testing.assert_allclose(fixed.pose.positions[51:], method.pose.positions[51:], atol=1e-6)
     others = [j for j in range(topo.N_JOINTS) if j not in (JOINT_INDEX + 1, JOINT_INDEX + 2)]
@@ -146,12 +154,18 @@ def test_a_ring_drag_in_solo_keys_the_joint_live_and_undo_brings_back_the_method
     hand = win.view.solo_hand()
     assert hand.pose is fixed.pose and "1 fix" in hand.label.text  # the cell draws and says the corrected one
     assert win.heatmap_choice.currentText() == "TBS Copy -> iris (fixed)"
+    assert list(mode.curve.keys) == [FRAME]  # the key marked on the curve's frame axis, in the ring's colour
+    image = mode.curve.grab().toImage()
+    scale = image.width() / mode.curve.width()
+    x, y = mode.curve._x(FRAME) * scale, mode.curve.axis_y() * scale
+    assert any(image.pixelColor(round(x + dx), round(y + dy)).name() == KEY_COLOUR.name()
+               for dx in range(-2, 3) for dy in range(-3, 4))
     assert mode.undo_stack.undoText().startswith("fix index PIP: bend +4") or \
         mode.undo_stack.undoText().startswith("fix index PIP: bend +3")
 
     QTest.keyClick(win, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
     assert mode.selected_result() is method and win.view.solo_hand().pose is method.pose
-    assert mode.scores.item(0, 0).text() == "TBS Copy"
+    assert mode.scores.item(0, 0).text() == "TBS Copy" and len(mode.curve.keys) == 0
     np.testing.assert_allclose(mode.curve.error, method.frame_error)
     QTest.keyClick(win, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier)
     assert mode.selected_result() is fixed
@@ -166,8 +180,8 @@ def test_a_key_blends_over_the_marked_range_and_the_fix_keys_delete_and_clear(wi
     win.timeline.set_frame(FRAME)
     pick_joint(qtbot, win)
     drag(qtbot, win, 30.0)
-    correction = mode.selected_result().corrections.of(ARTICULATED)
-    assert (correction.start, correction.end) == (20, 60)  # the marked range, not the ease frames
+    (key,) = mode.selected_result().corrections.of(ARTICULATED).keys
+    assert (key.frame, key.start, key.end) == (FRAME, 20, 60)  # the marked range, not the ease frames
     QTest.keyClick(win, Qt.Key.Key_K, Qt.KeyboardModifier.ShiftModifier)  # Fix > Delete the joint's key here
     assert not mode.selected_result().corrections
     QTest.keyClick(win, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
@@ -222,13 +236,70 @@ def test_every_motion_export_carries_the_corrections_and_s2h_retarget_applies_th
     assert mode.undo_stack.undoText() == "load corrections from cli.corrections.json"
 
 
-def test_closing_with_unsaved_corrections_asks_and_cancel_keeps_them(window, qtbot, tmp_path):
+def test_closing_with_unsaved_corrections_asks_and_offers_to_save_them(window, qtbot, tmp_path):
     win, mode = window, window.compare
     pick_joint(qtbot, win)
     drag(qtbot, win, 30.0)
     shown = answer(click("Cancel"))
     win.close()
-    assert win.isVisible() and "TBS Copy -> iris" in shown[0]
+    assert win.isVisible() and "TBS Copy -> iris" in shown[0] and "Save" in shown[0]
     assert mode.selected_result().corrections  # kept
-    assert win.export_motion(str(tmp_path / "kept.npz"))  # exported: nothing unsaved any more
-    assert mode.fixing.unsaved() == []
+    sidecar = tmp_path / "saved.corrections.json"
+    enter = (QMessageBox, lambda box: QTest.keyClick(box, Qt.Key.Key_Return))  # Save is the default: never Discard
+    answer(enter, choose_file(sidecar))
+    assert win.close() and not win.isVisible()
+    assert load_corrections(sidecar).corrections.n_keys == 1 and mode.fixing.unsaved() == []
+
+
+def test_a_menu_export_asks_its_frames_and_the_menu_loads_corrections(window, qtbot, tmp_path):
+    """What the user reaches through the menus (the fresh-eyes test found both broken: the menu's `checked`
+    argument read as a path): File > Export retargeted motion asks where and which frames, even with a range
+    marked; Fix > Load corrections asks for the file."""
+    from PySide6.QtWidgets import QDialog
+
+    from s2h_viewer.widgets.frame_range_dialog import FrameRangeDialog
+    win, mode = window, window.compare
+    pick_joint(qtbot, win)
+    drag(qtbot, win, 30.0)
+    win.timeline.set_frame(20)
+    QTest.keyClick(win, Qt.Key.Key_I)
+    win.timeline.set_frame(FRAME)
+    path = tmp_path / "menu.npz"
+
+    def whole_clip(dialog: QDialog) -> None:
+        QTest.mouseClick(dialog.whole_clip, Qt.MouseButton.LeftButton)
+        dialog.accept()
+    shown = answer(choose_file(path), (FrameRangeDialog, whole_clip))
+    menu_action(win, "Export retargeted motion...").trigger()
+    assert shown[0].endswith("short_iris_tbs_copy.glb") and shown[1:] == ["Export motion: frames"]  # where, frames
+    exported, _ = load_motion_file(path)
+    assert exported.n_frames == mode.comparison.n_frames  # the whole clip, as chosen (not the marked range)
+    assert load_corrections(tmp_path / "menu.corrections.json").frames == mode.comparison.n_frames
+    QTest.keyClick(win, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
+    assert not mode.selected_result().corrections
+    shown = answer(choose_file(tmp_path / "menu.corrections.json"))
+    menu_action(win, "Load corrections onto the selected retarget...").trigger()
+    qtbot.waitUntil(lambda: bool(mode.selected_result().corrections), timeout=5000)
+    assert mode.selected_result().corrections.n_keys == 1
+
+
+def test_a_second_key_changes_its_own_frames_only_and_space_waits_for_the_drag(window, qtbot):
+    win, mode = window, window.compare
+    pick_joint(qtbot, win)
+    drag(qtbot, win, 30.0)
+    first = mode.selected_result()
+    with qtbot.waitSignal(win.view.drawn, timeout=5000):  # the ring drawn at the new frame's pose
+        win.timeline.set_frame(FRAME + 25)
+
+    def press_space() -> None:  # Space while the ring is held: playback stays paused, the frame stays
+        QTest.keyClick(win, Qt.Key.Key_Space)
+        assert not win.timeline.playing and win.timeline.frame == FRAME + 25
+    drag(qtbot, win, -35.0, press_space)
+    second = mode.selected_result()
+    keys = second.corrections.of(ARTICULATED).keys
+    assert [(k.frame, k.start, k.end) for k in keys] == [(FRAME, 30, 50), (FRAME + 25, 55, 75)]
+    np.testing.assert_allclose(second.pose.positions[:55], first.pose.positions[:55], atol=1e-6)  # only its frames
+    assert not np.allclose(second.pose.positions[FRAME + 25], first.pose.positions[FRAME + 25], atol=1e-4)
+    QTest.keyClick(win, Qt.Key.Key_K, Qt.KeyboardModifier.ShiftModifier)  # delete it: back to the first exactly
+    np.testing.assert_allclose(mode.selected_result().pose.positions, first.pose.positions, atol=1e-7)
+    assert mode.undo_stack.undoText() == f"delete index PIP's key at frame {FRAME + 25}"

@@ -44,22 +44,38 @@ def test_a_key_holds_its_turn_at_its_frame_and_eases_to_nothing_at_its_range_end
     np.testing.assert_allclose(axis / np.linalg.norm(axis), [0.0, 1.0, 0.0], atol=1e-12)  # about its bend axis
 
 
-def test_a_second_turn_composes_on_the_curve_and_keys_interpolate_between_them():
+def test_a_second_key_changes_only_its_own_range_and_deleting_it_gives_back_the_first(sample_hands):
     first = Corrections().with_turn(INDEX_PIP, 40, turn_about("bend", 30.0), 20, 60)
     assert degrees(first, INDEX_PIP, 100)[50] == pytest.approx(15.0, abs=1e-6)  # half way down the ease out
     both = first.with_turn(INDEX_PIP, 50, turn_about("bend", 10.0), 45, 55)
-    curve = degrees(both, INDEX_PIP, 100)
-    assert curve[50] == pytest.approx(25.0, abs=1e-6)  # the 15 there turned 10 more: a key of 25
-    assert curve[40] == pytest.approx(30.0, abs=1e-6) and 25.0 < curve[45] < 30.0  # from one key to the next
-    assert both.of(INDEX_PIP).start == 20 and both.of(INDEX_PIP).end == 60  # inside the curve: its range stays
-    wider = both.with_turn(INDEX_PIP, 80, turn_about("splay", -5.0), 75, 90)
-    assert (wider.of(INDEX_PIP).start, wider.of(INDEX_PIP).end) == (20, 90)  # outside it: the range widens
-    assert wider.n_keys == 3 and list(wider.frames()) == [40, 50, 80]
-    assert wider.without_key(INDEX_PIP, 50).n_keys == 2
-    assert not wider.without_key(INDEX_PIP, 40).without_key(INDEX_PIP, 50).without_key(INDEX_PIP, 80)
-    narrowed = both.with_range(INDEX_PIP, 45, 52)  # a range keeps its keys inside it
-    assert (narrowed.of(INDEX_PIP).start, narrowed.of(INDEX_PIP).end) == (40, 52)
+    curve, alone = degrees(both, INDEX_PIP, 100), degrees(first, INDEX_PIP, 100)
+    assert curve[50] == pytest.approx(25.0, abs=1e-6)  # the 15 there turned 10 more, as dragged
+    np.testing.assert_allclose(curve[:46], alone[:46], atol=1e-9)  # outside the new key's range: as before
+    np.testing.assert_allclose(curve[55:], alone[55:], atol=1e-9)
+    assert [(k.frame, k.start, k.end) for k in both.of(INDEX_PIP).keys] == [(40, 20, 60), (50, 45, 55)]
+    assert both.without_key(INDEX_PIP, 50) == first  # deleting a key gives back exactly what was there without it
+    far = both.with_turn(INDEX_PIP, 80, turn_about("splay", -5.0), 75, 90)
+    np.testing.assert_allclose(degrees(far, INDEX_PIP, 100)[:75], curve[:75], atol=1e-9)  # no widened range
+    assert far.n_keys == 3 and list(far.frames()) == [40, 50, 80]
+    again = far.with_turn(INDEX_PIP, 50, turn_about("bend", 5.0), 0, 99)  # a key there: turned further, range kept
+    assert again.of(INDEX_PIP).key_at(50).start == 45 and degrees(again, INDEX_PIP, 100)[50] == pytest.approx(30.0)
+    assert not far.without_key(INDEX_PIP, 40).without_key(INDEX_PIP, 50).without_key(INDEX_PIP, 80)
+    narrowed = both.with_range(INDEX_PIP, 50, 52, 52)  # a range keeps its key's frame inside it
+    assert (narrowed.of(INDEX_PIP).key_at(50).start, narrowed.of(INDEX_PIP).key_at(50).end) == (50, 52)
+    assert both.with_range(INDEX_PIP, 41, 0, 99) == both  # no key at that frame: nothing changes
     assert both.without_joint(INDEX_PIP) == Corrections()
+
+
+def test_overlapping_keys_about_different_axes_still_hold_each_drag_at_its_frame():
+    """Keys whose ranges overlap compose; each drag turns the joint by what was dragged at its own frame."""
+    first = Corrections().with_turn(INDEX_PIP, 40, turn_about("bend", 30.0), 20, 60)
+    second = first.with_turn(INDEX_PIP, 45, turn_about("splay", 20.0), 35, 55)
+    want = first.offset_at(INDEX_PIP, 45) * turn_about("splay", 20.0)
+    got = second.offset_at(INDEX_PIP, 45)
+    assert np.degrees((got.inv() * want).magnitude()) < 1e-6
+    third = second.with_turn(INDEX_PIP, 40, turn_about("twist", -15.0), 0, 99)  # the first key turned further
+    want = second.offset_at(INDEX_PIP, 40) * turn_about("twist", -15.0)
+    assert np.degrees((third.offset_at(INDEX_PIP, 40).inv() * want).magnitude()) < 1e-6
 
 
 def test_a_turn_about_a_joints_bend_axis_moves_its_chain_by_that_much_and_nothing_else(sample_hands):
@@ -130,8 +146,10 @@ def test_the_sidecar_reads_back_what_was_written_and_sits_beside_its_motion(tmp_
     (lambda d: d.update(frames=-3), "frames"),
     (lambda d: d["joints"][0].update(joint="index_pipp"), "'index_pipp' is not one of"),
     (lambda d: d["joints"].append(dict(d["joints"][0])), "corrected twice"),
-    (lambda d: d["joints"][0].update(end=500), "end is 500, outside"),
-    (lambda d: d["joints"][1]["keys"][0].update(frame=70), "frame is 70, outside 20..60"),
+    (lambda d: d["joints"][0]["keys"][0].update(end=500), "end is 500, outside"),
+    (lambda d: d["joints"][1]["keys"][0].update(frame=500), "frame is 500, outside 0..99"),
+    (lambda d: d["joints"][1]["keys"][0].update(start=45), "start is 45, outside 0..40"),
+    (lambda d: d["joints"][1]["keys"][0].update(start=True), "start is True, not a whole number"),
     (lambda d: d["joints"][1]["keys"].reverse(), "does not follow"),
     (lambda d: d["joints"][1]["keys"][0].update(rotation_deg=[float("nan"), 0, 0]), "not three finite numbers"),
     (lambda d: d["joints"][1]["keys"][0].update(rotation_deg=[0, 1, "2"]), "not three finite numbers"),

@@ -89,6 +89,25 @@ def test_the_labels_font_shrinks_with_the_cell_down_to_a_minimum():
     assert label_font(400, 400)[1] == 3 and label_font(400, 40)[1] == 1  # a cell too short keeps the title only
 
 
+def test_a_4k_pictures_labels_grow_with_it_and_stay_in_their_cells_above_the_hands(sample_hands, tmp_path):
+    """A 3840 x 2160 export's labels in proportion to the picture (they read as the window's do; they were 13 px,
+    a speck), still inside their cells with the hand below them."""
+    from PIL import Image
+
+    from s2h_viewer.render.compare_scene import LABEL_PX, label_px_for, render_comparison
+    from s2h_viewer.retarget.comparison import build_comparison
+    assert label_px_for(720) == label_px_for(1000) == LABEL_PX and label_px_for(2160) == 28
+    motion = synthesize(["fist", "ok"], sample_hands["birch"], seed=4, name="short")
+    comparison = build_comparison(motion, sample_hands["birch"], [sample_hands["iris"]], ["tbs_copy"])
+    heights = []
+    for size in ((1280, 720), (3840, 2160)):
+        image = np.asarray(Image.open(render_comparison(comparison, tmp_path / f"{size[0]}.png", 20, size=size)))
+        band = image[: size[1] // 8, : size[0] // 3, :3]  # the top of the source's cell: its one-line label
+        rows = np.flatnonzero((band < 80).all(-1).any(1))  # rows with black ink (the skin is lighter)
+        heights.append(rows[-1] - rows[0] + 1)
+    assert heights[1] > 1.8 * heights[0]  # the label about twice as tall in a picture three times taller
+
+
 def test_back_faces_are_skipped_only_where_they_cannot_be_seen(sample_hands):
     import pyvista as pv
 

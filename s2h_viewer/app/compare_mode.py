@@ -209,7 +209,7 @@ class CompareMode(QWidget):
         self.timeline.range_changed.connect(self.curve.set_range)
         self.view.solo_changed.connect(self._solo_changed)
         self.heatmap_choice.currentIndexChanged.connect(self._choice_changed)
-        self.heatmap.row_chosen.connect(self._joint_chosen)
+        self.heatmap.row_chosen.connect(self.choose_joint)
         self.scores.currentCellChanged.connect(lambda row, *_: self._select_row(row))
         self.queue.result_ready.connect(self._on_result)
         self.queue.semantics_ready.connect(self._on_semantics)
@@ -396,13 +396,17 @@ class CompareMode(QWidget):
     def _keep_results(self, keep: set[ResultKey]) -> None:
         """Results outside ``keep`` go to the spare cache; the spares of this clip and these targets that
         ``keep`` asks for come back (at most SPARE_FRAMES frames are kept, the oldest dropped first)."""
-        self._spare.update({k: r for k, r in self.state.results.items() if k not in keep})
+        leaving = {k: r for k, r in self.state.results.items() if k not in keep}
+        self._spare.update(leaving)
+        fixed = [label(r) for r in leaving.values() if r.corrections]
+        if fixed:  # a corrected retarget unticked or its target removed: its corrections are kept, say where
+            self.status(f"{', '.join(fixed)}: its corrections are kept (Edit > Undo, or tick the method again)")
         clip, targets = (id(self.state.motion), id(self.state.source)), {id(t) for t in self.state.targets}
         self._spare = {k: r for k, r in self._spare.items() if (k.motion, k.source) == clip and k.target in targets}
         self.state.results = {k: r for k, r in self.state.results.items() if k in keep}
         self.state.results.update({k: self._spare.pop(k) for k in keep if k in self._spare})
         frames = sum(len(r.cell_error) for r in self._spare.values())
-        for key in list(self._spare):
+        for key in [k for k, r in self._spare.items() if not r.corrections]:  # a person's corrections stay
             if frames <= SPARE_FRAMES:
                 break
             frames -= len(self._spare.pop(key).cell_error)
@@ -559,10 +563,12 @@ class CompareMode(QWidget):
                                  "worst sideways bend of a curled PIP/DIP per frame, deg")
         else:
             self.curve.set_curve(result.frame_error, label(result))
+        self.curve.set_keys(result.corrections.frames())
         self.sideways_note.setText(selected_notes(result))
 
-    def _joint_chosen(self, row: int) -> None:
-        """A heatmap row clicked: the joint whose angle the curve shows (at once if it shows angles)."""
+    def choose_joint(self, row: int) -> None:
+        """A heatmap row clicked (or a joint picked for fixing): the joint whose angle the curve shows (at once if
+        it shows angles)."""
         self.curve_joint = row
         if self.curve_shows == ANGLE_CURVE:
             self.show_curve(ANGLE_CURVE)

@@ -15,21 +15,28 @@ from PySide6.QtWidgets import QWidget
 
 from s2h_viewer.app.compare_mode import CompareMode, label
 from s2h_viewer.app.job_progress import JobProgress
-from s2h_viewer.render.caption import add_caption, caption_text
+from s2h_viewer.render.caption import add_caption, caption_text, page_caption
 from s2h_viewer.render.compare_scene import render_comparison
 from s2h_viewer.retarget.progress import Cancelled
 
 
 def caption_for(mode: CompareMode, frame: int) -> str:
+    """The picture's line: clip, frame and the selected retarget, or, where the selection is on another page of
+    targets than the one exported, the page's targets (the caption names what the picture shows)."""
     comparison, result = mode.comparison, mode.selected_result()
+    shown = mode.view.comparison
+    if shown is not None and not any(r is result for r in shown.results):
+        return page_caption(comparison.motion.name, frame, comparison.n_frames, comparison.motion.fps,
+                            list(dict.fromkeys(r.target.name for r in shown.results)))
     return caption_text(comparison.motion.name, frame, comparison.n_frames, comparison.motion.fps,
                         label(result).split(" -> ")[0] + (" (fixed)" if result.corrections else ""),
                         result.target.name)
 
 
-def suggested_name(mode: CompareMode, suffix: str, frame: int | None = None) -> str:
-    """'<clip>_<target>_<method>[_f<frame>]<suffix>' for the selected retarget, safe as a file name."""
-    result = mode.selected_result()
+def suggested_name(mode: CompareMode, suffix: str, frame: int | None = None, result=None) -> str:
+    """'<clip>_<target>_<method>[_f<frame>]<suffix>' for the selected retarget (or ``result``), safe as a file
+    name."""
+    result = result or mode.selected_result()
     parts = [mode.comparison.motion.name, result.target.name, result.method]
     stem = "_".join(re.sub(r"[^\w.-]+", "-", part).strip("-.") or "x" for part in parts)
     return f"{stem}{'' if frame is None else f'_f{frame:04d}'}{suffix}"

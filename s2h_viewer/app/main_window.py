@@ -150,7 +150,9 @@ class MainWindow(QMainWindow):
         if shortcut:
             action.setShortcut(QKeySequence(shortcut))
         action.setCheckable(checkable)
-        action.triggered.connect(slot)
+        # a checkable action's slot gets its state; any other's gets nothing (triggered's False read as a path
+        # made File > Export retargeted motion skip its questions and Fix > Load corrections fail)
+        action.triggered.connect(slot if checkable else lambda _=False: slot())
         menu.addAction(action)
         return action
 
@@ -220,6 +222,7 @@ class MainWindow(QMainWindow):
                                   ("side", "Camera: side", "Ctrl+3"), ("default", "Camera: reset", "Ctrl+0")):
             self._action(view_menu, text, lambda _=False, p=preset: self.view.set_options(camera=p), key)
         self._action(view_menu, "Solo the selected retarget / back to the grid", self._toggle_solo, "Ctrl+M")
+        self._action(view_menu, "Frame the hand shown alone (fill the view)", self._frame_hand, "F")
         self._action(view_menu, "Next page of targets (grid)", lambda: self.view.set_page(self.view.page + 1),
                      "Ctrl+PgDown")
         self._action(view_menu, "Previous page of targets (grid)", lambda: self.view.set_page(self.view.page - 1),
@@ -324,6 +327,10 @@ class MainWindow(QMainWindow):
             action.setStatusTip("the last method ticked: tick another before unticking it" if name == last else "")
         self.compare.fill_targets_menu(self.targets_menu)
         self._follow_mode()
+
+    def _frame_hand(self) -> None:
+        if not self.view.frame_hand():
+            self.statusBar().showMessage("Frame the hand: show a hand alone first (double-click it, or Ctrl+M)", 5000)
 
     def _toggle_solo(self) -> None:
         """Ctrl+M: the selected retarget alone in the view, or the grid again (double-click does it too)."""
@@ -532,7 +539,7 @@ class MainWindow(QMainWindow):
     def load_motion(self, path: str) -> None:
         from s2h_viewer.io.files import load_motion_file
         from s2h_viewer.samples import load_sample_hand
-        if not self.compare.fixing.confirm_discard(f"opening {Path(path).name}"):
+        if not self._confirm_corrections(f"opening {Path(path).name}"):
             return
         try:
             motion, rig = load_motion_file(path, options=self.open_options)
@@ -697,23 +704,28 @@ class MainWindow(QMainWindow):
             [f"its corrections {fixes.name}"] if fixes is not None else [])
         return self._wrote(written, f" and {' and '.join(parts)}" if parts else "")
 
-    def save_corrections(self, path: str | None = None) -> Path | None:
-        """Fix > Save corrections: the selected retarget's corrections as a sidecar (`io.corrections`)."""
+    def save_corrections(self, path: str | None = None, result=None) -> Path | None:
+        """Fix > Save corrections: the selected retarget's (or ``result``'s) corrections as a sidecar
+        (`io.corrections`), where the user chooses unless ``path`` is given."""
         if self.comparison is None:
             return None
-        result = self.compare.selected_result()
+        result = result or self.compare.selected_result()
         if not result.corrections:
             self.statusBar().showMessage(f"{exports.label(result)} has no corrections to save", STATUS_MS_EXPORT)
             return None
         path = self._ask_to_save(f"Save corrections of {exports.label(result)}", "Corrections (*.corrections.json)",
-                                 path, lambda: exports.suggested_name(self.compare, ".corrections.json"))
+                                 path, lambda: exports.suggested_name(self.compare, ".corrections.json", result=result))
         if not path:
             return None
         try:
-            return self._wrote(self.compare.fixing.save(path))
+            return self._wrote(self.compare.fixing.save(path, result))
         except OSError as exc:
             self.error(f"{path}: could not write ({exc.strerror or exc})")
             return None
+
+    def _confirm_corrections(self, doing: str) -> bool:
+        """Corrections neither exported nor saved: saved (asking where), discarded, or ``doing`` is cancelled."""
+        return self.compare.fixing.confirm_discard(doing, lambda result: self.save_corrections(result=result))
 
     def load_corrections(self, path: str | None = None) -> None:
         """Fix > Load corrections: a sidecar's corrections applied to the selected retarget (undoable)."""
@@ -807,7 +819,7 @@ class MainWindow(QMainWindow):
         return True
 
     def closeEvent(self, event) -> None:
-        if not self.annotate.confirm_discard("quitting") or not self.compare.fixing.confirm_discard("quitting") or \
+        if not self.annotate.confirm_discard("quitting") or not self._confirm_corrections("quitting") or \
                 not self._confirm_quit_during_export():
             event.ignore()
             return

@@ -7,6 +7,7 @@ which Fix > Load corrections and ``s2h retarget --corrections`` read back."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -24,7 +25,7 @@ from s2h_viewer.render.compare_scene import ON_TOP_OFFSET
 from s2h_viewer.render.scene import to_view
 from s2h_viewer.retarget.compare_state import ResultKey
 from s2h_viewer.retarget.comparison import MethodResult
-from s2h_viewer.retarget.corrections import AXES, Corrections, spaced_joint, turn_about
+from s2h_viewer.retarget.corrections import AXES, Corrections, describe_keys, spaced_joint, turn_about
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.widgets.correction_bar import CorrectionBar
 from s2h_viewer.widgets.rotation_handle import RotationRing
@@ -68,7 +69,7 @@ class Drag:
     joint: int
     frame: int
     axis: str
-    frames: tuple[int, int]  # a new curve's start and end
+    frames: tuple[int, int]  # the key's start and end (a key already at its frame keeps its own)
     sense: float  # +1, or -1 where the view mirrors the hand (a turn on screen is the other way in hand space)
     degrees: float = 0.0
 
@@ -96,7 +97,8 @@ class RetargetFixing(QObject):
         self._live.timeout.connect(self._measure_drag)
         mode.view.grid_built.connect(self._follow_solo)
         mode.view.solo_changed.connect(self._follow_solo)
-        mode.timeline.frame_changed.connect(lambda _: self._place())
+        mode.timeline.frame_changed.connect(self._frame_changed)
+        mode.timeline.play_button.toggled.connect(self._playing_changed)
         mode.result_changed.connect(self._place)
         self.bar.axis_choice.currentIndexChanged.connect(lambda _: self._place())
         self.bar.delete_key.connect(self.delete_key)
@@ -134,6 +136,19 @@ class RetargetFixing(QObject):
         if ring.actor is not None and ring.plotter is self.mode.view.plotter:
             ring.renderer.remove_actor(ring.actor, reset_camera=False, render=False)
         ring.deleteLater()
+
+    def _frame_changed(self, frame: int) -> None:
+        """The ring follows the frame; while it is dragged the frame stays the drag's (a key goes where it began)."""
+        if self._drag is not None and frame != self._drag.frame:
+            self.mode.timeline.set_frame(self._drag.frame)
+            return
+        self._place()
+
+    def _playing_changed(self, playing: bool) -> None:
+        """No playback while the ring is dragged (Space during a drag): the key is at the frame shown."""
+        if playing and self._drag is not None:
+            self.mode.timeline.set_playing(False)
+            self.mode.status("Fix: playback waits for the drag to end")
 
     def _place(self, *_) -> None:
         """The ring about the picked joint's axis as the retarget poses it at the current frame (hidden without a
@@ -180,8 +195,7 @@ class RetargetFixing(QObject):
         correction = result.corrections.of(self.joint)
         if correction is None:
             return f"{name}: no corrections; drag its ring to turn it about its {self.bar.axis} axis at this frame"
-        frames = ", ".join(str(k.frame) for k in correction.keys)
-        return (f"{name}: keys at {frames}, blended over frames {correction.start}-{correction.end}; now "
+        return (f"{name}: {describe_keys(correction)}; here "
                 f"{np.degrees(correction.offset_at(self.mode.timeline.frame).magnitude()):.0f} deg off the method's")
 
     # --- the mouse ---
@@ -199,16 +213,26 @@ class RetargetFixing(QObject):
             renderer.WorldToDisplay()
             on_screen.append(renderer.GetDisplayPoint()[:2])
         distance = np.linalg.norm(np.asarray(on_screen) - (x, y), axis=1)
-        self.joint = PICKABLE[int(distance.argmin())][1] if distance.min() <= PICK_PIXELS else None
-        self._place()
+        self._picked(PICKABLE[int(distance.argmin())][1] if distance.min() <= PICK_PIXELS else None)
 
     def pick(self, joint: str) -> None:
         """Pick ``joint`` (an articulated joint's name) as a click on it would (keyboard users, scripts)."""
-        self.joint = topo.ARTICULATED_NAMES.index(joint)
+        self._picked(topo.ARTICULATED_NAMES.index(joint))
+
+    def _picked(self, joint: int | None) -> None:
+        """The joint picked (None: none): its ring, and the error curve's joint bend follows it."""
+        self.joint = joint
+        if joint is not None:
+            self.mode.choose_joint(int(topo.ARTICULATED_JOINTS[joint]) - 1)  # its heatmap row
         self._place()
 
-    def _key_frames(self, frame: int) -> tuple[int, int]:
-        """A new key's curve: the marked range if it holds ``frame``, else the ease frames around it."""
+    def _key_frames(self, result: MethodResult, frame: int) -> tuple[int, int]:
+        """The range of the key a drag at ``frame`` makes: the key's own if one is there, else the marked range if
+        it holds ``frame``, else the ease frames around it."""
+        correction = result.corrections.of(self.joint)
+        key = correction.key_at(frame) if correction is not None else None
+        if key is not None:
+            return key.start, key.end
         marked = self.mode.timeline.marked
         if marked is not None and frame in marked:
             return marked.start, marked[-1]
@@ -223,7 +247,7 @@ class RetargetFixing(QObject):
         key, result = shown
         frame = self.mode.timeline.frame
         sense = float(np.sign(np.linalg.det(result.target.palm_frame)))
-        self._drag = Drag(key, result, self.joint, frame, self.bar.axis, self._key_frames(frame), sense)
+        self._drag = Drag(key, result, self.joint, frame, self.bar.axis, self._key_frames(result, frame), sense)
 
     def _turn(self, degrees: float) -> None:
         if self._drag is not None:
@@ -271,17 +295,20 @@ class RetargetFixing(QObject):
         key, result = shown
         corrections = change(result.corrections, self.joint)
         if corrections == result.corrections:
-            self.mode.status(f"Fix: nothing to {text}")
+            self.mode.status(f"Fix: {text}: nothing there to change")
             return
         self._push(key, result, self.mode.corrected(result, corrections), text)
+
+    def _joint_name(self) -> str:
+        return spaced_joint(topo.ARTICULATED_NAMES[self.joint]) if self.joint is not None else "the joint"
 
     def delete_key(self) -> None:
         """The picked joint's key at the current frame taken away."""
         frame = self.mode.timeline.frame
-        self._change(lambda c, j: c.without_key(j, frame), f"delete the key at frame {frame}")
+        self._change(lambda c, j: c.without_key(j, frame), f"delete {self._joint_name()}'s key at frame {frame}")
 
     def clear_joint(self) -> None:
-        self._change(lambda c, j: c.without_joint(j), "clear the joint's corrections")
+        self._change(lambda c, j: c.without_joint(j), f"clear {self._joint_name()}'s corrections")
 
     def clear_all(self) -> None:
         self._change(lambda c, j: Corrections(), "remove the retarget's corrections", needs_joint=False)
@@ -291,8 +318,12 @@ class RetargetFixing(QObject):
         if marked is None:
             self.mode.status("Fix: mark a range first (Playback > Mark in I, Mark out O)")
             return
-        self._change(lambda c, j: c.with_range(j, marked.start, marked[-1]),
-                     f"blend over frames {marked.start}-{marked[-1]}")
+        frame = self.mode.timeline.frame
+        if frame not in marked:
+            self.mode.status(f"Fix: the marked range ({marked.start}-{marked[-1]}) does not hold frame {frame}")
+            return
+        self._change(lambda c, j: c.with_range(j, frame, marked.start, marked[-1]),
+                     f"blend {self._joint_name()}'s key at frame {frame} over frames {marked.start}-{marked[-1]}")
 
     def next_axis(self) -> None:
         self.bar.next_axis()
@@ -303,8 +334,8 @@ class RetargetFixing(QObject):
         for text, slot, shortcut in (("Next ring axis (bend, splay, twist)", self.next_axis, "R"),
                                      ("Delete the joint's key at this frame", self.delete_key, "Shift+K"),
                                      ("Clear the joint's corrections", self.clear_joint, "Ctrl+Shift+K"),
-                                     ("Blend the joint's corrections over the marked range", self.use_marked_range,
-                                      None),
+                                     ("Blend the joint's key at this frame over the marked range",
+                                      self.use_marked_range, None),
                                      ("Remove every correction of the retarget", self.clear_all, None)):
             action = QAction(text, menu)
             if shortcut:
@@ -360,16 +391,21 @@ class RetargetFixing(QObject):
             self._saved.update({k: r.corrections for k, r in zip(self.mode._shown_keys(),
                                                                   self.mode.comparison.results)})
 
-    def confirm_discard(self, doing: str) -> bool:
-        """True when no corrections would be lost by ``doing``, or the user chose to discard them."""
+    def confirm_discard(self, doing: str, save_as: Callable[[MethodResult], Path | None]) -> bool:
+        """True when no corrections would be lost by ``doing``: none unsaved, or the user saved them (``save_as``
+        asks where and writes a retarget's sidecar, None when cancelled) or chose to discard them."""
         unsaved = self.unsaved()
         if not unsaved:
             return True
         names = ", ".join(f"{METHODS[r.method].label} -> {r.target.name}" for r in unsaved)
         choice = ask(self.mode.window(), "s2h-viewer: unsaved corrections",
-                     f"The corrections of {names} are not exported or saved. Discard them before {doing}?",
-                     [("Discard", QMessageBox.ButtonRole.DestructiveRole),
+                     f"Save the corrections of {names} before {doing}?",
+                     [("Save...", QMessageBox.ButtonRole.AcceptRole),
+                      ("Discard", QMessageBox.ButtonRole.DestructiveRole),
                       ("Cancel", QMessageBox.ButtonRole.RejectRole)],
-                     "File > Export retargeted motion writes the corrected motion and a sidecar of its corrections; "
-                     "Fix > Save corrections writes the sidecar alone.")
-        return choice == 0
+                     "Save writes each retarget's corrections as a sidecar (Fix > Load corrections and s2h retarget "
+                     "--corrections read it); File > Export retargeted motion writes the corrected motion with it. "
+                     "Discarded corrections are lost.")
+        if choice == 0:
+            return all(save_as(result) is not None for result in unsaved)
+        return choice == 1

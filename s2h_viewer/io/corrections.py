@@ -6,11 +6,12 @@ Schema (version 1)::
 
     {"format": "s2h-corrections", "version": 1,
      "clip": "gestures", "frames": 378, "fps": 30.0, "source": "birch", "target": "iris", "method": "tbs_copy",
-     "joints": [{"joint": "index_pip", "start": 20, "end": 60,
-                 "keys": [{"frame": 40, "rotation_deg": [0.0, 25.0, 0.0]}]}]}
+     "joints": [{"joint": "index_pip",
+                 "keys": [{"frame": 40, "start": 30, "end": 50, "rotation_deg": [0.0, 25.0, 0.0]}]}]}
 
-``rotation_deg``: the key's offset as a rotation vector in degrees in the joint's TBS frame (its components
-about twist, bend, splay). A file is hostile until checked: every count, name, frame and number is."""
+A key: its frame, the frames it eases in from and out to (``start <= frame <= end``), and its turn as a rotation
+vector in degrees in the joint's TBS frame (its components about twist, bend, splay). A file is hostile until
+checked: every count, name, frame and number is."""
 
 from __future__ import annotations
 
@@ -61,9 +62,10 @@ def save_corrections(path: str | Path, file: CorrectionsFile) -> Path:
     document = {
         "format": FORMAT, "version": VERSION, "clip": file.clip, "frames": file.frames, "fps": file.fps,
         "source": file.source, "target": file.target, "method": file.method,
-        "joints": [{"joint": c.name, "start": c.start, "end": c.end,
-                    "keys": [{"frame": k.frame, "rotation_deg": [round(math.degrees(v), 6) for v in k.rotvec]}
-                             for k in c.keys]} for c in file.corrections.joints]}
+        "joints": [{"joint": c.name,
+                    "keys": [{"frame": k.frame, "start": k.start, "end": k.end,
+                              "rotation_deg": [round(math.degrees(v), 6) for v in k.rotvec]} for k in c.keys]}
+                   for c in file.corrections.joints]}
     with atomic_path(path) as tmp:
         tmp.write_text(json.dumps(document, indent=1) + "\n")
     return Path(path)
@@ -133,8 +135,6 @@ def _parse(path: Path, document) -> CorrectionsFile:
         if name in seen:
             raise _fail(path, f"{where}: joint {name} is corrected twice")
         seen.add(name)
-        start = _integer(path, entry.get("start"), f"{where} ({name}) start", 0, frames - 1)
-        end = _integer(path, entry.get("end"), f"{where} ({name}) end", start, frames - 1)
         keys = entry.get("keys")
         if not isinstance(keys, list) or not keys:
             raise _fail(path, f"{where} ({name}) has no keys")
@@ -143,7 +143,9 @@ def _parse(path: Path, document) -> CorrectionsFile:
             what = f"{where} ({name}) key {k}"
             if not isinstance(key, dict):
                 raise _fail(path, f"{what} is not an object")
-            frame = _integer(path, key.get("frame"), f"{what} frame", start, end)
+            frame = _integer(path, key.get("frame"), f"{what} frame", 0, frames - 1)
+            start = _integer(path, key.get("start"), f"{what} start", 0, frame)
+            end = _integer(path, key.get("end"), f"{what} end", frame, frames - 1)
             if parsed and frame <= parsed[-1].frame:
                 raise _fail(path, f"{what}: frame {frame} does not follow frame {parsed[-1].frame}")
             rotation = key.get("rotation_deg")
@@ -152,8 +154,8 @@ def _parse(path: Path, document) -> CorrectionsFile:
                 raise _fail(path, f"{what}: rotation_deg is {rotation!r}, not three finite numbers")
             if math.hypot(*rotation) > MAX_DEGREES:
                 raise _fail(path, f"{what}: a turn of {math.hypot(*rotation):.0f} deg (at most {MAX_DEGREES:.0f})")
-            parsed.append(OffsetKey(frame, tuple(math.radians(v) for v in rotation)))
-        corrections.append(JointCorrection(topo.ARTICULATED_NAMES.index(name), tuple(parsed), start, end))
+            parsed.append(OffsetKey(frame, tuple(math.radians(v) for v in rotation), start, end))
+        corrections.append(JointCorrection(topo.ARTICULATED_NAMES.index(name), tuple(parsed)))
     return CorrectionsFile(Corrections(tuple(sorted(corrections, key=lambda c: c.joint))),
                            _text(path, document, "clip"), frames, float(fps), _text(path, document, "source"),
                            _text(path, document, "target"), _text(path, document, "method"))

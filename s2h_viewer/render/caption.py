@@ -25,3 +25,8 @@ def frame_readout(frame: int, n_frames: int, fps: float) -> str:
 def caption_text(clip: str, frame: int, n_frames: int, fps: float, method: str, target: str) -> str:
     """One line: the clip, the frame as the timeline reads it, the selected retarget."""
     return f"{clip}   frame {frame_readout(frame, n_frames, fps)}   selected: {method} -> {target}"
+
+
+def page_caption(clip: str, frame: int, n_frames: int, fps: float, targets: list[str]) -> str:
+    """One line: the clip, the frame, the targets pictured (a page of them without the selected retarget)."""
+    return f"{clip}   frame {frame_readout(frame, n_frames, fps)}   targets: {', '.join(targets)}"

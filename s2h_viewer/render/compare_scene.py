@@ -25,6 +25,7 @@ from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.skinning import skin_vertices
 from s2h_viewer.render.keypoint_dots import KeypointDots
 from s2h_viewer.render.scene import BONE_COLOUR, SKIN_COLOUR, display_hand, skeleton, surface, to_view
+from s2h_viewer.render.text_lock import TEXT_LOCK
 from s2h_viewer.retarget.comparison import Comparison, MethodResult
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.semantics.contacts import CONTACT_PAIRS, SITES, detect_contacts, pad_centres
@@ -36,6 +37,8 @@ PLAYING_FACES = 3_000  # while the window plays: a third of the triangles, a qua
 COLOUR_BAR_SHARE = 0.065  # of the grid's width: the colour bar's column, however many hand columns
 LABEL_PX = 13  # the grid's labels' font size, in pixels, where their cell has room for it
 MIN_LABEL_PX = 9  # and at least, in small cells: smaller glyphs are no longer read at a glance
+#: the picture height LABEL_PX was chosen for: a taller export (2160 pixels) draws its labels larger in proportion
+LABEL_REFERENCE_HEIGHT = 1000
 LABEL_PAD = 4  # pixels between a label and its cell's top and left edges (and the band's bottom)
 BAND_SHARE = 0.35  # of a cell's height: the font shrinks until the labels' band fits in it
 MAX_BAND_SHARE = 0.45  # at most: a cell too short for every line even at MIN_LABEL_PX leaves out the last ones
@@ -314,7 +317,8 @@ def text_extent(text: str, px: int) -> tuple[int, int]:
     """Width and height in pixels of ``text`` at ``px`` pixels, as VTK will draw it (its own glyph measure)."""
     plain_text()
     box = [0, 0, 0, 0]
-    vtkTextRenderer.GetInstance().GetBoundingBox(_text_property(px), text, box, TEXT_DPI)
+    with TEXT_LOCK:
+        vtkTextRenderer.GetInstance().GetBoundingBox(_text_property(px), text, box, TEXT_DPI)
     return box[1] - box[0] + 1, box[3] - box[2] + 1
 
 
@@ -325,11 +329,11 @@ def band_height(lines: int, px: int) -> int:
 
 
 @lru_cache(maxsize=256)
-def label_font(width: int, height: int) -> tuple[int, int]:
+def label_font(width: int, height: int, largest: int = LABEL_PX) -> tuple[int, int]:
     """The labels' font size and lines kept in a ``width`` x ``height`` pixel cell: the largest size up to
     LABEL_PX whose widest line fits the width and whose band BAND_SHARE of the height; else MIN_LABEL_PX with
     the lines whose band fits MAX_BAND_SHARE (the title at least), so the hand keeps most of a small cell."""
-    for px in range(LABEL_PX, MIN_LABEL_PX - 1, -1):
+    for px in range(largest, MIN_LABEL_PX - 1, -1):
         if (text_extent(WIDEST_LINE, px)[0] <= width - 2 * LABEL_PAD
                 and band_height(LABEL_LINES, px) <= BAND_SHARE * height):
             return px, LABEL_LINES
@@ -337,9 +341,9 @@ def label_font(width: int, height: int) -> tuple[int, int]:
     return MIN_LABEL_PX, lines
 
 
-def text_band(width: int, height: int) -> int:
+def text_band(width: int, height: int, largest: int = LABEL_PX) -> int:
     """Pixels at the top of a ``width`` x ``height`` cell kept for its label: the hand is drawn below them."""
-    px, lines = label_font(width, height)
+    px, lines = label_font(width, height, largest)
     return band_height(lines, px)
 
 
@@ -361,13 +365,20 @@ def cell_pixels(plotter: pv.Plotter, renderer: pv.Renderer) -> tuple[int, int]:
     return max(1, round((x1 - x0) * width)), max(1, round((y1 - y0) * height))
 
 
-def fit_cells(plotter: pv.Plotter, hands: list["PosedHand"], labels: list[CellLabel]) -> None:
+def label_px_for(picture_height: int) -> int:
+    """The labels' largest font size in a picture ``picture_height`` pixels tall: LABEL_PX, larger in proportion
+    in an export taller than LABEL_REFERENCE_HEIGHT (a 4K picture's labels read as the window's do)."""
+    return max(LABEL_PX, round(LABEL_PX * picture_height / LABEL_REFERENCE_HEIGHT))
+
+
+def fit_cells(plotter: pv.Plotter, hands: list["PosedHand"], labels: list[CellLabel],
+              largest: int = LABEL_PX) -> None:
     """The drawn cells to their size now (the window's size and solo change it): the labels in one font, the
     smallest cell's (the grid's cells differ by a pixel of rounding, the legend's may span rows); each hand's
     overlays (`Overlays.fit`); the shared camera for a hand's cell (`fit_view_angle`)."""
     drawn = [(label, cell_pixels(plotter, label.renderer)) for label in labels if label.renderer.GetDraw()]
     if drawn:
-        font = label_font(min(w for _, (w, _) in drawn), min(h for _, (_, h) in drawn))
+        font = label_font(min(w for _, (w, _) in drawn), min(h for _, (_, h) in drawn), largest)
         for label, (width, height) in drawn:
             label.fit(width, height, font)
     shown = [hand for hand in hands if hand.renderer.GetDraw()]
@@ -380,14 +391,15 @@ def fit_cells(plotter: pv.Plotter, hands: list["PosedHand"], labels: list[CellLa
     if legend is not None:
         legend.fit(*cell_pixels(plotter, legend.renderer))
     if shown:
-        fit_view_angle(plotter, shown[0].renderer)
+        fit_view_angle(plotter, shown[0].renderer, largest)
 
 
 def result_label(result: MethodResult) -> str:
-    """A retarget's cell text: method and target, its S_finger and kept scores (and its corrections, if any)."""
-    fixed = f", {result.corrections.n_keys} fix{'es' * (result.corrections.n_keys != 1)}" if result.corrections \
-        else ""
-    return (f"{METHODS[result.method].label} -> {result.target.name}\nS_finger {result.scores.s_finger:.3f}\n"
+    """A retarget's cell text: method and target, its S_finger and kept scores; a corrected one's method starred
+    (a start of line that survives eliding) and its keys counted."""
+    keys = result.corrections.n_keys
+    star, fixed = ("*", f", {keys} fix{'es' * (keys != 1)}") if keys else ("", "")
+    return (f"{METHODS[result.method].label}{star} -> {result.target.name}\nS_finger {result.scores.s_finger:.3f}\n"
             f"kept {result.scores.signature_kept:.3f}{fixed}")
 
 
@@ -491,14 +503,14 @@ VIEW_ANGLE = 30.0  # degrees, vertical
 FIT_ASPECT = 0.65  # width / height of a cell's hand part under which a hand's width would not fit at VIEW_ANGLE
 
 
-def fit_view_angle(plotter: pv.Plotter, renderer) -> None:
+def fit_view_angle(plotter: pv.Plotter, renderer, largest: int = LABEL_PX) -> None:
     """Fit the shared camera to ``renderer``'s cell (every hand's cell has its size): the hand drawn below the
     cell's text band (`text_band`), the picture moved down by the band (the camera's window centre up) and the
     view angle widened so the part below it shows what the whole cell showed at VIEW_ANGLE; more where that
     part is narrower than FIT_ASPECT (one target: tall cells), so a hand's width stays in view. Zooming moves
     the camera, not the angle, so calling this before every render keeps the user's zoom."""
     width, height = cell_pixels(plotter, renderer)
-    band = min(text_band(width, height), height - 1) / height  # of the cell's height
+    band = min(text_band(width, height, largest), height - 1) / height  # of the cell's height
     widen = max(1.0, FIT_ASPECT * (1.0 - band) * height / width) / (1.0 - band)
     plotter.camera.view_angle = 2.0 * np.degrees(np.arctan(np.tan(np.radians(VIEW_ANGLE / 2)) * widen))
     plotter.camera.SetWindowCenter(0.0, band)  # in [-1, 1] over the cell: the hand's part's middle at its centre
@@ -728,14 +740,15 @@ def render_comparison(comparison: Comparison, path: str | Path, frame: int | Non
     from s2h_viewer.render.video import VIDEO_SUFFIXES, write_video
 
     path = Path(path)
-    plotter = pv.Plotter(off_screen=True, window_size=size, **grid_layout(comparison))
-    plotter.render_window.SetMultiSamples(0)
-    hands, labels = populate(plotter, comparison)
-    apply_options(plotter, hands, options)
-    framing.apply(plotter, hands)
-    ghost = solo_ghost(hands, options, framing.solo)
-    fit_cells(plotter, hands, labels)  # to the cells' sizes now (a solo cell is the whole picture)
-    plotter.show(auto_close=False)
+    with TEXT_LOCK:  # its labels laid out and first drawn while the window draws none (an export's worker thread)
+        plotter = pv.Plotter(off_screen=True, window_size=size, **grid_layout(comparison))
+        plotter.render_window.SetMultiSamples(0)
+        hands, labels = populate(plotter, comparison)
+        apply_options(plotter, hands, options)
+        framing.apply(plotter, hands)
+        ghost = solo_ghost(hands, options, framing.solo)
+        fit_cells(plotter, hands, labels, label_px_for(size[1]))  # to the cells now (solo: the whole picture)
+        plotter.show(auto_close=False)
 
     video = path.suffix.lower() in VIDEO_SUFFIXES
     shown = (range(comparison.n_frames) if frames is None else frames) if video else range(frame or 0, (frame or 0) + 1)

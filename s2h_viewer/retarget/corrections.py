@@ -1,11 +1,12 @@
-"""Corrections of a retarget: per-joint offset rotations keyed at frames and blended over a frame range with
-ease in and out, applied on top of a method's motion (the fix a person makes where a retarget reads wrong).
+"""Corrections of a retarget: per-joint offset rotations keyed at frames, each blended over its own frame range
+with ease in and out, applied on top of a method's motion (the fix a person makes where a retarget reads wrong).
 
 An offset turns a joint in its own TBS frame (``q' = q * offset``), so its children follow and a turn about
-the joint's twist, bend or splay axis stays one. Between two keys of a joint the offset goes from one to
-the other; from its range's start to the first key it eases in from none, from the last key to the range's
-end it eases out; outside the range there is none. Every ease is a smoothstep (flat at both ends), so a
-corrected finger starts and stops moving gently. Pure numpy / scipy: the viewer, its motion exports and
+the joint's twist, bend or splay axis stays one. Each key is a bump: none at its range's start, easing in to
+its turn at its frame, easing out to none at its range's end (smoothsteps, flat at both ends: a corrected
+finger starts and stops moving gently); a frame no key's range holds is the method's own. Keys whose ranges
+overlap compose, in the order of their frames, so a second key changes only its own range and deleting one
+gives back exactly what was there without it. Pure numpy / scipy: the viewer, its motion exports and
 ``s2h retarget --corrections`` apply the same curves."""
 
 from __future__ import annotations
@@ -30,62 +31,52 @@ def smoothstep(s: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class OffsetKey:
-    """The offset of one joint at one frame: a rotation vector in the joint's TBS frame (radians)."""
+    """One joint's turn at ``frame`` (a rotation vector in its TBS frame, radians), eased in from ``start`` and
+    out to ``end`` (``start <= frame <= end``; no offset from this key at and outside them but on ``frame``)."""
 
     frame: int
     rotvec: tuple[float, float, float]
+    start: int
+    end: int
 
     @property
     def rotation(self) -> Rotation:
         return Rotation.from_rotvec(np.asarray(self.rotvec, dtype=np.float64))
 
+    def weights(self, frames: np.ndarray) -> np.ndarray:
+        """Its share of its turn at each of ``frames``: 0 outside its range, 1 at its frame, smoothsteps between."""
+        rising = smoothstep((frames - self.start) / max(self.frame - self.start, 1))
+        falling = smoothstep((self.end - frames) / max(self.end - self.frame, 1))
+        weights = np.where(frames <= self.frame, rising, falling)
+        weights[frames == self.frame] = 1.0
+        weights[(frames < self.start) | (frames > self.end)] = 0.0
+        return weights
+
 
 @dataclass(frozen=True)
 class JointCorrection:
-    """One joint's offset curve: its keys (by frame, at least one) inside ``start`` .. ``end`` (no offset at
-    and outside these frames unless a key sits on them)."""
+    """One joint's keys, by frame (at least one, one per frame)."""
 
     joint: int  # articulated index (`topology.ARTICULATED_NAMES`)
     keys: tuple[OffsetKey, ...]
-    start: int
-    end: int
 
     @property
     def name(self) -> str:
         return topo.ARTICULATED_NAMES[self.joint]
 
-    def offsets(self, n_frames: int) -> Rotation:
-        """(n_frames,) the offset at every frame of the clip."""
+    def key_at(self, frame: int) -> OffsetKey | None:
+        return next((k for k in self.keys if k.frame == frame), None)
+
+    def offsets(self, n_frames: int, keys: tuple[OffsetKey, ...] | None = None) -> Rotation:
+        """(n_frames,) the offset at every frame: its keys' (or ``keys``') eased turns composed in frame order."""
         frames = np.arange(n_frames)
-        rotvecs = np.zeros((n_frames, 3))
-        first, last = self.keys[0], self.keys[-1]
-        easing_in = (frames >= self.start) & (frames <= first.frame)
-        span = max(first.frame - self.start, 1)
-        rotvecs[easing_in] = smoothstep((frames[easing_in] - self.start) / span)[:, None] * np.asarray(first.rotvec)
-        easing_out = (frames >= last.frame) & (frames <= self.end)
-        span = max(self.end - last.frame, 1)
-        rotvecs[easing_out] = smoothstep((self.end - frames[easing_out]) / span)[:, None] * np.asarray(last.rotvec)
-        for key in self.keys:  # each key's own offset at its frame (also on the range's ends)
-            if 0 <= key.frame < n_frames:
-                rotvecs[key.frame] = key.rotvec
-        offsets = Rotation.from_rotvec(rotvecs)
-        for a, b in zip(self.keys, self.keys[1:]):  # between keys: from one offset to the next, eased
-            between = frames[(frames > a.frame) & (frames < b.frame)]
-            if len(between):
-                step = (a.rotation.inv() * b.rotation).as_rotvec()
-                s = smoothstep((between - a.frame) / (b.frame - a.frame))
-                turned = a.rotation * Rotation.from_rotvec(s[:, None] * step)
-                offsets = _replace(offsets, between, turned)
-        return offsets
+        offset = Rotation.identity(n_frames)
+        for key in self.keys if keys is None else keys:
+            offset = offset * Rotation.from_rotvec(key.weights(frames)[:, None] * np.asarray(key.rotvec))
+        return offset
 
     def offset_at(self, frame: int) -> Rotation:
         return self.offsets(frame + 1)[frame]
-
-
-def _replace(rotations: Rotation, where: np.ndarray, values: Rotation) -> Rotation:
-    quats = rotations.as_quat()
-    quats[where] = values.as_quat()
-    return Rotation.from_quat(quats)
 
 
 @dataclass(frozen=True)
@@ -109,42 +100,49 @@ class Corrections:
         correction = self.of(joint)
         return Rotation.identity() if correction is None else correction.offset_at(frame)
 
-    def _with(self, correction: JointCorrection | None, joint: int) -> "Corrections":
-        kept = [c for c in self.joints if c.joint != joint] + ([correction] if correction is not None else [])
+    def _with(self, joint: int, keys: tuple[OffsetKey, ...]) -> "Corrections":
+        kept = [c for c in self.joints if c.joint != joint]
+        if keys:
+            kept.append(JointCorrection(joint, tuple(sorted(keys, key=lambda k: k.frame))))
         return Corrections(tuple(sorted(kept, key=lambda c: c.joint)))
 
     def with_turn(self, joint: int, frame: int, turn: Rotation, start: int, end: int) -> "Corrections":
-        """The joint turned by ``turn`` (in its TBS frame) at ``frame`` on top of its offset there: a key at
-        ``frame`` (replacing one there). A new curve spans ``start`` .. ``end``; an existing one widens to
-        them if the key falls outside it."""
-        offset = (self.offset_at(joint, frame) * turn).as_rotvec()
-        key = OffsetKey(int(frame), tuple(float(v) for v in offset))
+        """The joint turned by ``turn`` (in its TBS frame) at ``frame`` on top of its offset there: a new key there
+        eased over ``start`` .. ``end``, or the key already there (its range kept) turned further. Only the
+        frames of that key's range change."""
         correction = self.of(joint)
-        if correction is None:
-            return self._with(JointCorrection(joint, (key,), min(start, frame), max(end, frame)), joint)
-        keys = tuple(sorted([k for k in correction.keys if k.frame != frame] + [key], key=lambda k: k.frame))
-        inside = correction.start <= frame <= correction.end
-        return self._with(JointCorrection(joint, keys, correction.start if inside else min(correction.start, start),
-                                          correction.end if inside else max(correction.end, end)), joint)
+        keys = correction.keys if correction is not None else ()
+        old = next((k for k in keys if k.frame == frame), None)
+        start, end = (old.start, old.end) if old is not None else (min(start, frame), max(end, frame))
+        placeholder = OffsetKey(int(frame), (0.0, 0.0, 0.0), int(start), int(end))
+        order = sorted([k for k in keys if k.frame != frame] + [placeholder], key=lambda k: k.frame)
+        at = order.index(placeholder)
+        after = JointCorrection(joint, tuple(order)).offsets(frame + 1, tuple(order[at + 1:]))[frame]
+        own = old.rotation if old is not None else Rotation.identity()
+        # the keys compose as ``ahead * this * after``: ``ahead * new * after = ahead * own * after * turn`` is the
+        # joint at ``frame`` turned by ``turn`` on top of what it was
+        new = own * after * turn * after.inv()
+        order[at] = dataclasses.replace(placeholder, rotvec=tuple(float(v) for v in new.as_rotvec()))
+        return self._with(joint, tuple(order))
 
     def without_key(self, joint: int, frame: int) -> "Corrections":
         """The joint's key at ``frame`` taken away (its curve too if it was the last key)."""
         correction = self.of(joint)
         if correction is None:
             return self
-        keys = tuple(k for k in correction.keys if k.frame != frame)
-        return self._with(dataclasses.replace(correction, keys=keys) if keys else None, joint)
+        return self._with(joint, tuple(k for k in correction.keys if k.frame != frame))
 
     def without_joint(self, joint: int) -> "Corrections":
-        return self._with(None, joint)
+        return self._with(joint, ())
 
-    def with_range(self, joint: int, start: int, end: int) -> "Corrections":
-        """The joint's curve blended over ``start`` .. ``end`` (kept around its keys)."""
+    def with_range(self, joint: int, frame: int, start: int, end: int) -> "Corrections":
+        """The joint's key at ``frame`` eased over ``start`` .. ``end`` instead (kept around its frame)."""
         correction = self.of(joint)
-        if correction is None:
+        key = correction.key_at(frame) if correction is not None else None
+        if key is None:
             return self
-        start, end = min(start, correction.keys[0].frame), max(end, correction.keys[-1].frame)
-        return self._with(dataclasses.replace(correction, start=start, end=end), joint)
+        key = dataclasses.replace(key, start=min(start, frame), end=max(end, frame))
+        return self._with(joint, tuple(key if k.frame == frame else k for k in correction.keys))
 
     def apply(self, q_tbs: np.ndarray) -> np.ndarray:
         """(T, 15, 4) TBS quaternions (w, x, y, z) with every joint's offsets applied (a new array)."""
@@ -158,13 +156,18 @@ class Corrections:
         return q
 
     def frames(self) -> np.ndarray:
-        """Every keyed frame, sorted, once each (the timeline's key marks)."""
+        """Every keyed frame, sorted, once each (the error curve's key marks)."""
         return np.unique([k.frame for c in self.joints for k in c.keys]).astype(np.int64)
 
     def describe(self) -> str:
-        """'index PIP (1 key, frames 20-60), pinky DIP (2 keys, frames 0-90)'."""
-        return ", ".join(f"{spaced_joint(c.name)} ({len(c.keys)} key{'s' * (len(c.keys) != 1)}, frames "
-                         f"{c.start}-{c.end})" for c in self.joints)
+        """'index PIP (keys at 40 over 30-50, 60 over 50-70), pinky DIP (key at 12 over 2-22)'."""
+        return ", ".join(f"{spaced_joint(c.name)} ({describe_keys(c)})" for c in self.joints)
+
+
+def describe_keys(correction: JointCorrection) -> str:
+    """'keys at 40 over 30-50, 60 over 50-70'."""
+    keys = ", ".join(f"{k.frame} over {k.start}-{k.end}" for k in correction.keys)
+    return f"key{'s' * (len(correction.keys) != 1)} at {keys}"
 
 
 def spaced_joint(name: str) -> str:

@@ -205,6 +205,19 @@ class CompareView(QWidget):
             if self.interactor is not None:
                 self.interactor.update()
 
+    def frame_hand(self) -> bool:
+        """Turn the camera onto the hand shown alone so that it fills the view (as a 3D tool's "frame selected"):
+        a small hand's fingers readable, to fix them; False (nothing done) in the grid."""
+        hand = self._hands[self.solo] if 0 <= self.solo < len(self._hands) else None
+        if hand is None or self.plotter is None:
+            return False
+        shape = hand.mesh if hand.levels else hand.bones
+        hand.renderer.ResetCamera(*shape.bounds)
+        for renderer in self.plotter.renderers:
+            renderer.ResetCameraClippingRange()
+        self.interactor.update()
+        return True
+
     def solo_hand(self) -> PosedHand | None:
         """The retarget shown alone, or None (the grid, or the source alone)."""
         return self._hands[self.solo] if self.solo >= 1 and self.solo < len(self._hands) else None

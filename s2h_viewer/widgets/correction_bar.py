@@ -12,8 +12,7 @@ from s2h_viewer.retarget.corrections import AXES
 
 #: frames a new key eases in over before it and out over after it, unless a marked range holds the frame
 DEFAULT_EASE = 10
-HINT = ("Fix this retarget: click a joint of the hand, drag its ring (R: the next axis); a key blends over the "
-        "marked range, else the ease frames (Fix menu: Alt+X)")
+HINT = "Fix: click a joint, drag its ring (R: next axis). Keys blend over the marked range or the ease frames."
 
 
 class CorrectionBar(QWidget):

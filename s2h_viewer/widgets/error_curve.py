@@ -14,6 +14,7 @@ MOUSE = (("click the error curve", "jump to that frame"),)
 MISSING_COLOUR = QColor("#d9d9d9")
 OUTSIDE_RANGE_COLOUR, RANGE_COLOUR = QColor("#eeeeee"), QColor("#2e7d32")
 REFERENCE_COLOUR = QColor("#9e9e9e")
+KEY_COLOUR = QColor("#e8a317")  # a correction's keyed frames (the rotation ring's colour)
 MARGIN = 6  # pixels around the curve: a worst frame's ring (radius 3) at either end stays whole
 
 
@@ -63,6 +64,7 @@ class ErrorCurve(QWidget):
         self.title = ""
         self.marked: range | None = None  # the timeline's in and out points
         self.reference: np.ndarray | None = None
+        self.keys = np.zeros(0, dtype=int)  # frames keyed by the retarget's corrections (`set_keys`)
         self.quantity = "ASM error per frame"
         self._curve: QPixmap | None = None  # the curve and its marks, drawn once per curve and size
 
@@ -80,6 +82,12 @@ class ErrorCurve(QWidget):
         self.setToolTip(f"{title}: {quantity}; worst frames (red): "
                         f"{', '.join(str(f) for f in self.worst)}. {note}Click to jump; ] and [ step between "
                         f"the worst frames.")
+        self.update()
+
+    def set_keys(self, frames: np.ndarray) -> None:
+        """Mark the frames the shown retarget's corrections key (diamonds on the frame axis)."""
+        self.keys = np.asarray(frames, dtype=int)
+        self._curve = None
         self.update()
 
     def set_range(self, marked: range | None) -> None:
@@ -160,7 +168,15 @@ class ErrorCurve(QWidget):
             painter.drawLine(QPointF(x, MARGIN), QPointF(x, MARGIN + 8))
             painter.drawEllipse(QPointF(x, self._y(self.error[frame])), 3, 3)
         self._draw_axes(painter)
-        painter.drawText(MARGIN + 2, self.height() - 4, f"{self.quantity} ({self.title})   max {self.error.max():.3f}")
+        painter.setPen(QPen(KEY_COLOUR.darker(130), 1))
+        painter.setBrush(KEY_COLOUR)
+        for frame in self.keys:  # a correction key: a diamond on the frame axis
+            x, y = self._x(frame), self.axis_y()
+            painter.drawPolygon(QPolygonF([QPointF(x, y - 5), QPointF(x + 4, y), QPointF(x, y + 5), QPointF(x - 4, y)]))
+        keyed = f", {len(self.keys)} correction key{'s' * (len(self.keys) != 1)} (orange)" if len(self.keys) else ""
+        painter.setPen(QPen(QColor("black"), 1))
+        painter.drawText(MARGIN + 2, self.height() - 4,
+                         f"{self.quantity} ({self.title})   max {self.error.max():.3f}{keyed}")
         painter.end()
         return pixmap
 

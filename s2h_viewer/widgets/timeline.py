@@ -27,7 +27,8 @@ WIDGET_RATE = 30.0  # refreshes per second of the slider, the frame box and the 
 MAX_DRAW_WAIT = 0.2  # seconds a tick waits for the view to draw the frame asked before asking anew
 PASSED_KEYS = (Qt.Key.Key_Space, Qt.Key.Key_Left, Qt.Key.Key_Right, Qt.Key.Key_Home, Qt.Key.Key_End,
                Qt.Key.Key_BracketLeft, Qt.Key.Key_BracketRight,  # the worst-frame keys
-               Qt.Key.Key_I, Qt.Key.Key_O)  # the in and out points
+               Qt.Key.Key_I, Qt.Key.Key_O,  # the in and out points
+               Qt.Key.Key_F, Qt.Key.Key_R, Qt.Key.Key_K)  # frame the hand; fixing: the ring's axis, its keys
 
 
 class _LeaveShortcutKeys(QObject):

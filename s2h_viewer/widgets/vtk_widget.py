@@ -25,6 +25,8 @@ from vtkmodules.vtkCommonCore import vtkUnsignedCharArray
 from vtkmodules.vtkInteractionStyle import vtkInteractorStyleTrackballCamera
 from vtkmodules.vtkRenderingUI import vtkGenericRenderWindowInteractor
 
+from s2h_viewer.render.text_lock import TEXT_LOCK
+
 WHEEL_STEP = 120  # Qt's angle delta of one wheel notch: one VTK zoom step
 GL_PACK_INVERT_MESA = 0x8758
 #: what the mouse does to the camera of every 3D view (VTK's trackball camera style), for Help's list
@@ -124,7 +126,8 @@ class PlotterWidget(QWidget):
         if tuple(self._window.GetSize()) != (width, height):
             self._window.SetSize(width, height)
             self._interactor.SetSize(width, height)
-        self._window.Render()
+        with TEXT_LOCK:  # not while a video export's thread lays out its labels (`render.text_lock`)
+            self._window.Render()
         self._rows = self._read_rows(width, height)
         self._image = QImage(self._rows.data, width, height, 4 * width, QImage.Format.Format_RGBX8888)
         self._image.setDevicePixelRatio(self.devicePixelRatioF())
