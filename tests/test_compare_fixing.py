@@ -271,7 +271,7 @@ def test_a_menu_export_asks_its_frames_and_the_menu_loads_corrections(window, qt
         dialog.accept()
     shown = answer(choose_file(path), (FrameRangeDialog, whole_clip))
     menu_action(win, "Export retargeted motion...").trigger()
-    assert shown[0].endswith("short_iris_tbs_copy.glb") and shown[1:] == ["Export motion: frames"]  # where, frames
+    assert shown[0].endswith("short_iris_tbs_copy_fixed.glb") and shown[1:] == ["Export motion: frames"]  # where, frames
     exported, _ = load_motion_file(path)
     assert exported.n_frames == mode.comparison.n_frames  # the whole clip, as chosen (not the marked range)
     assert load_corrections(tmp_path / "menu.corrections.json").frames == mode.comparison.n_frames
@@ -303,3 +303,52 @@ def test_a_second_key_changes_its_own_frames_only_and_space_waits_for_the_drag(w
     QTest.keyClick(win, Qt.Key.Key_K, Qt.KeyboardModifier.ShiftModifier)  # delete it: back to the first exactly
     np.testing.assert_allclose(mode.selected_result().pose.positions, first.pose.positions, atol=1e-7)
     assert mode.undo_stack.undoText() == f"delete index PIP's key at frame {FRAME + 25}"
+
+
+def test_the_hand_alone_follows_the_selection_and_stays_alone_when_a_method_is_ticked(qtbot, sample_hands, tmp_path):
+    """The second fresh-eyes round: a table click while one hand was shown alone moved the heatmap and curve to
+    another retarget while the ring kept fixing the first; ticking a method dropped back to the grid."""
+    win = open_compare_window(qtbot, sample_hands, tmp_path, methods=("tbs_copy",), targets=("iris", "laurel"))
+    mode = win.compare
+    keyboard_to(qtbot, win.view.interactor)
+    win.scores.selectRow(0)
+    QTest.keyClick(win, Qt.Key.Key_M, Qt.KeyboardModifier.ControlModifier)
+    assert win.view.solo_hand().hand.name == "iris"
+    win.scores.selectRow(1)  # laurel in the table: laurel alone, the bar's and ring's hand with it
+    assert win.view.solo_hand().hand.name == "laurel" and mode.selected_result().target.name == "laurel"
+    assert mode.fixing.ring.renderer is win.view.solo_hand().renderer
+    with qtbot.waitSignal(mode.comparison_ready, timeout=120_000):
+        win.method_actions["dm"].trigger()  # a method ticked beside it: still laurel alone
+    assert win.view.solo_hand() is not None and win.view.solo_hand().hand.name == "laurel"
+    assert mode.fixing.bar.isVisible() and mode.fixing.ring is not None
+
+
+def test_an_export_over_another_retargets_sidecar_says_so_and_a_part_says_its_frames(window, qtbot, tmp_path):
+    win, mode = window, window.compare
+    pick_joint(qtbot, win)
+    drag(qtbot, win, 30.0)
+    assert win.export_motion(str(tmp_path / "b.npz")) and mode.fixing.unsaved() == []
+    QTest.keyClick(win, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)  # the method's own, no corrections
+    win.export_motion(str(tmp_path / "b.npz"))  # over the same name: its sidecar told of what is gone
+    assert not (tmp_path / "b.corrections.json").exists()
+    assert "removed b.corrections.json" in win.statusBar().currentMessage()
+    QTest.keyClick(win, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier)
+    assert [r.method for r in mode.fixing.unsaved()] == ["tbs_copy"]  # no file holds them now: quitting asks
+    win.timeline.set_frame(20)
+    QTest.keyClick(win, Qt.Key.Key_I)
+    win.timeline.set_frame(60)
+    QTest.keyClick(win, Qt.Key.Key_O)
+    win.export_motion(str(tmp_path / "part.npz"))  # a script's export: the marked range
+    part = load_corrections(tmp_path / "part.corrections.json")
+    assert part.part == (20, 60) and part.frames == mode.comparison.n_frames  # keys in the clip's frames
+    # a sidecar made on another retarget asks before it is applied; declined, nothing changes
+    other = tmp_path / "other.corrections.json"
+    other.write_text((tmp_path / "part.corrections.json").read_text().replace('"target": "iris"', '"target": "kale"'))
+    QTest.keyClick(win, Qt.Key.Key_K, Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier)
+    shown = answer(click("Cancel"))
+    win.load_corrections(str(other))
+    assert "made on TBS Copy -> kale" in shown[0] and not mode.selected_result().corrections
+    shown = answer(click("Apply"))
+    win.load_corrections(str(other))
+    assert mode.selected_result().corrections.n_keys == 1 and "loaded 1 correction keys" in \
+        win.statusBar().currentMessage()

@@ -341,6 +341,9 @@ class CompareMode(QWidget):
                     setter()
                     widget.blockSignals(False)
                 self.view.set_selected(index, turn_page)
+                solo = self.view.solo_hand()
+                if solo is not None and self.view.result_of_hand(self.view.solo) != index:
+                    self.view.set_solo(self.view.hand_of_result(index))  # the hand alone is the one selected
             self._show_selected_curve()
             self.show_frame(self.timeline.frame)
 
@@ -455,6 +458,8 @@ class CompareMode(QWidget):
             self.comparison_ready.emit()  # already on screen (a cancel or an undo went back to it)
             return
         new_clip = self.comparison is None or self.comparison.motion is not comparison.motion
+        # a retarget shown alone (being fixed) stays so when a method is ticked beside it
+        alone = self._shown_keys()[self.view.result_of_hand(self.view.solo)] if self.view.solo_hand() else None
         self.comparison = comparison
         self._shown = (self.state.motion, self.state.source, tuple(self.state.targets), tuple(self.state.methods))
         self._shown_index = self.undo_stack.index()
@@ -469,6 +474,9 @@ class CompareMode(QWidget):
         if new_clip:
             self.timeline.set_clip(comparison.n_frames, comparison.motion.fps)
         self.select(self._same_retarget(self.state.selected), turn_page=False)  # the user's page stays
+        keys = self._shown_keys()
+        if alone in keys:
+            self.view.set_solo(self.view.hand_of_result(keys.index(alone)))
         self.status(f"{comparison.motion.name}: {comparison.n_frames} frames, {len(comparison.results)} retargets")
         self.comparison_ready.emit()
 

@@ -37,7 +37,7 @@ def suggested_name(mode: CompareMode, suffix: str, frame: int | None = None, res
     """'<clip>_<target>_<method>[_f<frame>]<suffix>' for the selected retarget (or ``result``), safe as a file
     name."""
     result = result or mode.selected_result()
-    parts = [mode.comparison.motion.name, result.target.name, result.method]
+    parts = [mode.comparison.motion.name, result.target.name, result.method] + ["fixed"] * bool(result.corrections)
     stem = "_".join(re.sub(r"[^\w.-]+", "-", part).strip("-.") or "x" for part in parts)
     return f"{stem}{'' if frame is None else f'_f{frame:04d}'}{suffix}"
 
@@ -143,15 +143,20 @@ def export_motion(mode: CompareMode, path: str, frames: range | None = None) -> 
     return Path(path)
 
 
-def export_corrections(mode: CompareMode, motion_path: str | Path) -> Path | None:
-    """Beside a motion just exported from the selected retarget: the sidecar of its corrections (`io.corrections`),
-    or, without corrections, none (an earlier export's sidecar there is removed: it would tell of corrections
-    the motion no longer has). Returns the sidecar written, or None."""
+def export_corrections(mode: CompareMode, motion_path: str | Path, frames: range | None = None) -> tuple[Path | None, str]:
+    """Beside a motion just exported from the selected retarget (``frames`` of the clip): the sidecar of its
+    corrections (`io.corrections`; a part says which frames it is of), or, without corrections, none (an
+    earlier export's sidecar there is removed: it would tell of corrections the motion no longer has). Returns the
+    sidecar written (or None) and a note for the status line (a removed sidecar, and whose corrections it held)."""
     from s2h_viewer.io.corrections import is_corrections_file, sidecar_path
     result = mode.selected_result()
     sidecar = sidecar_path(motion_path)
-    if not result.corrections:
-        if is_corrections_file(sidecar):
-            sidecar.unlink(missing_ok=True)
-        return None
-    return mode.fixing.save(sidecar, result)
+    part = frames if frames is not None and len(frames) < mode.comparison.n_frames else None
+    if result.corrections:
+        return mode.fixing.save(sidecar, result, part), ""
+    if not is_corrections_file(sidecar):
+        return None, ""
+    sidecar.unlink(missing_ok=True)
+    held = mode.fixing.removed(sidecar)
+    return None, f"; removed {sidecar.name}, an earlier export's" + (
+        f" (it held the corrections of {held}: not saved now)" if held else "")

@@ -692,7 +692,7 @@ class MainWindow(QMainWindow):
             return None
         try:
             written = exports.export_motion(self.compare, path, frames)
-            fixes = exports.export_corrections(self.compare, written)
+            fixes, removed = exports.export_corrections(self.compare, written, frames)
         except S2HError as exc:
             self.error(str(exc))
             return None
@@ -702,7 +702,7 @@ class MainWindow(QMainWindow):
         sidecar = export_sidecar(written, result.target)
         parts = ([f"its TBS frames {sidecar.name}"] if sidecar is not None else []) + (
             [f"its corrections {fixes.name}"] if fixes is not None else [])
-        return self._wrote(written, f" and {' and '.join(parts)}" if parts else "")
+        return self._wrote(written, (f" and {' and '.join(parts)}" if parts else "") + removed)
 
     def save_corrections(self, path: str | None = None, result=None) -> Path | None:
         """Fix > Save corrections: the selected retarget's (or ``result``'s) corrections as a sidecar
@@ -817,6 +817,13 @@ class MainWindow(QMainWindow):
         job.cancel()
         job.thread.join()  # it stops after the frame it renders; its temporary file goes
         return True
+
+    def resizeEvent(self, event) -> None:
+        """Without a window manager nobody enforces the minimum size (an X client may resize the window to
+        anything): the window grows back to it."""
+        super().resizeEvent(event)
+        if self.width() < MIN_SIZE[0] or self.height() < MIN_SIZE[1]:
+            QTimer.singleShot(0, lambda: self.resize(max(self.width(), MIN_SIZE[0]), max(self.height(), MIN_SIZE[1])))
 
     def closeEvent(self, event) -> None:
         if not self.annotate.confirm_discard("quitting") or not self._confirm_corrections("quitting") or \

@@ -91,6 +91,7 @@ class RetargetFixing(QObject):
         self.ring: RotationRing | None = None
         self._drag: Drag | None = None
         self._saved: dict[ResultKey, Corrections] = {}  # the corrections last exported or saved, per retarget
+        self._files: dict[Path, ResultKey] = {}  # each sidecar written or read, and the retarget it holds
         self._live = QTimer(self)
         self._live.setSingleShot(True)
         self._live.setInterval(LIVE_MS)
@@ -188,7 +189,7 @@ class RetargetFixing(QObject):
     def _hint(self, result: MethodResult) -> str:
         from s2h_viewer.widgets.correction_bar import HINT
         fixes = result.corrections
-        return HINT + (f". Fixed: {fixes.describe()}" if fixes else "")
+        return HINT + (f". Fixed: {fixes.describe()}" if fixes else "")  # HINT ends without a stop
 
     def _joint_text(self, result: MethodResult) -> str:
         name = spaced_joint(topo.ARTICULATED_NAMES[self.joint])
@@ -284,8 +285,12 @@ class RetargetFixing(QObject):
 
     # --- the Fix menu ---
     def _change(self, change, text: str, needs_joint: bool = True) -> None:
-        """Apply ``change(corrections, joint)`` to the retarget shown alone (undoable), or say why not."""
+        """Apply ``change(corrections, joint)`` to the retarget shown alone (undoable), or say why not; one that
+        needs no joint acts on the selected retarget in the grid too."""
         shown = self._solo()
+        if shown is None and not needs_joint and self.mode.comparison is not None:
+            result = self.mode.selected_result()
+            shown = self._key_of(result), result
         if shown is None:
             self.mode.status("Fix: show a retarget alone first (double-click it, or Ctrl+M)")
             return
@@ -346,36 +351,72 @@ class RetargetFixing(QObject):
         return actions
 
     # --- files ---
-    def corrections_file(self, result: MethodResult) -> CorrectionsFile:
+    def corrections_file(self, result: MethodResult, part: range | None = None) -> CorrectionsFile:
         comparison = self.mode.comparison
         return CorrectionsFile(result.corrections, comparison.motion.name, comparison.n_frames, comparison.motion.fps,
-                               comparison.source.name, result.target.name, result.method)
+                               comparison.source.name, result.target.name, result.method,
+                               None if part is None else (part.start, part[-1]))
 
-    def save(self, path: str | Path, result: MethodResult | None = None) -> Path:
-        """The selected retarget's corrections (or ``result``'s) written to ``path``; they count as saved."""
+    def _key_of(self, result: MethodResult) -> ResultKey | None:
+        index = next((i for i, r in enumerate(self.mode.comparison.results) if r is result), None)
+        return None if index is None else self.mode._shown_keys()[index]
+
+    def save(self, path: str | Path, result: MethodResult | None = None, part: range | None = None) -> Path:
+        """The selected retarget's corrections (or ``result``'s) written to ``path`` (beside a motion export of
+        ``part`` of the clip: said in the file); they count as saved, and the retarget saved there before (an
+        export of another retarget to the same name) no longer does."""
         result = result or self.mode.selected_result()
-        written = save_corrections(path, self.corrections_file(result))
-        self.mark_saved(result)
+        written = save_corrections(path, self.corrections_file(result, part))
+        self._held_by(Path(path), self._key_of(result), result.corrections)
         return written
 
-    def mark_saved(self, result: MethodResult) -> None:
-        keys = self.mode._shown_keys()
-        index = next((i for i, r in enumerate(self.mode.comparison.results) if r is result), None)
-        if index is not None:
-            self._saved[keys[index]] = result.corrections
+    def _held_by(self, path: Path, key: ResultKey | None, corrections: Corrections | None) -> None:
+        """``path`` now holds ``key``'s ``corrections`` (None: the file is gone); whoever it held before is unsaved."""
+        path = path.resolve()
+        before = self._files.pop(path, None)
+        if before is not None and before != key:
+            self._saved.pop(before, None)
+        if key is not None and corrections is not None:
+            self._saved[key] = corrections
+            self._files[path] = key
 
-    def load(self, path: str | Path) -> None:
-        """A corrections sidecar applied to the selected retarget (undoable); `InputFileError` if it does not fit."""
+    def removed(self, path: str | Path) -> str | None:
+        """A sidecar an export took away: the retarget whose saved corrections it held counts as unsaved again;
+        returns its name for the status line (None if it held none of this session's)."""
+        key = self._files.get(Path(path).resolve())
+        self._held_by(Path(path), None, None)
+        if key is None or self.mode.comparison is None or key not in self.mode._shown_keys():
+            return None
+        result = self.mode.comparison.results[self.mode._shown_keys().index(key)]
+        return f"{METHODS[result.method].label} -> {result.target.name}"
+
+    def load(self, path: str | Path) -> bool:
+        """A corrections sidecar applied to the selected retarget (undoable), asking first where it was made on
+        another clip, target or method; `InputFileError` if it cannot fit (another clip length). False: declined."""
         from s2h_viewer.errors import InputFileError
         file = load_corrections(path)
         problem = file.mismatch(self.mode.comparison.n_frames)
         if problem is not None:
             raise InputFileError(path, problem)
         result = self.mode.selected_result()
-        key = self.mode._shown_keys()[self.mode.comparison.results.index(result)]
+        here = (self.mode.comparison.motion.name, result.target.name, result.method)
+        if (file.clip, file.target, file.method) != here:
+            made = f"{METHODS[file.method].label if file.method in METHODS else file.method} -> {file.target}"
+            choice = ask(self.mode.window(), "s2h-viewer: corrections made elsewhere",
+                         f"{Path(path).name} was made on {made} (clip {file.clip!r}). Apply it to "
+                         f"{METHODS[result.method].label} -> {result.target.name} (clip {here[0]!r})?",
+                         [("Apply", QMessageBox.ButtonRole.AcceptRole), ("Cancel", QMessageBox.ButtonRole.RejectRole)],
+                         "Its keys are turns about each joint's own axes at frame numbers: on another hand or "
+                         "method they turn the same joints by the same angles, which may not fix the same thing.")
+            if choice != 0:
+                return False
+        key = self._key_of(result)
         self._push(key, result, self.mode.corrected(result, file.corrections),
                    f"load corrections from {Path(path).name}")
-        self._saved[key] = file.corrections
+        self._held_by(Path(path), key, file.corrections)
+        self.mode.status(f"loaded {file.corrections.n_keys} correction keys ({file.corrections.describe()}) from "
+                         f"{Path(path).name} onto {METHODS[result.method].label} -> {result.target.name}")
+        return True
 
     def unsaved(self) -> list[MethodResult]:
         """The retargets on screen whose corrections were changed since they were last exported or saved."""

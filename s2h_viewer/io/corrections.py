@@ -9,6 +9,8 @@ Schema (version 1)::
      "joints": [{"joint": "index_pip",
                  "keys": [{"frame": 40, "start": 30, "end": 50, "rotation_deg": [0.0, 25.0, 0.0]}]}]}
 
+Beside a motion export of part of the clip, ``"part": [first, last]`` says which frames the motion file holds (the
+keys keep the clip's frame numbers: the sidecar applies to the clip's retarget, as ``s2h retarget`` makes it).
 A key: its frame, the frames it eases in from and out to (``start <= frame <= end``), and its turn as a rotation
 vector in degrees in the joint's TBS frame (its components about twist, bend, splay). A file is hostile until
 checked: every count, name, frame and number is."""
@@ -41,6 +43,7 @@ class CorrectionsFile:
     source: str
     target: str
     method: str
+    part: tuple[int, int] | None = None  # beside a motion export of these frames of the clip (first, last)
 
     def mismatch(self, clip_frames: int) -> str | None:
         """Why these corrections cannot apply to a clip of ``clip_frames`` frames, or None."""
@@ -62,6 +65,7 @@ def save_corrections(path: str | Path, file: CorrectionsFile) -> Path:
     document = {
         "format": FORMAT, "version": VERSION, "clip": file.clip, "frames": file.frames, "fps": file.fps,
         "source": file.source, "target": file.target, "method": file.method,
+        **({} if file.part is None else {"part": list(file.part)}),
         "joints": [{"joint": c.name,
                     "keys": [{"frame": k.frame, "start": k.start, "end": k.end,
                               "rotation_deg": [round(math.degrees(v), 6) for v in k.rotvec]} for k in c.keys]}
@@ -156,6 +160,12 @@ def _parse(path: Path, document) -> CorrectionsFile:
                 raise _fail(path, f"{what}: a turn of {math.hypot(*rotation):.0f} deg (at most {MAX_DEGREES:.0f})")
             parsed.append(OffsetKey(frame, tuple(math.radians(v) for v in rotation), start, end))
         corrections.append(JointCorrection(topo.ARTICULATED_NAMES.index(name), tuple(parsed)))
+    part = document.get("part")
+    if part is not None:
+        if not isinstance(part, list) or len(part) != 2:
+            raise _fail(path, f'"part" is {part!r}, not [first, last]')
+        first = _integer(path, part[0], '"part" first frame', 0, frames - 1)
+        part = (first, _integer(path, part[1], '"part" last frame', first, frames - 1))
     return CorrectionsFile(Corrections(tuple(sorted(corrections, key=lambda c: c.joint))),
                            _text(path, document, "clip"), frames, float(fps), _text(path, document, "source"),
-                           _text(path, document, "target"), _text(path, document, "method"))
+                           _text(path, document, "target"), _text(path, document, "method"), part)

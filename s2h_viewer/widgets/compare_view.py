@@ -31,6 +31,7 @@ from s2h_viewer.widgets.vtk_widget import PlotterWidget, window_plotter
 MOUSE = (("double-click a hand", "show it alone and select it; double-click again for the grid"),)
 #: pixels a target's row needs at least (its label band and a hand that reads): more targets than fit page
 MIN_ROW_PX = 130
+FRAME_FILL = 0.9  # View > Frame the hand: the share of the cell the hand's box fills
 REFIT_MS = 200  # after a resize, the rows that fit are counted again once it has settled
 
 
@@ -212,9 +213,18 @@ class CompareView(QWidget):
         if hand is None or self.plotter is None:
             return False
         shape = hand.mesh if hand.levels else hand.bones
-        hand.renderer.ResetCamera(*shape.bounds)
-        for renderer in self.plotter.renderers:
-            renderer.ResetCameraClippingRange()
+        renderer = hand.renderer
+        renderer.ResetCamera(*shape.bounds)  # the bounding sphere in view: a long hand fills little of it
+        x0, x1, y0, y1, z0, z1 = shape.bounds
+        corners = []
+        for corner in ((x, y, z) for x in (x0, x1) for y in (y0, y1) for z in (z0, z1)):
+            renderer.SetWorldPoint(*corner, 1.0)
+            renderer.WorldToView()  # -1 .. 1 across the cell
+            corners.append(renderer.GetViewPoint()[:2])
+        extent = np.ptp(np.asarray(corners), axis=0) / 2.0  # of the cell's half width and height
+        renderer.GetActiveCamera().Dolly(FRAME_FILL / max(float(extent.max()), 1e-6))
+        for each in self.plotter.renderers:
+            each.ResetCameraClippingRange()
         self.interactor.update()
         return True
 

@@ -4,7 +4,7 @@ owner's (`app.retarget_fixing`); this only shows and asks."""
 
 from __future__ import annotations
 
-from PySide6.QtCore import Signal
+from PySide6.QtCore import Qt, Signal
 from PySide6.QtWidgets import (QComboBox, QHBoxLayout, QLabel, QSizePolicy, QSpinBox, QToolButton, QVBoxLayout,
                                QWidget)
 
@@ -12,7 +12,7 @@ from s2h_viewer.retarget.corrections import AXES
 
 #: frames a new key eases in over before it and out over after it, unless a marked range holds the frame
 DEFAULT_EASE = 10
-HINT = "Fix: click a joint, drag its ring (R: next axis). Keys blend over the marked range or the ease frames."
+HINT = "Fix: click a joint, drag its ring (R: next axis); keys blend over the marked range or the ease frames"
 
 
 class CorrectionBar(QWidget):
@@ -24,6 +24,7 @@ class CorrectionBar(QWidget):
 
     def __init__(self, parent: QWidget | None = None):
         super().__init__(parent)
+        self._said = HINT
         self.readout = QLabel(HINT)
         # one line whatever it says (the whole text in its tooltip): a bar that grew would shrink the 3D view under
         # the ring being dragged
@@ -67,5 +68,15 @@ class CorrectionBar(QWidget):
         self.axis_choice.setCurrentIndex((self.axis_choice.currentIndex() + 1) % len(AXES))
 
     def say(self, text: str) -> None:
-        self.readout.setText(text)
+        """One line, elided to the bar's width (the whole text in its tooltip)."""
+        self._said = text
         self.readout.setToolTip(text)
+        self._elide()
+
+    def _elide(self) -> None:
+        self.readout.setText(self.readout.fontMetrics().elidedText(self._said, Qt.TextElideMode.ElideRight,
+                                                                   max(self.readout.width(), 40)))
+
+    def resizeEvent(self, event) -> None:
+        super().resizeEvent(event)
+        self._elide()

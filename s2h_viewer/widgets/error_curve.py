@@ -173,7 +173,7 @@ class ErrorCurve(QWidget):
         for frame in self.keys:  # a correction key: a diamond on the frame axis
             x, y = self._x(frame), self.axis_y()
             painter.drawPolygon(QPolygonF([QPointF(x, y - 5), QPointF(x + 4, y), QPointF(x, y + 5), QPointF(x - 4, y)]))
-        keyed = f", {len(self.keys)} correction key{'s' * (len(self.keys) != 1)} (orange)" if len(self.keys) else ""
+        keyed = f", keys at {len(self.keys)} frame{'s' * (len(self.keys) != 1)} (orange)" if len(self.keys) else ""
         painter.setPen(QPen(QColor("black"), 1))
         painter.drawText(MARGIN + 2, self.height() - 4,
                          f"{self.quantity} ({self.title})   max {self.error.max():.3f}{keyed}")

@@ -28,6 +28,10 @@ CLICK_PIXELS = 4
 #: (about 70 deg off face-on); nearer edge-on it rolls under the pointer instead
 FACING = 0.35
 PRESSES = (QEvent.Type.MouseButtonPress, QEvent.Type.MouseButtonDblClick)
+#: an edge-on ring rolls at least this share of its on-screen radius per radian of turn (`_roll_pixels`)
+ROLL_LEAST = 0.5
+#: how near the pointer must be to the ring to grab it (VTK's pick tolerance: a share of the window's diagonal)
+PICK_TOLERANCE = 0.008
 
 
 @dataclass
@@ -64,7 +68,7 @@ class RotationRing(QObject):
         self._total = 0.0
         self._picker = vtkCellPicker()
         self._picker.PickFromListOn()
-        self._picker.SetTolerance(0.004)
+        self._picker.SetTolerance(PICK_TOLERANCE)
         widget.installEventFilter(self)
 
     def eventFilter(self, watched, event) -> bool:
@@ -128,10 +132,18 @@ class RotationRing(QObject):
 
     def _roll_pixels(self, grabbed: np.ndarray) -> np.ndarray:
         """On screen, the way and the pixels per radian that the grabbed point of the ring moves as the ring
-        turns: an edge-on ring rolls under the pointer like a wheel seen from the side."""
+        turns: an edge-on ring rolls under the pointer like a wheel seen from the side. At least half the ring's
+        radius on screen per radian: grabbed near where the ring turns away from the camera, its point hardly
+        moves on screen, and a few pixels of drag would turn it a half turn."""
         radial = grabbed - self.centre - np.dot(grabbed - self.centre, self.axis) * self.axis
         velocity = self.radius * np.cross(self.axis, radial / np.linalg.norm(radial))
-        return self._to_display(self.centre + radial + velocity) - self._to_display(self.centre + radial)
+        roll = self._to_display(self.centre + radial + velocity) - self._to_display(self.centre + radial)
+        least = ROLL_LEAST * float(np.linalg.norm(self._to_display(self.centre + radial) -
+                                                  self._to_display(self.centre)))
+        if np.linalg.norm(roll) < least:
+            way = roll if np.linalg.norm(roll) > 1e-9 else np.array([1.0, 0.0])
+            roll = way / np.linalg.norm(way) * least
+        return roll
 
     def _angle(self, x: int, y: int) -> float | None:
         """Degrees about the twist axis from the grab to the pointer (None where the pointer gives none)."""
