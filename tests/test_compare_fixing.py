@@ -352,3 +352,18 @@ def test_an_export_over_another_retargets_sidecar_says_so_and_a_part_says_its_fr
     win.load_corrections(str(other))
     assert mode.selected_result().corrections.n_keys == 1 and "loaded 1 correction keys" in \
         win.statusBar().currentMessage()
+
+
+def test_leaving_the_hand_alone_during_a_drag_keeps_the_key_undoable(window, qtbot):
+    win, mode = window, window.compare
+    method = mode.selected_result()
+    pick_joint(qtbot, win)
+
+    def back_to_the_grid() -> None:  # Ctrl+M with the button held: the drag ends as if let go
+        qtbot.waitUntil(lambda: bool(mode.selected_result().corrections), timeout=5000)
+        QTest.keyClick(win, Qt.Key.Key_M, Qt.KeyboardModifier.ControlModifier)
+        assert win.view.solo_hand() is None and not mode.fixing.bar.isVisible()
+    drag(qtbot, win, 30.0, back_to_the_grid)
+    assert mode.selected_result().corrections.n_keys == 1 and mode.undo_stack.undoText().startswith("fix index PIP")
+    QTest.keyClick(win, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
+    assert mode.selected_result() is method

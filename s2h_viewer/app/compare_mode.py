@@ -332,7 +332,7 @@ class CompareMode(QWidget):
         to its page unless ``turn_page`` is False."""
         self.state.selected = key
         if self.comparison is not None:
-            keys = self._shown_keys()
+            keys = self.shown_keys()
             if key in keys:
                 index = keys.index(key)
                 for widget, setter in ((self.heatmap_choice, lambda: self.heatmap_choice.setCurrentIndex(index)),
@@ -366,7 +366,8 @@ class CompareMode(QWidget):
         self._sync()
 
     # --- keeping the queue and the screen on the state ---
-    def _shown_keys(self) -> list[ResultKey]:
+    def shown_keys(self) -> list[ResultKey]:
+        """The keys of the retargets on screen, in the comparison's order."""
         return [self.state.key(r.target, r.method) for r in self.comparison.results] if self.comparison else []
 
     def _sync(self) -> None:
@@ -416,7 +417,7 @@ class CompareMode(QWidget):
 
     def _same_retarget(self, key: ResultKey | None) -> ResultKey:
         """The shown retarget with ``key``'s target and method (a new clip keeps the selection), else the first."""
-        keys = self._shown_keys()
+        keys = self.shown_keys()
         return next((k for k in keys if key is not None and (k.target, k.method) == (key.target, key.method)),
                     keys[0])
 
@@ -459,7 +460,7 @@ class CompareMode(QWidget):
             return
         new_clip = self.comparison is None or self.comparison.motion is not comparison.motion
         # a retarget shown alone (being fixed) stays so when a method is ticked beside it
-        alone = self._shown_keys()[self.view.result_of_hand(self.view.solo)] if self.view.solo_hand() else None
+        alone = self.shown_keys()[self.view.result_of_hand(self.view.solo)] if self.view.solo_hand() else None
         self.comparison = comparison
         self._shown = (self.state.motion, self.state.source, tuple(self.state.targets), tuple(self.state.methods))
         self._shown_index = self.undo_stack.index()
@@ -474,7 +475,7 @@ class CompareMode(QWidget):
         if new_clip:
             self.timeline.set_clip(comparison.n_frames, comparison.motion.fps)
         self.select(self._same_retarget(self.state.selected), turn_page=False)  # the user's page stays
-        keys = self._shown_keys()
+        keys = self.shown_keys()
         if alone in keys:
             self.view.set_solo(self.view.hand_of_result(keys.index(alone)))
         self.status(f"{comparison.motion.name}: {comparison.n_frames} frames, {len(comparison.results)} retargets")
@@ -495,7 +496,7 @@ class CompareMode(QWidget):
             self._spare[key] = result
         if key in self.state.results:
             self.state.results[key] = result
-        keys = self._shown_keys()
+        keys = self.shown_keys()
         if key not in keys:
             return
         index = keys.index(key)
@@ -536,22 +537,22 @@ class CompareMode(QWidget):
     # --- showing a frame and the selection ---
     def selected_result(self) -> MethodResult:
         """The retarget the heatmap shows (and exports follow)."""
-        keys = self._shown_keys()
+        keys = self.shown_keys()
         key = self.state.selected if self.state.selected in keys else keys[0]
         return self.comparison.results[keys.index(key)]
 
     def _choice_changed(self, index: int) -> None:
         if self.comparison is not None and 0 <= index < len(self.comparison.results):
-            self.select(self._shown_keys()[index])
+            self.select(self.shown_keys()[index])
 
     def _select_row(self, row: int) -> None:
         if self.comparison is not None and 0 <= row < len(self.comparison.results):
-            self.select(self._shown_keys()[row])
+            self.select(self.shown_keys()[row])
 
     def _solo_changed(self, hand: int) -> None:
         """A retarget shown alone (double-click, Ctrl+M) is the selected one; the source alone changes nothing."""
         if self.comparison is not None and hand >= 1:
-            self.select(self._shown_keys()[self.view.result_of_hand(hand)])
+            self.select(self.shown_keys()[self.view.result_of_hand(hand)])
 
     def _show_selected_curve(self) -> None:
         result = self.selected_result()

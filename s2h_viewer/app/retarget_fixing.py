@@ -112,7 +112,7 @@ class RetargetFixing(QObject):
         if view.solo_hand() is None or self.mode.comparison is None:
             return None
         index = view.result_of_hand(view.solo)
-        return self.mode._shown_keys()[index], self.mode.comparison.results[index]
+        return self.mode.shown_keys()[index], self.mode.comparison.results[index]
 
     def _follow_solo(self, *_) -> None:
         """A retarget shown alone gets the bar and a ring in its cell; the grid neither."""
@@ -129,8 +129,11 @@ class RetargetFixing(QObject):
         self._place()
 
     def _drop_ring(self) -> None:
-        """The ring out of its cell (its grid may be gone already: then it went with it)."""
-        ring, self.ring, self._drag = self.ring, None, None
+        """The ring out of its cell (its grid may be gone already: then it went with it); a drag under way ends
+        as if let go (its key kept and undoable, not left on screen unrecorded)."""
+        if self._drag is not None:
+            self._end()
+        ring, self.ring = self.ring, None
         if ring is None or not shiboken6.isValid(ring):
             return
         ring.widget.removeEventFilter(ring)
@@ -359,7 +362,7 @@ class RetargetFixing(QObject):
 
     def _key_of(self, result: MethodResult) -> ResultKey | None:
         index = next((i for i, r in enumerate(self.mode.comparison.results) if r is result), None)
-        return None if index is None else self.mode._shown_keys()[index]
+        return None if index is None else self.mode.shown_keys()[index]
 
     def save(self, path: str | Path, result: MethodResult | None = None, part: range | None = None) -> Path:
         """The selected retarget's corrections (or ``result``'s) written to ``path`` (beside a motion export of
@@ -385,9 +388,9 @@ class RetargetFixing(QObject):
         returns its name for the status line (None if it held none of this session's)."""
         key = self._files.get(Path(path).resolve())
         self._held_by(Path(path), None, None)
-        if key is None or self.mode.comparison is None or key not in self.mode._shown_keys():
+        if key is None or self.mode.comparison is None or key not in self.mode.shown_keys():
             return None
-        result = self.mode.comparison.results[self.mode._shown_keys().index(key)]
+        result = self.mode.comparison.results[self.mode.shown_keys().index(key)]
         return f"{METHODS[result.method].label} -> {result.target.name}"
 
     def load(self, path: str | Path) -> bool:
@@ -422,14 +425,14 @@ class RetargetFixing(QObject):
         """The retargets on screen whose corrections were changed since they were last exported or saved."""
         if self.mode.comparison is None:
             return []
-        keys = self.mode._shown_keys()
+        keys = self.mode.shown_keys()
         return [r for k, r in zip(keys, self.mode.comparison.results)
                 if r.corrections != self._saved.get(k, Corrections())]
 
     def forget_unsaved(self) -> None:
         """Whatever is on screen counts as saved: nothing to ask about when the window closes (a discard)."""
         if self.mode.comparison is not None:
-            self._saved.update({k: r.corrections for k, r in zip(self.mode._shown_keys(),
+            self._saved.update({k: r.corrections for k, r in zip(self.mode.shown_keys(),
                                                                   self.mode.comparison.results)})
 
     def confirm_discard(self, doing: str, save_as: Callable[[MethodResult], Path | None]) -> bool:
