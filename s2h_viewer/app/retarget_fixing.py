@@ -25,7 +25,7 @@ from s2h_viewer.render.compare_scene import ON_TOP_OFFSET
 from s2h_viewer.render.scene import to_view
 from s2h_viewer.retarget.compare_state import ResultKey
 from s2h_viewer.retarget.comparison import MethodResult
-from s2h_viewer.retarget.corrections import AXES, Corrections, describe_keys, spaced_joint, turn_about
+from s2h_viewer.retarget.corrections import AXES, Corrections, describe_keys, turn_about
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.widgets.correction_bar import CorrectionBar
 from s2h_viewer.widgets.rotation_handle import RotationRing
@@ -195,7 +195,7 @@ class RetargetFixing(QObject):
         return HINT + (f". Fixed: {fixes.describe()}" if fixes else "")  # HINT ends without a stop
 
     def _joint_text(self, result: MethodResult) -> str:
-        name = spaced_joint(topo.ARTICULATED_NAMES[self.joint])
+        name = topo.joint_label(topo.ARTICULATED_NAMES[self.joint])
         correction = result.corrections.of(self.joint)
         if correction is None:
             return f"{name}: no corrections; drag its ring to turn it about its {self.bar.axis} axis at this frame"
@@ -264,7 +264,7 @@ class RetargetFixing(QObject):
         drag = self._drag
         if drag is not None:
             self.mode.show_result(drag.key, self.mode.corrected(drag.before, drag.corrections()))
-            self.bar.say(f"{spaced_joint(topo.ARTICULATED_NAMES[drag.joint])}: {drag.axis} "
+            self.bar.say(f"{topo.joint_label(topo.ARTICULATED_NAMES[drag.joint])}: {drag.axis} "
                          f"{drag.sense * drag.degrees:+.0f} deg at frame {drag.frame} (blended over frames "
                          f"{drag.frames[0]}-{drag.frames[1]})")
 
@@ -278,7 +278,7 @@ class RetargetFixing(QObject):
             self._place()
             return
         after = self.mode.corrected(drag.before, drag.corrections())
-        self._push(drag.key, drag.before, after, f"fix {spaced_joint(topo.ARTICULATED_NAMES[drag.joint])}: "
+        self._push(drag.key, drag.before, after, f"fix {topo.joint_label(topo.ARTICULATED_NAMES[drag.joint])}: "
                                                  f"{drag.axis} {drag.sense * drag.degrees:+.0f} deg at frame "
                                                  f"{drag.frame}")
 
@@ -308,7 +308,7 @@ class RetargetFixing(QObject):
         self._push(key, result, self.mode.corrected(result, corrections), text)
 
     def _joint_name(self) -> str:
-        return spaced_joint(topo.ARTICULATED_NAMES[self.joint]) if self.joint is not None else "the joint"
+        return topo.joint_label(topo.ARTICULATED_NAMES[self.joint]) if self.joint is not None else "the joint"
 
     def delete_key(self) -> None:
         """The picked joint's key at the current frame taken away."""

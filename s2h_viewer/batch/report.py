@@ -12,6 +12,7 @@ from pathlib import Path
 
 from s2h_viewer.batch.summary import ordered
 from s2h_viewer.io.atomic import atomic_path
+from s2h_viewer.semantics.flexion import SidewaysPeak
 
 _NAMES = (("motion", "motion"), ("target", "target"), ("method", "method"), ("status", "status"))
 _SCORES = (("s_finger", "S_finger"), ("s_palm", "S_palm"), ("contact_p", "contact P"), ("contact_r", "contact R"),
@@ -101,8 +102,7 @@ def _sideways_note(row: dict) -> str:
     degrees = row.get("sideways_deg")
     if not joint or not isinstance(degrees, float) or math.isnan(degrees):
         return ""
-    finger, _, level = joint.partition("_")
-    return f"{finger} {level.upper()} bends {degrees:.0f} deg sideways at frame {frame}"
+    return SidewaysPeak(degrees, joint, int(frame)).describe()
 
 
 def _cell(row: dict, key: str, numeric: bool) -> str:

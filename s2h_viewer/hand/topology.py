@@ -57,3 +57,8 @@ def joint_index(name: str) -> int:
     except ValueError:
         raise KeyError(f"unknown joint {name!r}; expected one of {', '.join(JOINT_NAMES)}") from None
 
+
+def joint_label(name: str) -> str:
+    """'index_pip' -> 'index PIP', 'thumb_ip' -> 'thumb IP': how every message names a joint ('wrist' stays)."""
+    finger, _, level = name.partition("_")
+    return f"{finger} {level.upper()}" if level else name

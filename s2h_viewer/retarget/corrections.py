@@ -161,19 +161,13 @@ class Corrections:
 
     def describe(self) -> str:
         """'index PIP (keys at 40 over 30-50, 60 over 50-70), pinky DIP (key at 12 over 2-22)'."""
-        return ", ".join(f"{spaced_joint(c.name)} ({describe_keys(c)})" for c in self.joints)
+        return ", ".join(f"{topo.joint_label(c.name)} ({describe_keys(c)})" for c in self.joints)
 
 
 def describe_keys(correction: JointCorrection) -> str:
     """'keys at 40 over 30-50, 60 over 50-70'."""
     keys = ", ".join(f"{k.frame} over {k.start}-{k.end}" for k in correction.keys)
     return f"key{'s' * (len(correction.keys) != 1)} at {keys}"
-
-
-def spaced_joint(name: str) -> str:
-    """'index_pip' -> 'index PIP' (as the heatmap names joints)."""
-    finger, _, level = name.partition("_")
-    return f"{finger} {level.upper()}"
 
 
 def turn_about(axis: str, degrees: float) -> Rotation:

@@ -62,8 +62,7 @@ class SidewaysPeak:
     def describe(self) -> str:
         if np.isnan(self.degrees):
             return "no finger curls"
-        name = self.joint.replace("_", " ").replace("pip", "PIP").replace("dip", "DIP")
-        return f"{name} bends {self.degrees:.0f} deg sideways at frame {self.frame}"
+        return f"{topo.joint_label(self.joint)} bends {self.degrees:.0f} deg sideways at frame {self.frame}"
 
 
 def sideways_peak(positions: np.ndarray) -> SidewaysPeak:
