@@ -27,7 +27,7 @@ from s2h_viewer.retarget.compare_state import ResultKey
 from s2h_viewer.retarget.comparison import MethodResult
 from s2h_viewer.retarget.corrections import AXES, Corrections, describe_keys, turn_about
 from s2h_viewer.retarget.methods import METHODS
-from s2h_viewer.widgets.correction_bar import CorrectionBar
+from s2h_viewer.widgets.correction_bar import HINT, CorrectionBar
 from s2h_viewer.widgets.rotation_handle import RotationRing
 
 #: while the ring is dragged the whole clip is measured again at most this often (ms)
@@ -190,7 +190,6 @@ class RetargetFixing(QObject):
         return max(RING_RADIUS * length, RING_PX / per_unit if per_unit > 0 else 0.0)
 
     def _hint(self, result: MethodResult) -> str:
-        from s2h_viewer.widgets.correction_bar import HINT
         fixes = result.corrections
         return HINT + (f". Fixed: {fixes.describe()}" if fixes else "")  # HINT ends without a stop
 
