@@ -238,8 +238,8 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
         retargeted = retarget(motion, source, target, args.method)
     fixes = _corrections(args, retargeted, target) if args.corrections else None
     if fixes is not None:
-        retargeted = dataclasses.replace(retargeted, q_tbs=fixes.corrections.apply(retargeted.q_tbs),
-                                         meta={**retargeted.meta, "corrections": fixes.corrections.describe()})
+        from s2h_viewer.retarget.corrections import corrected_motion
+        retargeted = corrected_motion(retargeted, fixes.corrections)
     path = save_motion_file(args.out, retargeted, target)
     sidecar = export_sidecar(path, target)
     print(f"{motion.name}: {motion.n_frames} frames, {source.name} -> {target.name} ({args.method}) -> {path}"
@@ -256,12 +256,8 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
 def _corrections(args: argparse.Namespace, retargeted, target):
     """``--corrections FILE`` read and checked against the retargeted clip (`io.corrections`); a note where it
     was made on another target or method (its keys are per joint, so they still apply)."""
-    from s2h_viewer.errors import InputFileError
     from s2h_viewer.io.corrections import load_corrections
-    fixes = load_corrections(args.corrections)
-    problem = fixes.mismatch(retargeted.n_frames)
-    if problem is not None:
-        raise InputFileError(args.corrections, problem)
+    fixes = load_corrections(args.corrections, retargeted.n_frames)
     if (fixes.target, fixes.method) != (target.name, args.method):
         print(f"{args.corrections}: made on {fixes.method} -> {fixes.target}; applied to {args.method} -> "
               f"{target.name}")

@@ -101,7 +101,7 @@ def sideways_curve(result: MethodResult) -> np.ndarray:
 
 def label(result: MethodResult) -> str:
     """'TBS Copy -> iris', '(fixed)' after it where corrections are applied."""
-    return f"{METHODS[result.method].label} -> {result.target.name}" + (" (fixed)" if result.corrections else "")
+    return result.name + (" (fixed)" if result.corrections else "")
 
 
 class SetMethodsCommand(QUndoCommand):

@@ -17,6 +17,7 @@ from s2h_viewer.app.compare_mode import CompareMode, label
 from s2h_viewer.app.job_progress import JobProgress
 from s2h_viewer.render.caption import add_caption, caption_text, page_caption
 from s2h_viewer.render.compare_scene import render_comparison
+from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.retarget.progress import Cancelled
 
 
@@ -29,7 +30,7 @@ def caption_for(mode: CompareMode, frame: int) -> str:
         return page_caption(comparison.motion.name, frame, comparison.n_frames, comparison.motion.fps,
                             list(dict.fromkeys(r.target.name for r in shown.results)))
     return caption_text(comparison.motion.name, frame, comparison.n_frames, comparison.motion.fps,
-                        label(result).split(" -> ")[0] + (" (fixed)" if result.corrections else ""),
+                        METHODS[result.method].label + (" (fixed)" if result.corrections else ""),
                         result.target.name)
 
 

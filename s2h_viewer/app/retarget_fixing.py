@@ -16,7 +16,6 @@ import shiboken6
 from PySide6.QtCore import QObject, QTimer
 from PySide6.QtGui import QAction, QKeySequence, QUndoCommand
 from PySide6.QtWidgets import QMenu, QMessageBox
-from vtkmodules.vtkRenderingCore import vtkRenderer
 
 from s2h_viewer.app.annotate_mode import ask
 from s2h_viewer.hand import topology as topo
@@ -28,12 +27,10 @@ from s2h_viewer.retarget.comparison import MethodResult
 from s2h_viewer.retarget.corrections import AXES, Corrections, describe_keys, turn_about
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.widgets.correction_bar import HINT, CorrectionBar
-from s2h_viewer.widgets.rotation_handle import RotationRing
+from s2h_viewer.widgets.rotation_handle import RotationRing, nearest_on_screen
 
 #: while the ring is dragged the whole clip is measured again at most this often (ms)
 LIVE_MS = 40
-#: a click this many pixels from a joint on screen, or nearer, picks it
-PICK_PIXELS = 24
 #: the ring's radius as a share of the hand's length, and at least this many pixels on screen when placed
 RING_RADIUS, RING_PX = 0.09, 48
 #: the mouse in a retarget shown alone, for Help's list
@@ -209,14 +206,8 @@ class RetargetFixing(QObject):
             return
         _, result = shown
         positions = to_view(result.target, result.pose.positions[self.mode.timeline.frame].numpy().astype(np.float64))
-        renderer: vtkRenderer = self.ring.renderer
-        on_screen = []
-        for joint, _ in PICKABLE:
-            renderer.SetWorldPoint(*positions[joint], 1.0)
-            renderer.WorldToDisplay()
-            on_screen.append(renderer.GetDisplayPoint()[:2])
-        distance = np.linalg.norm(np.asarray(on_screen) - (x, y), axis=1)
-        self._picked(PICKABLE[int(distance.argmin())][1] if distance.min() <= PICK_PIXELS else None)
+        nearest = nearest_on_screen(self.ring.renderer, positions[[joint for joint, _ in PICKABLE]], x, y)
+        self._picked(None if nearest is None else PICKABLE[nearest][1])
 
     def pick(self, joint: str) -> None:
         """Pick ``joint`` (an articulated joint's name) as a click on it would (keyboard users, scripts)."""
@@ -390,23 +381,19 @@ class RetargetFixing(QObject):
         if key is None or self.mode.comparison is None or key not in self.mode.shown_keys():
             return None
         result = self.mode.comparison.results[self.mode.shown_keys().index(key)]
-        return f"{METHODS[result.method].label} -> {result.target.name}"
+        return result.name
 
     def load(self, path: str | Path) -> bool:
         """A corrections sidecar applied to the selected retarget (undoable), asking first where it was made on
         another clip, target or method; `InputFileError` if it cannot fit (another clip length). False: declined."""
-        from s2h_viewer.errors import InputFileError
-        file = load_corrections(path)
-        problem = file.mismatch(self.mode.comparison.n_frames)
-        if problem is not None:
-            raise InputFileError(path, problem)
+        file = load_corrections(path, self.mode.comparison.n_frames)
         result = self.mode.selected_result()
         here = (self.mode.comparison.motion.name, result.target.name, result.method)
         if (file.clip, file.target, file.method) != here:
             made = f"{METHODS[file.method].label if file.method in METHODS else file.method} -> {file.target}"
             choice = ask(self.mode.window(), "s2h-viewer: corrections made elsewhere",
                          f"{Path(path).name} was made on {made} (clip {file.clip!r}). Apply it to "
-                         f"{METHODS[result.method].label} -> {result.target.name} (clip {here[0]!r})?",
+                         f"{result.name} (clip {here[0]!r})?",
                          [("Apply", QMessageBox.ButtonRole.AcceptRole), ("Cancel", QMessageBox.ButtonRole.RejectRole)],
                          "Its keys are turns about each joint's own axes at frame numbers: on another hand or "
                          "method they turn the same joints by the same angles, which may not fix the same thing.")
@@ -417,7 +404,7 @@ class RetargetFixing(QObject):
                    f"load corrections from {Path(path).name}")
         self._held_by(Path(path), key, file.corrections)
         self.mode.status(f"loaded {file.corrections.n_keys} correction keys ({file.corrections.describe()}) from "
-                         f"{Path(path).name} onto {METHODS[result.method].label} -> {result.target.name}")
+                         f"{Path(path).name} onto {result.name}")
         return True
 
     def unsaved(self) -> list[MethodResult]:
@@ -440,7 +427,7 @@ class RetargetFixing(QObject):
         unsaved = self.unsaved()
         if not unsaved:
             return True
-        names = ", ".join(f"{METHODS[r.method].label} -> {r.target.name}" for r in unsaved)
+        names = ", ".join(r.name for r in unsaved)
         choice = ask(self.mode.window(), "s2h-viewer: unsaved corrections",
                      f"Save the corrections of {names} before {doing}?",
                      [("Save...", QMessageBox.ButtonRole.AcceptRole),

@@ -86,15 +86,20 @@ def is_corrections_file(path: str | Path) -> bool:
         return False
 
 
-def load_corrections(path: str | Path) -> CorrectionsFile:
-    """Read and check a corrections sidecar; one `InputFileError` naming the file and the problem."""
+def load_corrections(path: str | Path, clip_frames: int | None = None) -> CorrectionsFile:
+    """Read and check a corrections sidecar (against a clip of ``clip_frames`` frames, if given: the one it is to
+    apply to); one `InputFileError` naming the file and the problem."""
     path = require_readable_file(path, MAX_BYTES)
     with reading(path, "a corrections sidecar"):
         try:
             document = json.loads(path.read_text(encoding="utf-8"))
         except (json.JSONDecodeError, UnicodeDecodeError) as exc:
             raise InputFileError(path, f"is not JSON ({exc})") from None
-        return _parse(path, document)
+        file = _parse(path, document)
+    problem = None if clip_frames is None else file.mismatch(clip_frames)
+    if problem is not None:
+        raise InputFileError(path, problem)
+    return file
 
 
 def _fail(path: Path, problem: str) -> InputFileError:

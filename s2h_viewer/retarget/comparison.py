@@ -15,8 +15,8 @@ import torch
 from s2h_viewer.hand.kinematics import HandPose, forward_kinematics
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
-from s2h_viewer.retarget.corrections import Corrections
-from s2h_viewer.retarget.methods import retarget
+from s2h_viewer.retarget.corrections import Corrections, corrected_motion
+from s2h_viewer.retarget.methods import METHODS, retarget
 from s2h_viewer.retarget.progress import report, stage
 from s2h_viewer.semantics.asm import semantic_matrix
 from s2h_viewer.semantics.metrics import RetargetScores, per_joint_cosine, score_retarget
@@ -34,6 +34,11 @@ class MethodResult:
     scores: RetargetScores
     corrections: Corrections = field(default_factory=Corrections)  # applied to ``motion`` (and all above)
     base: "MethodResult | None" = None  # the method's own retarget, before the corrections (None: this is it)
+
+    @property
+    def name(self) -> str:
+        """'TBS Copy -> iris': how every message names the retarget."""
+        return f"{METHODS[self.method].label} -> {self.target.name}"
 
     @property
     def uncorrected(self) -> "MethodResult":
@@ -97,9 +102,7 @@ def corrected_result(result: MethodResult, corrections: Corrections, motion: Mot
     base = result.uncorrected
     if not corrections:
         return base
-    moved = dataclasses.replace(base.motion, q_tbs=corrections.apply(base.motion.q_tbs),
-                                meta={**base.motion.meta, "corrections": corrections.describe()})
-    measured = _measured(motion, source, source_asm, base.target, base.method, moved)
+    measured = _measured(motion, source, source_asm, base.target, base.method, corrected_motion(base.motion, corrections))
     return dataclasses.replace(measured, corrections=corrections, base=base)
 
 

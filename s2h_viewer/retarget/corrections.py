@@ -18,6 +18,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from s2h_viewer.hand import topology as topo
+from s2h_viewer.hand.motion import Motion
 
 #: the axes a joint can be turned about, in its TBS frame's column order (x twist, y bend, z splay)
 AXES: tuple[str, ...] = ("twist", "bend", "splay")
@@ -168,6 +169,12 @@ def describe_keys(correction: JointCorrection) -> str:
     """'keys at 40 over 30-50, 60 over 50-70'."""
     keys = ", ".join(f"{k.frame} over {k.start}-{k.end}" for k in correction.keys)
     return f"key{'s' * (len(correction.keys) != 1)} at {keys}"
+
+
+def corrected_motion(motion: Motion, corrections: Corrections) -> Motion:
+    """``motion`` with ``corrections`` applied, its meta saying which (the viewer's and `s2h retarget`'s one way)."""
+    return dataclasses.replace(motion, q_tbs=corrections.apply(motion.q_tbs),
+                               meta={**motion.meta, "corrections": corrections.describe()})
 
 
 def turn_about(axis: str, degrees: float) -> Rotation:

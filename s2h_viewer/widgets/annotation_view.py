@@ -16,7 +16,7 @@ from s2h_viewer.annotate.editing import AnnotationSession, rotate_about_twist, s
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.render.scene import (AXIS_COLOURS, BONE_COLOUR, SKIN_COLOUR, display_hand, pose_frame, skeleton,
                                      surface, to_view)
-from s2h_viewer.widgets.rotation_handle import RotationRing
+from s2h_viewer.widgets.rotation_handle import RotationRing, nearest_on_screen
 from s2h_viewer.widgets.vtk_widget import PlotterWidget, window_plotter
 
 LEGEND = ("TBS frames: twist (along the bone) red, bend green, splay (out of the back) blue. Drag the "
@@ -25,8 +25,6 @@ LEGEND = ("TBS frames: twist (along the bone) red, bend green, splay (out of the
 MOUSE = (("click a joint (in 3D or the list)", "select it and show its ring about its twist axis"),
          ("drag the ring (it lights up under the pointer) or the dial",
           "turn the selected joint's frame about its twist axis"))
-#: a click this many pixels from a joint on screen, or nearer, selects it
-PICK_PIXELS = 24
 #: the ring's radius and the arrows' length as shares of the hand's length
 RING_RADIUS = 0.09
 ARROW_LENGTH = 0.12
@@ -134,15 +132,9 @@ class AnnotationView(QWidget):
         """A click in 3D (VTK display pixels) selects the joint nearest to it on screen, if one is near."""
         if self.session is None:
             return
-        renderer = self.plotter.renderer
-        on_screen = []
-        for point in self.joint_centres():
-            renderer.SetWorldPoint(*point, 1.0)
-            renderer.WorldToDisplay()
-            on_screen.append(renderer.GetDisplayPoint()[:2])
-        distance = np.linalg.norm(np.asarray(on_screen) - (x, y), axis=1)
-        if distance.min() <= PICK_PIXELS:
-            self.select(int(distance.argmin()))
+        joint = nearest_on_screen(self.plotter.renderer, self.joint_centres(), x, y)
+        if joint is not None:
+            self.select(joint)
 
     def refresh_list(self) -> None:
         self.joints.blockSignals(True)

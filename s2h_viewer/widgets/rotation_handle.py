@@ -28,10 +28,24 @@ CLICK_PIXELS = 4
 #: (about 70 deg off face-on); nearer edge-on it rolls under the pointer instead
 FACING = 0.35
 PRESSES = (QEvent.Type.MouseButtonPress, QEvent.Type.MouseButtonDblClick)
+#: a click this many pixels from a joint on screen, or nearer, picks it (`nearest_on_screen`)
+PICK_PIXELS = 24
 #: an edge-on ring rolls at least this share of its on-screen radius per radian of turn (`_roll_pixels`)
 ROLL_LEAST = 0.5
 #: how near the pointer must be to the ring to grab it (VTK's pick tolerance: a share of the window's diagonal)
 PICK_TOLERANCE = 0.008
+
+
+def nearest_on_screen(renderer, points: np.ndarray, x: int, y: int, within: float = PICK_PIXELS) -> int | None:
+    """The index of the view-space point of ``points`` drawn nearest to display pixel (x, y) in ``renderer``, if it
+    is ``within`` pixels; else None (what a click on a joint picks, in Annotate and in a retarget being fixed)."""
+    on_screen = []
+    for point in points:
+        renderer.SetWorldPoint(*point, 1.0)
+        renderer.WorldToDisplay()
+        on_screen.append(renderer.GetDisplayPoint()[:2])
+    distance = np.linalg.norm(np.asarray(on_screen) - (x, y), axis=1)
+    return int(distance.argmin()) if distance.min() <= within else None
 
 
 @dataclass
