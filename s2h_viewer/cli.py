@@ -144,7 +144,7 @@ def _rig_options(args: argparse.Namespace):
 
     return RigOptions(side=args.side, scheme=args.scheme, joint_map=args.joint_map,
                       animation=getattr(args, "animation", None), fps=getattr(args, "fps", None),
-                      unit=getattr(args, "unit", None))
+                      unit=getattr(args, "unit", None), hinges_from=getattr(args, "hinges_from", None))
 
 
 def _cmd_rig(args: argparse.Namespace) -> int:
@@ -191,7 +191,10 @@ def _cmd_rig(args: argparse.Namespace) -> int:
 def _cmd_annotate(args: argparse.Namespace) -> int:
     import time
 
+    import numpy as np
+
     from s2h_viewer import samples
+    from s2h_viewer.annotate.hinges import LABEL as HINGE_LABEL
     from s2h_viewer.annotate.report import annotation_report
     from s2h_viewer.annotate.solver import solve_tbs_frames
     from s2h_viewer.io.annotation import Annotation, hand_side, save_annotation
@@ -203,6 +206,12 @@ def _cmd_annotate(args: argparse.Namespace) -> int:
         hand = load_hand_file(name, _rig_options(args))
         start = time.perf_counter()
         solution = solve_tbs_frames(hand)
+        if hand.meta.get("annotation") == "solver":  # the loaded hand's frames: checked against any hinges
+            set_by = hand.meta["frame_set_by"]
+            solution = dataclasses.replace(
+                solution, frames=hand.rest_frames.copy(), diagnostics=hand.meta["solver_diagnostics"],
+                confidence=np.asarray(hand.meta["frame_confidence"], dtype=float),
+                basis=[HINGE_LABEL if by == HINGE_LABEL else basis for by, basis in zip(set_by, solution.basis)])
         results.append((hand, solution, time.perf_counter() - start))
         if args.save:
             path = samples.ASSETS_DIR / "hands" / f"{name}.npz" if Path(name).suffix == "" else Path(name)
@@ -372,6 +381,10 @@ def _add_rig_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--unit", choices=list(UNITS), help="length unit of the rig and motion files (default: "
                                                             "the format's where the hand's size fits it, else "
                                                             "guessed from the size, and said)")
+    parser.add_argument("--hinges-from", metavar="FILE",
+                        help="a motion or pose file on the same skeleton as the hand files (glTF/FBX): the hinge "
+                             "each finger joint turns about in its animations sets that joint's bend axis where the "
+                             "solver's is more than 10 deg off (default: a rig file's own animations, if any)")
 
 
 def _cmd_gestures(args: argparse.Namespace) -> int:

@@ -2,7 +2,11 @@
 (held one by one, `s2h evaluate --animation all`) and on the shipped gestures clip: poses whose signature
 is kept, contact precision, violations, the worst sideways flexion at the tightest curls.
 
-    python scripts/real_rig_evaluation.py [--methods tbs_copy,dm,asrn] [--shared ../shared]
+    python scripts/real_rig_evaluation.py [--methods tbs_copy,dm,asrn] [--shared ../shared] [--side left] [--no-hinges]
+
+The source is the rig the poses were authored on (the right hand's), its frames checked against the hinges of
+the poses themselves (`--hinges-from`; `--no-hinges`: the solver's alone); `--side left` takes the left-hand
+pose file on its own skeleton (it has no mesh: palm-plane frames and the hinges).
 """
 
 from __future__ import annotations
@@ -26,12 +30,17 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--methods", default="tbs_copy,dm,asrn")
     parser.add_argument("--shared", default=str(ROOT.parent / "shared"))
+    parser.add_argument("--side", choices=("right", "left"), default="right", help="which hand's pose file")
+    parser.add_argument("--no-hinges", action="store_true", help="the source rig's frames without the poses' hinges")
     args = parser.parse_args()
     shared = Path(args.shared)
     methods = args.methods.split(",")
-    poses, performer = load_motion_file(ROOT / "assets/motions/real/godot_hand_poses_r.gltf",
-                                        load_hand_file(ROOT / "assets/motions/real/godot_hand_r_posed_rig.gltf"),
-                                        RigOptions(animation="all"))
+    pose_file = ROOT / f"assets/motions/real/godot_hand_poses_{args.side[0]}.gltf"
+    rig = None
+    if args.side == "right":
+        rig = load_hand_file(ROOT / "assets/motions/real/godot_hand_r_posed_rig.gltf",
+                             RigOptions(hinges_from=None if args.no_hinges else pose_file))
+    poses, performer = load_motion_file(pose_file, rig, RigOptions(animation="all"))
     gestures = next(m for m in samples.load_sample_motions() if m.name.startswith("gestures"))
     hands = {performer.name: performer, gestures.hand_name: samples.load_sample_hand(gestures.hand_name)}
     labels = []
@@ -44,15 +53,17 @@ def main() -> None:
         hand.name = label
         hands[label] = hand
         labels.append(label)
+    print(f"source: {pose_file.name} on {performer.source or performer.name} ({performer.meta.get('annotation')})")
     print("| rig | method | poses kept (of 35) | contact P (poses) | violations (poses) | sideways max, poses "
-          "| sideways max, gestures | S_finger, gestures |")
-    print("|---|---|---:|---:|---:|---:|---:|---:|")
+          "| thumb follows, poses | sideways max, gestures | S_finger, gestures |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|")
     pose_rows = evaluate([poses], hands, labels, methods)
     gesture_rows = evaluate([gestures], hands, labels, methods)
     for p, g in zip(pose_rows, gesture_rows):
         kept = sum(not lost for lost in p.poses.values())
         print(f"| {p.target} | {p.method} | {kept} | {p.scores.contact_precision:.2f} | {p.scores.violation_rate:.3f} "
-              f"| {p.scores.sideways_deg:.0f} | {g.scores.sideways_deg:.0f} ({g.scores.sideways_at}) "
+              f"| {p.scores.sideways_deg:.0f} | {p.scores.thumb_follow:.2f} ({p.scores.thumb_follow_at}) "
+              f"| {g.scores.sideways_deg:.0f} ({g.scores.sideways_at}) "
               f"| {g.scores.s_finger:.3f} |", flush=True)
     print()
     for p in pose_rows:

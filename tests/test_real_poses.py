@@ -7,13 +7,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import torch
 
 from s2h_viewer.annotate.solver import PALM_EVIDENCE, solve_tbs_frames
 from s2h_viewer.cli import main
+from s2h_viewer.hand.kinematics import forward_kinematics
 from s2h_viewer.io.files import RigOptions, load_hand_file, load_motion_file
 from s2h_viewer.retarget.evaluation import evaluate, format_markdown, summarise
 from s2h_viewer.retarget.guard import guarded
 from s2h_viewer.retarget.methods import retarget
+from s2h_viewer.semantics.flexion import thumb_follow
 from s2h_viewer.semantics.metrics import score_retarget
 from s2h_viewer.semantics.signature import INVENTED_BIT, held_poses, loss_masks, pose_differences, signatures
 
@@ -127,3 +130,24 @@ def test_check_reports_each_animations_sideways_flexion(capsys):
     assert "ring_dip" in out and "worst sideways flexion at the tightest curls" in out
     assert main(["check", str(HUMAN)]) == 2
     assert "has no animations to check" in capsys.readouterr().err
+
+
+def test_the_thumb_follows_score_reads_whether_the_thumb_does_what_the_sources_does(poses, sample_hands):
+    """The authored poses move all three thumb joints. Onto their own rig the thumb follows exactly (1.0); a
+    retarget whose thumb is held still in its rest pose reads 0 on every joint; one whose thumb plays the
+    poses backwards in time reads far below; the CSV names the worst joint."""
+    motion, rig = poses
+    positions = forward_kinematics(rig, torch.as_tensor(motion.q_tbs, dtype=torch.float64)).positions.numpy()
+    assert all(c == pytest.approx(1.0) for c in thumb_follow(positions, positions).values())
+    still = motion.q_tbs.copy()
+    still[:, 0:3] = [1.0, 0.0, 0.0, 0.0]
+    scores = score_retarget(rig, motion.q_tbs, rig, still)
+    assert scores.thumb_follow == 0.0 and scores.thumb_follow_at == "thumb_cmc"
+    backwards = motion.q_tbs.copy()
+    backwards[:, 0:3] = motion.q_tbs[::-1, 0:3]
+    reversed_scores = score_retarget(rig, motion.q_tbs, rig, backwards)
+    assert reversed_scores.thumb_follow < 0.5 and reversed_scores.thumb_follow_at.startswith("thumb_")
+    assert score_retarget(rig, motion.q_tbs, rig, motion.q_tbs).thumb_follow == pytest.approx(1.0)
+    rows = evaluate([motion], {rig.name: rig, "iris": sample_hands["iris"]}, ["iris"], ["tbs_copy"])
+    assert "Thumb follows (corr)" in format_markdown(summarise(rows))
+    assert -1.0 <= rows[0].scores.thumb_follow <= 1.0

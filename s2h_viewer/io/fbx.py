@@ -52,15 +52,17 @@ def _read(path: Path, fps: float = 30.0) -> tuple[RigSkeleton, RigMesh | None, l
 
 
 def load_fbx_hand(path: str | Path, side: str | None = None, scheme: str | None = None,
-                  joint_map: dict[str, str] | None = None, name: str | None = None, unit: str | None = None
-                  ) -> HandModel:
-    """The hand of an FBX file (a lone hand or one hand of a character), annotated, as a right hand."""
+                  joint_map: dict[str, str] | None = None, name: str | None = None, unit: str | None = None,
+                  hinges_from: str | Path | None = None) -> HandModel:
+    """The hand of an FBX file (a lone hand or one hand of a character), annotated, as a right hand; the
+    solver's frames checked against the hinges of its own takes, or of ``hinges_from``'s (`annotate.hinges`)."""
     path = Path(path)
     with reading(path, "an FBX hand"):
-        skeleton, mesh, _ = _read(path)
+        skeleton, mesh, takes = _read(path)
         if not skeleton.names:
             raise InputFileError(path, "has no nodes (no skeleton)")
-        return build_hand(path, skeleton, recognise(skeleton, path, side, scheme, joint_map), mesh, name, unit)
+        return build_hand(path, skeleton, recognise(skeleton, path, side, scheme, joint_map), mesh, name, unit,
+                          hinge_evidence=hinges_from or (path if takes else None))
 
 
 def list_fbx_takes(path: str | Path) -> list[str]:

@@ -90,6 +90,9 @@ class RigOptions:
     animation: str | int | None = None
     fps: float | None = None
     unit: str | None = None  # the rig's length unit (`io.units.UNITS`); None: the format's, else guessed
+    #: a motion file on the rig's skeleton whose animations give each joint's hinge (`annotate.hinges`);
+    #: None: the rig file's own animations, if it has any
+    hinges_from: str | Path | None = None
 
     def for_file(self, hand_file: str | Path) -> "RigOptions":
         """These options with the joint map to use on ``hand_file`` as a dict: the user's, else the one saved
@@ -131,10 +134,10 @@ def _load_hand(path: Path, suffix: str, options: RigOptions) -> HandModel:
     o = options.for_file(path)
     if suffix in GLTF_FAMILY:
         from s2h_viewer.io.gltf import load_gltf_hand
-        return load_gltf_hand(path, o.side, o.scheme, o.joint_map, unit=o.unit)
+        return load_gltf_hand(path, o.side, o.scheme, o.joint_map, unit=o.unit, hinges_from=o.hinges_from)
     if suffix == ".fbx":
         from s2h_viewer.io.fbx import load_fbx_hand
-        return load_fbx_hand(path, o.side, o.scheme, o.joint_map, unit=o.unit)
+        return load_fbx_hand(path, o.side, o.scheme, o.joint_map, unit=o.unit, hinges_from=o.hinges_from)
     from s2h_viewer.io.bvh import load_bvh
     return load_bvh(path, o.side, o.scheme, o.joint_map, unit=o.unit)[0]
 
@@ -180,8 +183,8 @@ def _every_animation(path: Path, suffix: str, rig: HandModel) -> Motion:
     """Every animation (take) of a glTF/FBX file in turn, one clip labelled by animation (`motions.pose_clip`)."""
     from s2h_viewer.motions.pose_clip import concatenate_clips
     if suffix in GLTF_FAMILY:
-        from s2h_viewer.io.gltf import list_gltf_animations, load_gltf_motion
-        clips = [load_gltf_motion(path, rig, k) for k in range(len(list_gltf_animations(path)))]
+        from s2h_viewer.io.gltf import load_every_gltf_animation
+        clips = load_every_gltf_animation(path, rig)
     else:
         from s2h_viewer.io.fbx import list_fbx_takes, load_fbx_motion
         clips = [load_fbx_motion(path, rig, k) for k in range(len(list_fbx_takes(path)))]

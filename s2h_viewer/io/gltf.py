@@ -342,16 +342,18 @@ def _recognise(doc: _Document, side: str | None, scheme: str | None, joint_map: 
 
 
 def load_gltf_hand(path: str | Path, side: str | None = None, scheme: str | None = None,
-                   joint_map: dict[str, str] | None = None, name: str | None = None, unit: str | None = None
-                   ) -> HandModel:
+                   joint_map: dict[str, str] | None = None, name: str | None = None, unit: str | None = None,
+                   hinges_from: str | Path | None = None) -> HandModel:
     """The hand of a glTF/GLB file (a lone hand or one hand of a character), annotated, as a right hand.
     ``side`` None: the side the names say, else the one geometry says (see `rig_recognition`); ``unit`` None:
-    metres where the hand is plausible in them, else a guess (`io.units`)."""
+    metres where the hand is plausible in them, else a guess (`io.units`). The solver's frames are checked
+    against the hinges of the file's own animations, or of ``hinges_from``'s (`annotate.hinges`)."""
     with reading(path, "a glTF hand"):
         doc = _Document(Path(path))
         mapping = _recognise(doc, side, scheme, joint_map)
         skeleton = RigSkeleton(doc.names, doc.world, doc.parents)
-        return build_hand(doc.path, skeleton, mapping, _skinned_mesh(doc), name, unit)
+        evidence = hinges_from or (doc.path if doc.gltf.animations else None)
+        return build_hand(doc.path, skeleton, mapping, _skinned_mesh(doc), name, unit, hinge_evidence=evidence)
 
 
 def list_gltf_animations(path: str | Path) -> list[tuple[str, float]]:
@@ -407,6 +409,13 @@ def load_gltf_motion(path: str | Path, hand: HandModel, animation: str | int | N
     finger rotations on ``hand`` (a hand loaded from the same rig, or any rig with the same bone names)."""
     with reading(path, "a glTF animation"):
         return _load_motion(_Document(Path(path)), hand, animation, fps)
+
+
+def load_every_gltf_animation(path: str | Path, hand: HandModel, fps: float = 30.0) -> list[Motion]:
+    """Every animation of the file in file order, as `load_gltf_motion` reads each, the file parsed once."""
+    with reading(path, "a glTF animation"):
+        doc = _Document(Path(path))
+        return [_load_motion(doc, hand, k, fps) for k in range(len(doc.gltf.animations or []))]
 
 
 def _load_motion(doc: _Document, hand: HandModel, animation: str | int | None, fps: float) -> Motion:

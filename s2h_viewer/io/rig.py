@@ -113,9 +113,12 @@ def _unit(skeleton: RigSkeleton, index: np.ndarray, source: Path, unit: str | No
 
 
 def build_hand(source: str | Path, skeleton: RigSkeleton, mapping: RigMapping, mesh: RigMesh | None,
-               name: str | None = None, unit: str | None = None, declared: str | None = "m") -> HandModel:
+               name: str | None = None, unit: str | None = None, declared: str | None = "m",
+               hinge_evidence: str | Path | None = None) -> HandModel:
     """The `HandModel` of a mapped rig, annotated (sidecar, solver or palm plane) and mirrored if left; lengths
-    in ``unit`` (None: the ``declared`` unit of the format where the hand is plausible in it, else a guess)."""
+    in ``unit`` (None: the ``declared`` unit of the format where the hand is plausible in it, else a guess).
+    ``hinge_evidence``: a motion file on this skeleton (the rig's own, or a pose file) whose animations the
+    solver's frames are checked against (`annotate.hinges`)."""
     from s2h_viewer.annotate.solver import palm_plane_frames
 
     source = Path(source)
@@ -155,7 +158,7 @@ def build_hand(source: str | Path, skeleton: RigSkeleton, mapping: RigMapping, m
         if side == "left":
             hand = mirror_hand(hand, MIRROR_NORMAL)
             hand.rest_frames = palm_plane_frames(hand.rest_positions)  # the guess, made for the right hand
-        return annotate(hand, source)
+        return annotate(hand, source, None if hinge_evidence is None else Path(hinge_evidence))
     except InvalidHandError as exc:
         raise InputFileError(source, str(exc)) from None
 
@@ -188,15 +191,17 @@ def _check_mesh(mesh: RigMesh, skeleton: RigSkeleton, source: Path) -> None:
         raise InputFileError(source, f"mesh is skinned to a bone past the {len(skeleton.names)} there are")
 
 
-def annotate(hand: HandModel, source: Path) -> HandModel:
-    """Set ``hand``'s TBS frames and radii: the sidecar of ``source``, else the solver, else the palm plane."""
+def annotate(hand: HandModel, source: Path, hinge_evidence: Path | None = None) -> HandModel:
+    """Set ``hand``'s TBS frames and radii: the sidecar of ``source``, else the solver (checked against the
+    hinges of ``hinge_evidence``'s animations, if given), else the palm plane."""
     from s2h_viewer.annotate import trust
+    from s2h_viewer.annotate.hinges import LABEL as HINGE_LABEL
     from s2h_viewer.annotate.solver import estimate_radii, solve_tbs_frames
 
     side = hand_side(hand)
     annotation = load_annotation(source, side) if source.exists() else None
     solution = solve_tbs_frames(hand) if hand.mesh is not None else None
-    refused = None
+    refused, diagnostics = None, []
     if annotation is not None and annotation.side is None and not _frames_fit(hand, annotation.frames):
         refused = (f"{legacy_sidecar_path(source).name} (an older sidecar that does not say its hand) does not fit "
                    f"the {side} hand: not used; annotate this hand and save to write its own sidecar")
@@ -205,19 +210,110 @@ def annotate(hand: HandModel, source: Path) -> HandModel:
         hand.rest_frames, how = annotation.frames, "sidecar"
         set_by, confidence = annotation.set_by, annotation.confidence
     elif solution is not None:
+        if hinge_evidence is not None:
+            solution = _with_animation_hinges(hand, solution, hinge_evidence, source)
         hand.rest_frames, how = solution.frames, "solver"
-        set_by = [trust.GUESS if basis == trust.GUESS else "solver" for basis in solution.basis]
+        set_by = [basis if basis in (trust.GUESS, HINGE_LABEL) else "solver" for basis in solution.basis]
         confidence = solution.confidence
     else:
         how = "palm plane (no mesh)"
         set_by, confidence = [trust.GUESS] * topo.N_ARTICULATED, np.full(topo.N_ARTICULATED, np.nan)
+        if hinge_evidence is not None:  # a skeleton with animations: its one-axis joints bend as they do there
+            hinged = _with_animation_hinges(hand, _palm_plane_solution(hand.rest_frames), hinge_evidence, source)
+            hand.rest_frames, set_by, confidence = hinged.frames, hinged.basis, hinged.confidence
+            if HINGE_LABEL in set_by:
+                how = "palm plane (no mesh), animation hinges"
+            diagnostics = hinged.diagnostics
     trust.record(hand, set_by, confidence)
     hand.radii = estimate_radii(hand, solution)
     hand.meta["annotation"] = how
-    if solution is not None or refused:
-        hand.meta["solver_diagnostics"] = ([refused] if refused else []) + (solution.diagnostics if solution else [])
+    if solution is not None:
+        diagnostics = solution.diagnostics
+    if solution is not None or diagnostics or refused:
+        hand.meta["solver_diagnostics"] = ([refused] if refused else []) + diagnostics
     hand.validate()
     return hand
+
+
+SAME_ROLL_DEGREES = 30.0  # a finger bone rolled further than this about itself in another file: another skeleton
+
+
+def _rest_difference(own: RigSkeleton, other: RigSkeleton, joints: dict[str, str]) -> str | None:
+    """Where ``other``'s finger bones are rolled unlike ``own``'s ("Index_Proximal_R rolled 157 deg"), else None.
+    Each mapped finger bone's rest rotation relative to its parent is compared, and only its turn about the bone
+    itself counts: a pose file's nodes may rest in a pose (bent, not rolled), while bones rolled otherwise
+    (another export of the rig) make the same animation keys turn about other axes. The thumb is left out
+    (opposition rolls it)."""
+    lookup = [{n: i for i, n in enumerate(s.names)} for s in (own, other)]
+    missing, rolled = [], []
+    for joint, bone in joints.items():
+        child_bone = None if joint.endswith("_tip") or joint == "wrist" else joints.get(_child_joint(joint))
+        if joint.startswith("thumb") or not bone or bone not in lookup[0] or child_bone not in lookup[0]:
+            continue
+        if bone not in lookup[1]:
+            missing.append(bone)
+            continue
+        local = []
+        for skeleton, index in zip((own, other), lookup):
+            i = index[bone]
+            world = rotation_part(skeleton.world[i])
+            parent = skeleton.parents[i]
+            local.append(world if parent < 0 else rotation_part(skeleton.world[parent]).T @ world)
+        child = own.world[lookup[0][child_bone], :3, 3] - own.world[lookup[0][bone], :3, 3]
+        along = rotation_part(own.world[lookup[0][bone]]).T @ child  # the bone's direction in its own axes
+        quat = Rotation.from_matrix(local[0].T @ local[1]).as_quat()  # x, y, z, w
+        roll = 2.0 * np.arctan2(abs(quat[:3] @ along) / max(np.linalg.norm(along), 1e-12), abs(quat[3]))
+        if np.degrees(roll) > SAME_ROLL_DEGREES:
+            rolled.append((float(np.degrees(roll)), bone))
+    if not missing and not rolled:
+        return None
+    parts = [f"{bone} rolled {angle:.0f} deg" for angle, bone in sorted(rolled, reverse=True)[:2]]
+    parts += [f"no bone {bone}" for bone in missing[:2]]
+    return ", ".join(parts)
+
+
+def _child_joint(joint: str) -> str:
+    """'index_mcp' -> 'index_pip': the next joint down a finger (a finger's DIP -> its tip)."""
+    return topo.JOINT_NAMES[topo.JOINT_NAMES.index(joint) + 1]
+
+
+def _palm_plane_solution(frames: np.ndarray):
+    """A `TbsSolution` of palm-plane frames (a rig without a mesh), for the animation hinges to check."""
+    from s2h_viewer.annotate import trust
+    from s2h_viewer.annotate.solver import TbsSolution
+
+    unknown = np.full(topo.N_ARTICULATED, np.nan)
+    return TbsSolution(frames.copy(), unknown, np.zeros(topo.N_ARTICULATED), unknown, unknown,
+                       np.ones(topo.N_ARTICULATED, dtype=bool), [], [trust.GUESS] * topo.N_ARTICULATED)
+
+
+def _with_animation_hinges(hand: HandModel, solution, evidence: Path, source: Path):
+    """``solution`` checked against the hinges every animation of ``evidence`` turns each joint about
+    (`annotate.hinges.overrule_with_hinges`). A pose file on another skeleton, or a rig's own animations that
+    cannot be read on its hand, leave the solution as it was, with a line saying so; a pose file that cannot be
+    read raises its error."""
+    from dataclasses import replace
+
+    from s2h_viewer.annotate.hinges import animation_hinges, overrule_with_hinges
+    from s2h_viewer.io.files import ALL_ANIMATIONS, RigOptions, load_motion_file
+
+    hand.rest_frames = solution.frames
+    if evidence != source:
+        from s2h_viewer.io.files import read_rig_skeleton
+        other = _rest_difference(read_rig_skeleton(source), read_rig_skeleton(evidence), hand.meta["rig_joints"])
+        if other is not None:  # another rig (of several a command reads) or another export of this one
+            return replace(solution, diagnostics=[*solution.diagnostics, (
+                f"hinges from {evidence.name} not taken: its bones are rolled otherwise ({other}), so its keys "
+                f"turn them about other axes; use animations made on this skeleton")])
+    try:
+        motion, _ = load_motion_file(evidence, hand, RigOptions(animation=ALL_ANIMATIONS))
+    except InputFileError as exc:
+        if evidence != source:
+            raise InputFileError(evidence, f"cannot take hinges from it for {source.name}: {exc.problem}") from None
+        return replace(solution, diagnostics=[*solution.diagnostics,
+                                              f"its animations could not be read for hinges: {exc.problem}"])
+    hinges = animation_hinges(motion.q_tbs, solution.frames, evidence.name)
+    return overrule_with_hinges(solution, hinges, hand.rest_positions)
 
 
 def _frames_fit(hand: HandModel, frames: np.ndarray) -> bool:

@@ -28,7 +28,7 @@ from s2h_viewer.semantics.signature import pose_differences
 
 METRICS = ("mse", "s_palm", "s_finger", "s_finger_paper", "contact_precision", "contact_recall",
            "palm_contact_recall", "violation_rate",
-           "jitter", "sideways_deg", "source_sideways_deg")
+           "jitter", "sideways_deg", "source_sideways_deg", "thumb_follow")
 #: the table's columns, as the paper's Table 1: (header, family the rows are averaged over, metric);
 #: "S_finger (paper)" is the official code's figure (zero diagonal counted), comparable with the paper's
 COLUMNS = (("Same MSE", "same", "mse"), ("Same S_palm", "same", "s_palm"), ("Same S_finger", "same", "s_finger"),
@@ -38,7 +38,8 @@ COLUMNS = (("Same MSE", "same", "mse"), ("Same S_palm", "same", "s_palm"), ("Sam
            ("Contact P", "all", "contact_precision"), ("Contact R", "all", "contact_recall"),
            ("Palm R", "all", "palm_contact_recall"),
            ("Violations", "all", "violation_rate"), ("Jitter", "all", "jitter"),
-           ("Sideways max (deg)", "all", "sideways_deg"), ("Poses kept", "all", "poses_kept"))
+           ("Sideways max (deg)", "all", "sideways_deg"), ("Poses kept", "all", "poses_kept"),
+           ("Thumb follows (corr)", "all", "thumb_follow"))
 #: columns summarised by their largest row, not the mean: the worst finger is what a user sees
 WORST_OF = ("sideways_deg",)
 
@@ -127,13 +128,13 @@ def write_results(rows: list[EvaluationRow], summary: dict[str, dict[str, float]
     out_dir = Path(out_dir)
     buffer = io.StringIO()
     writer = csv.writer(buffer)
-    writer.writerow(["method", "motion", "source", "target", "family", *METRICS, "sideways_at", "poses_kept",
-                     "poses_lost"])
+    writer.writerow(["method", "motion", "source", "target", "family", *METRICS, "sideways_at", "thumb_follow_at",
+                     "poses_kept", "poses_lost"])
     for r in rows:
         s = r.scores.as_dict()
         writer.writerow([r.method, r.motion, r.source, r.target, r.family,
                          *("" if s[m] is None or np.isnan(s[m]) else s[m] for m in METRICS), s["sideways_at"],
-                         "" if np.isnan(r.poses_kept) else r.poses_kept,
+                         s["thumb_follow_at"], "" if np.isnan(r.poses_kept) else r.poses_kept,
                          "; ".join(f"{name}: {', '.join(lost)}" for name, lost in r.poses.items() if lost)])
     written = []
     for name, text in (("evaluation.csv", buffer.getvalue()), ("evaluation.md", format_markdown(summary) + "\n")):

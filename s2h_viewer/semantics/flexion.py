@@ -98,3 +98,44 @@ def bend_angles(positions: np.ndarray, joint: int) -> np.ndarray:
     if joint in topo.TIP_JOINTS:
         joint -= 1
     return _bend(np.asarray(positions, dtype=np.float64), np.array([joint]))[1][:, 0]
+
+
+#: the thumb's three joints, as (name, index into the 21 joints)
+THUMB_JOINTS: tuple[tuple[str, int], ...] = tuple((name, topo.JOINT_NAMES.index(name))
+                                                  for name in ("thumb_cmc", "thumb_mcp", "thumb_ip"))
+#: a thumb joint moving less than this (standard deviation of its angle, degrees) in the source has no motion to follow
+MIN_THUMB_MOTION_DEG = 2.0
+
+
+def thumb_opening(positions: np.ndarray) -> np.ndarray:
+    """(T,) degrees between the thumb's metacarpal (CMC -> MCP) and the index's (wrist -> index MCP): what the
+    CMC does (opposition opens and closes it). The CMC's own bend is not used: the wrist-to-CMC "bone" it is
+    measured from is no bone on most rigs, and sits anywhere from 2 to 5 cm from the wrist."""
+    positions = np.asarray(positions, dtype=np.float64)
+    names = topo.JOINT_NAMES
+    thumb = positions[:, names.index("thumb_mcp")] - positions[:, names.index("thumb_cmc")]
+    index = positions[:, names.index("index_mcp")] - positions[:, names.index("wrist")]
+    cos = (thumb * index).sum(-1) / np.maximum(np.linalg.norm(thumb, axis=-1) * np.linalg.norm(index, axis=-1), 1e-12)
+    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+
+
+def thumb_angles(positions: np.ndarray) -> dict[str, np.ndarray]:
+    """Per thumb joint, (T,) degrees: the CMC's opening (`thumb_opening`), the MCP's and IP's bends."""
+    return {name: thumb_opening(positions) if name == "thumb_cmc" else bend_angles(positions, j)
+            for name, j in THUMB_JOINTS}
+
+
+def thumb_follow(source_positions: np.ndarray, target_positions: np.ndarray) -> dict[str, float]:
+    """Per thumb joint, the correlation over frames of its angle (`thumb_angles`, from positions) on the target
+    with the source's: 1 where the retarget's thumb does what the source's does, whatever the rigs' rest poses;
+    0 where it stays still while the source's moves; NaN for a joint that barely moves in the source."""
+    source, target = thumb_angles(source_positions), thumb_angles(target_positions)
+    out = {}
+    for name, _ in THUMB_JOINTS:
+        if source[name].std() < MIN_THUMB_MOTION_DEG:
+            out[name] = float("nan")
+        elif target[name].std() < 1e-6:
+            out[name] = 0.0
+        else:
+            out[name] = float(np.corrcoef(source[name], target[name])[0, 1])
+    return out

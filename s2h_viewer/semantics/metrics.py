@@ -15,7 +15,7 @@ from s2h_viewer.semantics.anatomy import violation_rate
 from s2h_viewer.semantics.asm import semantic_matrix
 from s2h_viewer.semantics.contacts import (CONTACT_PAIRS, PAD_PAIRS, PALM_PAIRS, contact_precision_recall,
                                            detect_contacts)
-from s2h_viewer.semantics.flexion import sideways_peak
+from s2h_viewer.semantics.flexion import sideways_peak, thumb_follow
 from s2h_viewer.semantics.signature import pose_loss_masks
 from s2h_viewer.semantics.similarity import masked_cosine
 
@@ -82,6 +82,10 @@ class RetargetScores:
     #: invented on most frames with its first frame ("thumb-middle@120"; empty if none)
     invented_contacts: int = 0
     invented_at: str = ""
+    #: the least correlation, over the thumb's joints that move in the source, of a joint's bend with the
+    #: source's (`semantics.flexion.thumb_follow`; NaN: the source's thumb stays still) and that joint ("thumb_ip")
+    thumb_follow: float = float("nan")
+    thumb_follow_at: str = ""
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -114,13 +118,17 @@ def score_retarget_frames(source_hand: HandModel, source_q: np.ndarray | torch.T
         peak = sideways_peak(tgt_pose.positions.numpy())
         kept = pose_loss_masks(source_hand, src_pose, target_hand, tgt_pose) == 0
         invented = tgt_contacts & ~src_contacts
+        follow = {name: c for name, c in thumb_follow(src_pose.positions.numpy(), tgt_pose.positions.numpy()).items()
+                  if not np.isnan(c)}
+        worst_thumb = min(follow, key=follow.get, default="")
         scores = RetargetScores(s_palm=s_palm, s_finger=s_finger, s_finger_paper=s_finger_paper,
                                 contact_precision=precision, contact_recall=recall, palm_contact_recall=palm_recall,
                                 violation_rate=violation_rate(tgt_q), jitter=jitter(tgt_pose, target_hand.hand_length),
                                 mse=mse, sideways_deg=peak.degrees, sideways_at=peak.where,
                                 source_sideways_deg=sideways_peak(src_pose.positions.numpy()).degrees,
                                 signature_kept=float(kept.mean()), invented_contacts=int(invented.any(-1).sum()),
-                                invented_at=most_invented(invented))
+                                invented_at=most_invented(invented),
+                                thumb_follow=follow.get(worst_thumb, float("nan")), thumb_follow_at=worst_thumb)
         return scores, frame_error
 
 
