@@ -126,10 +126,12 @@ def _cmd_train(args: argparse.Namespace) -> int:
     from s2h_viewer.retarget.asrn.inference import MODELS_DIR
     from s2h_viewer.retarget.asrn.training import default_config, train
 
-    weights = {name: value for name, value in (("contact_weight", args.contact_weight),
-                                               ("anatomy_weight", args.anatomy_weight)) if value is not None}
-    config = default_config(args.kind, steps=args.steps, seed=args.seed, scripts_per_hand=args.scripts,
-                            extra_hands=args.extra_hands, **weights)
+    changes = {name: value for name, value in (("contact_weight", args.contact_weight),
+                                               ("anatomy_weight", args.anatomy_weight),
+                                               ("pose_scripts_per_hand", args.pose_scripts), ("steps", args.steps))
+               if value is not None}
+    config = default_config(args.kind, seed=args.seed, scripts_per_hand=args.scripts, extra_hands=args.extra_hands,
+                            **changes)
     out = Path(args.out) if args.out else MODELS_DIR / f"{args.kind}.pt"
     history = train(config, samples.load_sample_hands("train"), out, resume=args.resume, show_progress=not args.quiet,
                     stop_at=args.stop_at)
@@ -500,9 +502,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     tr = sub.add_parser("train", help="train ASRN or DM on the training hands (CPU, seeded, resumable)")
     tr.add_argument("--kind", choices=["asrn", "dm"], default="asrn")
-    tr.add_argument("--steps", type=int, default=4000)
+    tr.add_argument("--steps", type=int, help="training steps (shipped: 12000 for asrn, 4000 for dm)")
     tr.add_argument("--seed", type=int, default=0)
     tr.add_argument("--scripts", type=int, default=6, help="random gesture scripts per training hand")
+    tr.add_argument("--pose-scripts", type=int, help="clips through random key poses over the whole pose space per "
+                                                     "training hand (shipped: 6 for asrn, 0 for dm)")
     tr.add_argument("--out", help="checkpoint path (default: assets/models/<kind>.pt)")
     tr.add_argument("--extra-hands", type=int, default=16, help="unnamed procedural hands added to the 8 shipped "
                                                                  "training hands")

@@ -22,12 +22,8 @@ def synthesize(names: list[str], hand: HandModel | None = None, fps: float = 30.
                noise_deg: float = 1.0, name: str = "", fitted: dict[str, np.ndarray] | None = None) -> Motion:
     """A motion through the named gestures (starting from "relaxed"), fitted to ``hand`` if given.
 
-    Angles are interpolated per joint with a smootherstep ease (zero velocity and acceleration at
-    key poses); noise is Gaussian-filtered so it reads as tremor, not jitter, and everything is
-    clamped back into the anatomical limits. Hold frames are labelled with the gesture's name.
     ``fitted`` (from `fit_library`) saves refitting when one hand performs many scripts.
     """
-    rng = np.random.default_rng(seed)
     sequence = [gesture(n) for n in ["relaxed", *names]]
     if fitted is not None:
         keys = np.stack([fitted[g.name] for g in sequence])
@@ -35,7 +31,21 @@ def synthesize(names: list[str], hand: HandModel | None = None, fps: float = 30.
         keys = fit_gesture_angles(hand, sequence)
     else:
         keys = np.stack([np.radians(g.angles_deg) for g in sequence])
+    meta = {"script": list(names), "seed": seed, "hold": list(hold), "transition": list(transition),
+            "noise_deg": noise_deg}
+    return perform(keys, [g.name for g in sequence], np.random.default_rng(seed), fps, hold, transition, noise_deg,
+                   name=name or "+".join(names), hand_name=hand.name if hand else "", meta=meta)
 
+
+def perform(keys: np.ndarray, key_names: list[str], rng: np.random.Generator, fps: float = 30.0,
+            hold: tuple[float, float] = (0.5, 0.9), transition: tuple[float, float] = (0.35, 0.6),
+            noise_deg: float = 1.0, name: str = "", hand_name: str = "", meta: dict | None = None) -> Motion:
+    """A motion through (K, 15, 3) key angles (radians): each held, then eased into the next.
+
+    Angles are interpolated per joint with a smootherstep ease (zero velocity and acceleration at
+    key poses); noise is Gaussian-filtered so it reads as tremor, not jitter, and everything is
+    clamped back into the anatomical limits. Hold frames are labelled with their key's name.
+    """
     frames, labels = [], []
     for i, key in enumerate(keys):
         if i > 0:
@@ -45,7 +55,7 @@ def synthesize(names: list[str], hand: HandModel | None = None, fps: float = 30.
             labels += [""] * n
         n = max(1, round(rng.uniform(*hold) * fps))
         frames.append(np.repeat(key[None], n, 0))
-        labels += [sequence[i].name] * n
+        labels += [key_names[i]] * n
     angles = np.concatenate(frames)
 
     if noise_deg > 0:
@@ -55,10 +65,8 @@ def synthesize(names: list[str], hand: HandModel | None = None, fps: float = 30.
         angles = angles + noise
     angles = clamp_to_limits(torch.as_tensor(angles)).numpy()
     q = tbs_euler_to_quat(torch.as_tensor(angles)).numpy().astype(np.float32)
-    meta = {"script": list(names), "seed": seed, "hold": list(hold), "transition": list(transition),
-            "noise_deg": noise_deg}
-    return Motion(q_tbs=q, fps=fps, name=name or "+".join(names), hand_name=hand.name if hand else "",
-                  labels=np.array(labels, dtype=object), meta=meta)
+    return Motion(q_tbs=q, fps=fps, name=name, hand_name=hand_name, labels=np.array(labels, dtype=object),
+                  meta=meta or {})
 
 
 def fit_library(hand: HandModel) -> dict[str, np.ndarray]:

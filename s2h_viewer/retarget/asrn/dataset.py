@@ -1,4 +1,5 @@
-"""Training data: random gesture scripts performed by each training hand, cut into windows of
+"""Training data: random gesture scripts (and, for the shipped ASRN, clips through random key poses over
+the whole pose space: `motions.pose_space`) performed by each training hand, cut into windows of
 ``TrainConfig.window`` frames.
 
 Pairs are drawn per batch: one target hand B; with probability ``p_same`` every window comes from B
@@ -18,6 +19,7 @@ from s2h_viewer.hand.kinematics import forward_kinematics
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.procedural import generate_hand
 from s2h_viewer.motions.gestures import GESTURES
+from s2h_viewer.motions.pose_space import random_pose_motion
 from s2h_viewer.motions.synthesis import fit_library, synthesize
 from s2h_viewer.retarget.asrn.features import source_features, target_static
 from s2h_viewer.semantics.contacts import contact_gaps
@@ -63,22 +65,31 @@ def extra_training_hands(count: int, seed: int = 0) -> list[HandModel]:
 
 
 def build_training_set(kind: str, hands: list[HandModel], scripts_per_hand: int = 6, gestures_per_script: int = 10,
-                       seed: int = 0, progress: Callable[[str], None] | None = None) -> TrainingSet:
-    """Each hand performs ``scripts_per_hand`` random scripts (contacts fitted to that hand)."""
+                       seed: int = 0, progress: Callable[[str], None] | None = None,
+                       pose_scripts_per_hand: int = 0) -> TrainingSet:
+    """Each hand performs ``scripts_per_hand`` random gesture scripts and ``pose_scripts_per_hand`` clips
+    through random key poses, ``gestures_per_script`` keys each (contacts fitted to that hand). The random
+    poses draw from their own seeded stream, so the gesture clips are the same with or without them."""
     rng = np.random.default_rng(seed)
+    pose_rng = np.random.default_rng([seed, 1])
     names = list(GESTURES)
     clips = []
+
+    def add(h: int, hand: HandModel, motion) -> None:
+        q = torch.as_tensor(motion.q_tbs)
+        with torch.no_grad():
+            gaps = contact_gaps(hand, forward_kinematics(hand, q)) / hand.hand_length
+        clips.append(Clip(h, q, source_features(kind, hand, motion.q_tbs), gaps.float()))
+
     for h, hand in enumerate(hands):
         if progress:
             progress(f"fitting the gesture library to {hand.name}")
         fitted = fit_library(hand)
         for s in range(scripts_per_hand):
             script = list(rng.choice(names, gestures_per_script, replace=False))
-            motion = synthesize(script, hand, seed=int(rng.integers(1 << 31)), fitted=fitted)
-            q = torch.as_tensor(motion.q_tbs)
-            with torch.no_grad():
-                gaps = contact_gaps(hand, forward_kinematics(hand, q)) / hand.hand_length
-            clips.append(Clip(h, q, source_features(kind, hand, motion.q_tbs), gaps.float()))
+            add(h, hand, synthesize(script, hand, seed=int(rng.integers(1 << 31)), fitted=fitted))
+        for s in range(pose_scripts_per_hand):
+            add(h, hand, random_pose_motion(hand, gestures_per_script, seed=int(pose_rng.integers(1 << 31))))
     return TrainingSet(kind, hands, [target_static(h) for h in hands], clips)
 
 

@@ -6,7 +6,9 @@ difference of the two distance matrices. The shipped ASRN (`SHIPPED`) goes beyon
 loss over the fingertip pad pairs (`contact_loss`: pads touching in the source touch on the target,
 pads apart stay apart), because L_sem alone lets a few millimetres open between pads that must touch,
 L_ana weighted 1.0 so that the pull toward contacts does not buy them with broken limits, and half
-the batches supervised (A = B) so that a hand retargeted onto itself stays itself.
+the batches supervised (A = B) so that a hand retargeted onto itself stays itself, and beside the gesture
+scripts as many clips through random key poses over the whole pose space (`motions.pose_space`), since
+real hands make poses the 31 gestures do not.
 Fingertip-on-palm pairs are left to L_sem: on long-fingered hands the palm is out of reach within
 the bend limits. The shipped DM, the baseline of Zhang et al., keeps the paper's loss.
 The learning rate follows a cosine decay to zero (computed from the step, so resuming needs no
@@ -54,6 +56,7 @@ class TrainConfig:
     anatomy_weight: float = 0.1
     contact_weight: float = 0.0  # on pad gaps in hand lengths
     scripts_per_hand: int = 6
+    pose_scripts_per_hand: int = 0  # clips through random key poses (motions.pose_space) per hand, beside the scripts
     extra_hands: int = 16  # unnamed procedural hands (seeds disjoint from the shipped ones) for variety
     width: int = 128
     seed: int = 0
@@ -61,7 +64,8 @@ class TrainConfig:
 
 
 #: how the shipped networks were trained, beyond `TrainConfig`'s (the paper's) defaults
-SHIPPED: dict[str, dict] = {"asrn": {"contact_weight": 300.0, "anatomy_weight": 1.0, "p_same": 0.5}, "dm": {}}
+SHIPPED: dict[str, dict] = {"asrn": {"contact_weight": 300.0, "anatomy_weight": 1.0, "p_same": 0.5,
+                                     "pose_scripts_per_hand": 6, "steps": 12000}, "dm": {}}
 
 
 def default_config(kind: str, **changes) -> TrainConfig:
@@ -70,8 +74,9 @@ def default_config(kind: str, **changes) -> TrainConfig:
 
 
 def stored_config(state: dict) -> TrainConfig:
-    """The configuration a checkpoint was trained with (one from before the contact term had none)."""
-    return TrainConfig(**{"contact_weight": 0.0} | state["config"])
+    """The configuration a checkpoint was trained with (one from before the contact term or the random
+    poses had none)."""
+    return TrainConfig(**{"contact_weight": 0.0, "pose_scripts_per_hand": 0} | state["config"])
 
 
 def build_model(config: TrainConfig) -> RetargetNet:
@@ -170,7 +175,8 @@ def train(config: TrainConfig, hands: list[HandModel], out: str | Path, resume: 
     hands = hands + extra_training_hands(config.extra_hands, config.seed)
     with tqdm(total=len(hands), desc=f"{config.kind} data", disable=not show_progress, leave=False) as bar:
         data = build_training_set(config.kind, hands, config.scripts_per_hand, seed=config.seed,
-                                  progress=lambda what: (bar.set_postfix_str(what), bar.update()))
+                                  progress=lambda what: (bar.set_postfix_str(what), bar.update()),
+                                  pose_scripts_per_hand=config.pose_scripts_per_hand)
     names = [h.name for h in hands]
     running: list[dict] = []
     skipped = history[-1]["skipped"] if history else 0
