@@ -501,15 +501,18 @@ def build_parser() -> argparse.ArgumentParser:
     bt.set_defaults(func=_cmd_batch)
 
     tr = sub.add_parser("train", help="train ASRN or DM on the training hands (CPU, seeded, resumable)")
-    tr.add_argument("--kind", choices=["asrn", "dm"], default="asrn")
-    tr.add_argument("--steps", type=int, help="training steps (shipped: 12000 for asrn, 4000 for dm)")
-    tr.add_argument("--seed", type=int, default=0)
-    tr.add_argument("--scripts", type=int, default=6, help="random gesture scripts per training hand")
+    tr.add_argument("--kind", choices=["asrn", "dm"], default="asrn", help="which network (default: asrn)")
+    tr.add_argument("--steps", type=int, help="training steps (default: the shipped network's, 12000 for asrn, 4000 "
+                                              "for dm)")
+    tr.add_argument("--seed", type=int, default=0, help="seeds the data and the training (default: 0, the shipped)")
+    tr.add_argument("--scripts", type=int, default=6, help="random gesture scripts per training hand (default: 6)")
     tr.add_argument("--pose-scripts", type=int, help="clips through random key poses over the whole pose space per "
-                                                     "training hand (shipped: 6 for asrn, 0 for dm)")
-    tr.add_argument("--out", help="checkpoint path (default: assets/models/<kind>.pt)")
+                                                     "training hand (default: the shipped network's, 6 for asrn, 0 "
+                                                     "for dm)")
+    tr.add_argument("--out", help="checkpoint path (default: assets/models/<kind>.pt, replacing the shipped network: "
+                                  "pass another path to keep it)")
     tr.add_argument("--extra-hands", type=int, default=16, help="unnamed procedural hands added to the 8 shipped "
-                                                                 "training hands")
+                                                                 "training hands (default: 16)")
     tr.add_argument("--contact-weight", type=float, help="weight of the pad contact loss (shipped: 300 for asrn, "
                                                          "0 for dm as in the paper)")
     tr.add_argument("--anatomy-weight", type=float, help="weight of L_ana (shipped: 1.0 for asrn, 0.1 for dm as in "

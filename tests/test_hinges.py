@@ -104,8 +104,10 @@ def test_poses_made_on_another_skeleton_are_refused(capsys, tmp_path):
     np.testing.assert_array_equal(hand.rest_frames, plain.rest_frames)
     assert LABEL not in hand.meta["frame_set_by"]
     line = hand.meta["solver_diagnostics"][-1]
-    assert re.match(r"hinges from godot_hand_poses_r.gltf not taken: its bones are rolled otherwise "
-                    r"\(\w+_Proximal_R rolled 1\d\d deg", line), line
+    assert re.match(r"hinges from godot_hand_poses_r.gltf not taken: its bones are rolled otherwise, so its keys "
+                    r"turn them about other axes \(\w+_Proximal_R rolled 1\d\d deg", line), line
+    other = load_hand_file(GODOT_R, RigOptions(hinges_from=ROOT / "assets/hands/real/human-female.glb"))
+    assert "not taken: its skeleton is not this hand's (no bone Index_Proximal_R" in other.meta["solver_diagnostics"][-1]
     assert main(["annotate", str(GODOT_R), "--hinges-from", str(POSES)]) == 0
     assert "hinges from godot_hand_poses_r.gltf not taken" in capsys.readouterr().out
     broken = tmp_path / "poses.gltf"

@@ -302,9 +302,10 @@ def _with_animation_hinges(hand: HandModel, solution, evidence: Path, source: Pa
         from s2h_viewer.io.files import read_rig_skeleton
         other = _rest_difference(read_rig_skeleton(source), read_rig_skeleton(evidence), hand.meta["rig_joints"])
         if other is not None:  # another rig (of several a command reads) or another export of this one
+            why = ("its skeleton is not this hand's" if "rolled" not in other else
+                   "its bones are rolled otherwise, so its keys turn them about other axes")
             return replace(solution, diagnostics=[*solution.diagnostics, (
-                f"hinges from {evidence.name} not taken: its bones are rolled otherwise ({other}), so its keys "
-                f"turn them about other axes; use animations made on this skeleton")])
+                f"hinges from {evidence.name} not taken: {why} ({other}); use animations made on this skeleton")])
     try:
         motion, _ = load_motion_file(evidence, hand, RigOptions(animation=ALL_ANIMATIONS))
     except InputFileError as exc:
