@@ -39,7 +39,10 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     with _progress_bar("evaluate", total, "clip", disable=args.quiet):
         rows = evaluate(motions, hands, targets, methods)
     summary = summarise(rows)
-    print(f"{len(motions)} motions x {len(targets)} held-out hands ({', '.join(targets)})")
+    held_out = set(samples.hand_names("test"))
+    kind = ("held-out hand" if set(targets) <= held_out else "target hand") + "s" * (len(targets) != 1)
+    print(f"{len(motions)} motion{'s' * (len(motions) != 1)} x {len(targets)} {kind} "
+          f"({', '.join(Path(t).name for t in targets)})")
     print(format_markdown(summary))
     for path in write_results(rows, summary, args.out):
         print(f"wrote {path}")

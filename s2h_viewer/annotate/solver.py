@@ -289,7 +289,7 @@ def _overrule_unsure_rays(frames: np.ndarray, confidence: np.ndarray, basis: lis
             chosen, label = palm_bend[members], "palm plane"
         why = "the rays could not tell its bend axis" if not sure else "its rays point away from the palm plane"
         diagnostics.append(f"{topo.FINGERS[f]}: {why} (rays' confidence {confidence[members].min():.2f}); "
-                           f"bend axes taken from the {label}")
+                           f"bend axes taken from the {label}, confidence {PALM_EVIDENCE:.1f} at most")
         previous = back[members[0]]
         for k, j in enumerate(members):
             z = np.cross(twist[k], chosen[k])
