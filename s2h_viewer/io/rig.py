@@ -158,7 +158,7 @@ def build_hand(source: str | Path, skeleton: RigSkeleton, mapping: RigMapping, m
         if side == "left":
             hand = mirror_hand(hand, MIRROR_NORMAL)
             hand.rest_frames = palm_plane_frames(hand.rest_positions)  # the guess, made for the right hand
-        return annotate(hand, source, None if hinge_evidence is None else Path(hinge_evidence))
+        return annotate(hand, source, None if hinge_evidence is None else Path(hinge_evidence), skeleton)
     except InvalidHandError as exc:
         raise InputFileError(source, str(exc)) from None
 
@@ -191,9 +191,11 @@ def _check_mesh(mesh: RigMesh, skeleton: RigSkeleton, source: Path) -> None:
         raise InputFileError(source, f"mesh is skinned to a bone past the {len(skeleton.names)} there are")
 
 
-def annotate(hand: HandModel, source: Path, hinge_evidence: Path | None = None) -> HandModel:
+def annotate(hand: HandModel, source: Path, hinge_evidence: Path | None = None,
+             skeleton: RigSkeleton | None = None) -> HandModel:
     """Set ``hand``'s TBS frames and radii: the sidecar of ``source``, else the solver (checked against the
-    hinges of ``hinge_evidence``'s animations, if given), else the palm plane."""
+    hinges of ``hinge_evidence``'s animations, if given; ``skeleton``: ``source``'s, which another file's is
+    compared with), else the palm plane."""
     from s2h_viewer.annotate import trust
     from s2h_viewer.annotate.hinges import LABEL as HINGE_LABEL
     from s2h_viewer.annotate.solver import estimate_radii, solve_tbs_frames
@@ -211,7 +213,7 @@ def annotate(hand: HandModel, source: Path, hinge_evidence: Path | None = None) 
         set_by, confidence = annotation.set_by, annotation.confidence
     elif solution is not None:
         if hinge_evidence is not None:
-            solution = _with_animation_hinges(hand, solution, hinge_evidence, source)
+            solution = _with_animation_hinges(hand, solution, hinge_evidence, source, skeleton)
         hand.rest_frames, how = solution.frames, "solver"
         set_by = [basis if basis in (trust.GUESS, HINGE_LABEL) else "solver" for basis in solution.basis]
         confidence = solution.confidence
@@ -219,7 +221,8 @@ def annotate(hand: HandModel, source: Path, hinge_evidence: Path | None = None) 
         how = "palm plane (no mesh)"
         set_by, confidence = [trust.GUESS] * topo.N_ARTICULATED, np.full(topo.N_ARTICULATED, np.nan)
         if hinge_evidence is not None:  # a skeleton with animations: its one-axis joints bend as they do there
-            hinged = _with_animation_hinges(hand, _palm_plane_solution(hand.rest_frames), hinge_evidence, source)
+            hinged = _with_animation_hinges(hand, _palm_plane_solution(hand.rest_frames), hinge_evidence, source,
+                                            skeleton)
             hand.rest_frames, set_by, confidence = hinged.frames, hinged.basis, hinged.confidence
             if HINGE_LABEL in set_by:
                 how = "palm plane (no mesh), animation hinges"
@@ -238,12 +241,13 @@ def annotate(hand: HandModel, source: Path, hinge_evidence: Path | None = None) 
 SAME_ROLL_DEGREES = 30.0  # a finger bone rolled further than this about itself in another file: another skeleton
 
 
-def _rest_difference(own: RigSkeleton, other: RigSkeleton, joints: dict[str, str]) -> str | None:
-    """Where ``other``'s finger bones are rolled unlike ``own``'s ("Index_Proximal_R rolled 157 deg"), else None.
-    Each mapped finger bone's rest rotation relative to its parent is compared, and only its turn about the bone
-    itself counts: a pose file's nodes may rest in a pose (bent, not rolled), while bones rolled otherwise
-    (another export of the rig) make the same animation keys turn about other axes. The thumb is left out
-    (opposition rolls it)."""
+def _roll_difference(own: RigSkeleton, other: RigSkeleton, joints: dict[str, str]
+                     ) -> tuple[list[tuple[float, str]], list[str]]:
+    """``other``'s finger bones rolled unlike ``own``'s, as (degrees, bone), and those it lacks; both empty for
+    the same skeleton. Each mapped finger bone's rest rotation relative to its parent is compared, and only its
+    turn about the bone itself counts: a pose file's nodes may rest in a pose (bent, not rolled), while bones
+    rolled otherwise (another export of the rig) make the same animation keys turn about other axes. The thumb
+    is left out (opposition rolls it)."""
     lookup = [{n: i for i, n in enumerate(s.names)} for s in (own, other)]
     missing, rolled = [], []
     for joint, bone in joints.items():
@@ -265,11 +269,7 @@ def _rest_difference(own: RigSkeleton, other: RigSkeleton, joints: dict[str, str
         roll = 2.0 * np.arctan2(abs(quat[:3] @ along) / max(np.linalg.norm(along), 1e-12), abs(quat[3]))
         if np.degrees(roll) > SAME_ROLL_DEGREES:
             rolled.append((float(np.degrees(roll)), bone))
-    if not missing and not rolled:
-        return None
-    parts = [f"{bone} rolled {angle:.0f} deg" for angle, bone in sorted(rolled, reverse=True)[:2]]
-    parts += [f"no bone {bone}" for bone in missing[:2]]
-    return ", ".join(parts)
+    return sorted(rolled, reverse=True), missing
 
 
 def _child_joint(joint: str) -> str:
@@ -287,7 +287,7 @@ def _palm_plane_solution(frames: np.ndarray):
                        np.ones(topo.N_ARTICULATED, dtype=bool), [], [trust.GUESS] * topo.N_ARTICULATED)
 
 
-def _with_animation_hinges(hand: HandModel, solution, evidence: Path, source: Path):
+def _with_animation_hinges(hand: HandModel, solution, evidence: Path, source: Path, skeleton: RigSkeleton):
     """``solution`` checked against the hinges every animation of ``evidence`` turns each joint about
     (`annotate.hinges.overrule_with_hinges`). A pose file on another skeleton, or a rig's own animations that
     cannot be read on its hand, leave the solution as it was, with a line saying so; a pose file that cannot be
@@ -300,12 +300,15 @@ def _with_animation_hinges(hand: HandModel, solution, evidence: Path, source: Pa
     hand.rest_frames = solution.frames
     if evidence != source:
         from s2h_viewer.io.files import read_rig_skeleton
-        other = _rest_difference(read_rig_skeleton(source), read_rig_skeleton(evidence), hand.meta["rig_joints"])
-        if other is not None:  # another rig (of several a command reads) or another export of this one
-            why = ("its skeleton is not this hand's" if "rolled" not in other else
-                   "its bones are rolled otherwise, so its keys turn them about other axes")
+        rolled, missing = _roll_difference(skeleton, read_rig_skeleton(evidence), hand.meta["rig_joints"])
+        if rolled or missing:  # another rig (of several a command reads) or another export of this one
+            why = ("its bones are rolled otherwise, so its keys turn them about other axes" if rolled else
+                   "its skeleton is not this hand's")
+            where = ([f"{bone} rolled {angle:.0f} deg" for angle, bone in rolled[:2]]
+                     + [f"no bone {bone}" for bone in missing[:2]])
             return replace(solution, diagnostics=[*solution.diagnostics, (
-                f"hinges from {evidence.name} not taken: {why} ({other}); use animations made on this skeleton")])
+                f"hinges from {evidence.name} not taken: {why} ({', '.join(where)}); use animations made on this "
+                f"skeleton")])
     try:
         motion, _ = load_motion_file(evidence, hand, RigOptions(animation=ALL_ANIMATIONS))
     except InputFileError as exc:

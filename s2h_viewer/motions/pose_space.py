@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.motions.fitting import fit_gesture_angles
@@ -26,7 +27,7 @@ PALM_CURL = 0.85  # a finger curled at least this far (of a full curl) is labell
 #: degrees (from the library's OK, letter D and W); the fit then closes the gap on each hand
 OPPOSITION = {"index": ((30, 25, 20), (45, 50, 35)), "middle": ((35, 25, 25), (45, 50, 35)),
               "ring": ((40, 35, 25), (55, 55, 40)), "pinky": ((45, 40, 30), (70, 80, 60))}
-FINGERS = tuple(OPPOSITION)
+FINGERS = topo.FINGERS[1:]
 FULL_CURL = np.array([80.0, 88.0, 65.0])  # MCP, PIP, DIP at a flexion of 1 (the library's CURL, PIP inside 89)
 
 
