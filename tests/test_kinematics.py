@@ -18,7 +18,8 @@ from s2h_viewer.hand.mirror import mirror_hand, mirror_motion
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.hand.rotations import (matrix_to_tbs_euler, quat_angle, quat_multiply, quat_to_matrix,
-                                       quat_to_tbs_euler, random_quats, tbs_euler_to_quat)
+                                       quat_to_tbs_euler, quat_to_tbs_euler_past_lock, random_quats,
+                                       tbs_euler_to_quat)
 from s2h_viewer.hand.skinning import skin_vertices
 from s2h_viewer.semantics.reference import fk_frame
 
@@ -111,6 +112,20 @@ def test_tbs_euler_matches_scipy_intrinsic_xyz(rng):
     ours = matrix_to_tbs_euler(r).numpy()
     theirs = Rotation.from_matrix(r.numpy()).as_euler("XYZ")  # intrinsic twist(x), bend(y), splay(z)
     np.testing.assert_allclose(ours, theirs, atol=1e-9)
+
+
+def test_a_bend_past_90_degrees_reads_as_a_bend_not_a_twist(rng):
+    """A knuckle of a fist bent 103 deg: the plain reading keeps the bend within 90 and turns it into a 160 deg
+    twist and splay; the past-lock reading gives the angles it was made of, and every reading is the same rotation."""
+    made = torch.tensor([math.radians(12.0), math.radians(103.0), math.radians(-8.0)], dtype=torch.float64)
+    q = tbs_euler_to_quat(made)
+    plain = torch.rad2deg(quat_to_tbs_euler(q))
+    assert abs(plain[0]) > 150 and abs(plain[1]) < 90  # the same rotation, read as a twisted finger
+    np.testing.assert_allclose(quat_to_tbs_euler_past_lock(q).numpy(), made.numpy(), atol=1e-9)
+    many = random_quats((2000,), generator=rng)
+    angles = quat_to_tbs_euler_past_lock(many)
+    assert (angles[:, 0].abs() <= math.pi / 2 + 1e-9).all()
+    assert quat_angle(tbs_euler_to_quat(angles), many).max() < 1e-6
 
 
 def test_mirroring_twice_is_identity_and_keeps_the_pose(sample_hands, rng):

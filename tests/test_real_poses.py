@@ -13,12 +13,14 @@ from s2h_viewer.annotate.solver import PALM_EVIDENCE, solve_tbs_frames
 from s2h_viewer.cli import main
 from s2h_viewer.hand.kinematics import forward_kinematics
 from s2h_viewer.io.files import RigOptions, load_hand_file, load_motion_file
+from s2h_viewer.retarget.contact_fit import fit_contacts
 from s2h_viewer.retarget.evaluation import evaluate, format_markdown, summarise
 from s2h_viewer.retarget.guard import guarded
 from s2h_viewer.retarget.methods import retarget
 from s2h_viewer.semantics.flexion import thumb_follow
 from s2h_viewer.semantics.metrics import score_retarget
-from s2h_viewer.semantics.signature import INVENTED_BIT, held_poses, loss_masks, pose_differences, signatures
+from s2h_viewer.semantics.signature import (INVENTED_BIT, SIDEWAYS_LIMIT, TOUCH_BITS, frame_sideways, held_poses,
+                                            loss_masks, pose_differences, signatures)
 
 ROOT = Path(__file__).resolve().parents[1]
 POSES = ROOT / "assets/motions/real/godot_hand_poses_r.gltf"
@@ -96,6 +98,30 @@ def test_asrn_keeps_at_least_the_poses_tbs_copy_keeps_on_a_real_rig(poses):
         invented[method] = int(((loss_masks(rig, motion.q_tbs, target, moved.q_tbs) >> INVENTED_BIT) & 1).sum())
     assert kept["asrn"] >= kept["tbs_copy"] >= 10, kept
     assert invented["tbs_copy"] > 50 and invented["asrn"] <= invented["tbs_copy"] // 20, invented
+
+
+def test_the_contact_fit_opens_invented_contacts_without_bending_fingers_sideways(poses):
+    """TBS Copy of the poses onto the Godot hand leaves the ring and pinky tips side by side in every fist (a pad
+    contact the source does not make, 210 frames) and the thumb off fingertips it is at (OK: 3% of the hand in the
+    source). The fit opened those by bending the pinky DIP 45 deg sideways (a fist's knuckle bent past 90 read as a
+    160 deg twist, which the anatomy term then "untwisted"), and pushed the OK's thumb off the index: now it may bend
+    no hinge past 20 deg sideways, and keeps the thumb where the source's is."""
+    motion, rig = poses
+    target = load_hand_file(GODOT_R)
+    start = motion.q_tbs.astype(np.float32)
+    fitted = fit_contacts(motion.q_tbs, rig, target, start.copy())
+    before, after = (score_retarget(rig, motion.q_tbs, target, q) for q in (start, fitted))
+    assert before.invented_contacts > 150 and after.invented_contacts <= before.invented_contacts // 10
+    assert after.contact_precision >= 0.9 and after.contact_recall >= 0.95
+    thumb_lost = [int(((loss_masks(rig, motion.q_tbs, target, q) >> TOUCH_BITS) & 15).astype(bool).sum())
+                  for q in (start, fitted)]
+    assert thumb_lost[0] > 50 and thumb_lost[1] <= 2, thumb_lost
+    sideways = [frame_sideways(forward_kinematics(target, torch.as_tensor(q, dtype=torch.float64)).positions.numpy())
+                for q in (start, fitted)]
+    assert (sideways[1] <= np.maximum(sideways[0], SIDEWAYS_LIMIT) + 0.5).all()
+    kept = [sum(not lost for lost in pose_differences(rig, motion.q_tbs, target, q, motion.labels).values())
+            for q in (start, fitted)]
+    assert kept[1] >= kept[0] + 10, kept
 
 
 def test_the_guard_never_adds_a_loss(poses):

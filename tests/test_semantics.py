@@ -15,10 +15,11 @@ from s2h_viewer.hand.kinematics import HandPose, forward_kinematics, identity_mo
 from s2h_viewer.hand.rotations import tbs_euler_to_quat
 from s2h_viewer.motions.fitting import fit_gesture_angles
 from s2h_viewer.motions.gestures import GESTURES
-from s2h_viewer.semantics.anatomy import anatomical_loss, violation_rate
+from s2h_viewer.semantics.anatomy import BEND_HIGH, anatomical_loss, clamp_bend_change, violation_rate
 from s2h_viewer.semantics.asm import (BLOCK_FRAMES, SELF_CELLS, asm_columns, distance_matrix, palm_unit,
                                       semantic_matrix, semantic_matrix_by_axis)
 from s2h_viewer.semantics.contacts import contact_precision_recall, detect_contacts, pair_index
+from s2h_viewer.semantics.flexion import flexion_and_sideways, hinge_flexion_and_alignment
 from s2h_viewer.semantics.metrics import palm_and_finger_scores, score_retarget
 from s2h_viewer.semantics.reference import asm_sequence
 from s2h_viewer.semantics.similarity import SourceSemantics, masked_cosine, semantic_similarity, semantic_weights
@@ -208,6 +209,33 @@ def test_ok_sign_on_a_generated_hand_has_the_thumb_index_contact(sample_hands):
     assert contacts[0, thumb_index]  # OK: thumb and index touch
     assert contacts[0].sum() == 1  # and nothing else does
     assert not contacts[1].any()  # spread: no contacts at all
+
+
+def test_a_corrected_bend_stays_in_its_limits_or_no_further_out_than_it_started():
+    start = torch.zeros(3, 15, 3, dtype=torch.float64)
+    start[:, 3, 1] = torch.tensor([math.radians(103.0), math.radians(85.0), math.radians(-5.0)])  # index MCP
+    moved = start.clone()
+    moved[:, 3, 1] += torch.tensor([math.radians(4.0), math.radians(10.0), math.radians(-20.0)])
+    out = clamp_bend_change(start, moved)
+    # a fist's 103 deg stays (not snapped to 89), may not grow; 85 + 10 stops 1 deg short of 90; -25 stops at -10
+    assert torch.rad2deg(out[:, 3, 1]).tolist() == pytest.approx([103.0, 89.0, -10.0])
+    assert out[0, 3, 1] <= BEND_HIGH[3] or out[0, 3, 1] == start[0, 3, 1]
+    np.testing.assert_array_equal(clamp_bend_change(start, start).numpy(), start.numpy())  # no correction, no change
+
+
+def test_the_smooth_sideways_reading_is_the_scores_and_has_gradients(sample_hands, rng):
+    hand = sample_hands["birch"]
+    q = random_tbs_motion(40, rng, max_deg=90.0)
+    positions = forward_kinematics(hand, torch.as_tensor(q)).positions.detach().requires_grad_()
+    flexion, alignment = hinge_flexion_and_alignment(positions)
+    degrees, sideways = flexion_and_sideways(positions.detach().numpy())
+    np.testing.assert_allclose(np.degrees(flexion.detach().numpy()), degrees, atol=1e-6)
+    flexed = ~np.isnan(sideways)
+    assert flexed.sum() > 50
+    np.testing.assert_allclose(np.degrees(np.arccos(alignment.detach().numpy().clip(0, 1)))[flexed], sideways[flexed],
+                               atol=1e-4)
+    alignment.sum().backward()
+    assert torch.isfinite(positions.grad).all() and positions.grad.abs().sum() > 0
 
 
 def test_gesture_library_is_anatomical_and_large_enough():

@@ -97,6 +97,20 @@ def quat_to_tbs_euler(q: torch.Tensor) -> torch.Tensor:
     return matrix_to_tbs_euler(quat_to_matrix(q))
 
 
+def quat_to_tbs_euler_past_lock(q: torch.Tensor) -> torch.Tensor:
+    """(..., 4) quaternions -> (..., 3) TBS angles with the twist within +-90 deg and the bend free to pass
+    +-90 deg. `quat_to_tbs_euler` keeps the bend within +-90, so a joint bent to 103 deg reads (twist 158,
+    bend 77, splay -159): the same rotation, but an optimiser stepping its "splay" there twists the finger.
+    ``Rx(a + pi) Ry(pi - b) Rz(c + pi) = Rx(a) Ry(b) Rz(c)`` gives the other reading."""
+    twist, bend, splay = quat_to_tbs_euler(q).unbind(-1)
+    flip = twist.abs() > torch.pi / 2
+    half_turn = torch.full_like(twist, torch.pi)
+    twist = torch.where(flip, twist - torch.copysign(half_turn, twist), twist)
+    bend = torch.where(flip, torch.copysign(half_turn, bend) - bend, bend)
+    splay = torch.where(flip, splay - torch.copysign(half_turn, splay), splay)
+    return torch.stack([twist, bend, splay], -1)
+
+
 def slerp(a: np.ndarray, b: np.ndarray, weight: np.ndarray) -> np.ndarray:
     """(T, J, 4) per-joint slerp from ``a`` to ``b`` (T, J, 4; w, x, y, z) by ``weight`` (T,), float32."""
     start = Rotation.from_quat(a.reshape(-1, 4).astype(np.float64), scalar_first=True)

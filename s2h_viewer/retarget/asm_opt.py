@@ -7,8 +7,9 @@ linearly in between, so the warm start's detail is kept and the loss is evaluate
 only. Loss: -L_sem (match the source's ASM) + L_ana (stay anatomical) +
 temporal smoothness of the correction + a contact term that goes beyond the paper: pairs touching in
 the source are pulled to touch on the target and pairs apart are kept apart, gaps measured in each
-hand's own length. The anatomy term is taken on the angles themselves (smooth past a 90 deg bend)
-and the result's bends are clamped into their limits. Long clips go in overlapping chunks,
+hand's own length. The anatomy term is taken on the angles themselves (smooth past a 90 deg bend; the warm
+start read with the twist within +-90 deg, so a knuckle bent past 90 is a bend, not a twisted finger) and
+the result's bends are clamped into their limits. Long clips go in overlapping chunks,
 cross-faded at the seams (`retarget.windows`). No training.
 """
 
@@ -22,7 +23,7 @@ import torch
 from s2h_viewer.hand.kinematics import forward_kinematics
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
-from s2h_viewer.hand.rotations import quat_to_tbs_euler, tbs_euler_to_quat
+from s2h_viewer.hand.rotations import quat_to_tbs_euler_past_lock, tbs_euler_to_quat
 from s2h_viewer.retarget.contact_fit import fit_contacts
 from s2h_viewer.retarget.methods import on_target, register
 from s2h_viewer.retarget.progress import report, stage
@@ -135,7 +136,7 @@ def _optimise_keyframes(source_q: np.ndarray, source_hand: HandModel, target_han
         source_gaps = contact_gaps(source_hand, src_pose) / source_hand.hand_length
         touching = source_gaps < CONTACT_TOLERANCE
         source = SourceSemantics.of(semantic_matrix(src_pose))
-        start = quat_to_tbs_euler(torch.as_tensor(initial_q, dtype=torch.float32))
+        start = quat_to_tbs_euler_past_lock(torch.as_tensor(initial_q, dtype=torch.float32))
 
     def at(keys: np.ndarray) -> _Keyed:
         return _Keyed(keys, start[keys], SourceSemantics(source.directions[keys], source.weights[keys]),

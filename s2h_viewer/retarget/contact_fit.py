@@ -1,14 +1,19 @@
 """Contact fit: close on the target the fingertip-pad contacts the source has, and open those it lacks,
-changing a retarget only around the frames where the two disagree (beyond the paper).
+changing a retarget only around the frames where the two disagree (beyond the paper); and keep the
+thumb at the fingertips the source's thumb is at (the pose signature's looser touch, `thumb_touch_loss`).
 
 A network trained on procedural hands brings pads close on a hand it never saw, but not always within
 the 1.5% tolerance that makes a touch (DESIGN.md section 5). This pass takes its output as given and
 optimises a correction of the TBS Euler angles on the frames where a pad pair is touching on one hand and
-apart on the other, and on ``reach`` frames either side, where the correction fades to zero (a
+apart on the other (or the thumb at a fingertip, `gaps_disagree`), and on ``reach`` frames either side, where the correction fades to zero (a
 smoothness term ties each run's ends to zero): elsewhere the retarget is returned bit for bit. Loss:
 the contact term (`semantics.contacts.contact_loss`), L_ana on the angles, smoothness, and a pull to the
-network's pose; bends are clamped into their limits. All runs of a clip are optimised together in one
-batch, a bounded number of frames at a time.
+network's pose, and a sideways term: no flexed PIP/DIP bent more than `SIDEWAYS_FREE` out of the curl
+plane (on the Godot hand, opening the ring-pinky touch of fists bent the pinky DIP 45 deg sideways
+without it). The angles are read with the twist within +-90 deg (`quat_to_tbs_euler_past_lock`): a
+knuckle of a fist bent past 90 read as twisted 160 deg, and the anatomy term "untwisted" it. Bends
+moved by the fit stay within their limits, or no further out than they were. All runs of a clip are
+optimised together in one batch, a bounded number of frames at a time.
 """
 
 from __future__ import annotations
@@ -21,11 +26,16 @@ import torch
 from s2h_viewer.hand.chunks import frame_chunks
 from s2h_viewer.hand.kinematics import HandPose, forward_kinematics
 from s2h_viewer.hand.model import HandModel
-from s2h_viewer.hand.rotations import quat_to_tbs_euler, tbs_euler_to_quat
+from s2h_viewer.hand.rotations import quat_to_tbs_euler_past_lock, tbs_euler_to_quat
 from s2h_viewer.retarget.progress import report, stage
 from s2h_viewer.retarget.threads import torch_threads
-from s2h_viewer.semantics.anatomy import angle_loss, clamp_bends
+from s2h_viewer.semantics.anatomy import angle_loss, clamp_bend_change
 from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, PAD_PAIRS, contact_gaps, contact_loss
+from s2h_viewer.semantics.flexion import hinge_flexion_and_alignment
+from s2h_viewer.semantics.signature import SIDEWAYS_FLEXION, SIDEWAYS_LIMIT, THUMB_PAIRS, THUMB_TOUCH
+
+#: the thumb-to-fingertip pairs, as indices into the pad pairs (the thumb's come first in both)
+_THUMB = list(THUMB_PAIRS)
 
 
 @dataclass(frozen=True)
@@ -36,8 +46,22 @@ class ContactFitConfig:
     anatomy_weight: float = 10.0
     smoothness_weight: float = 100.0
     prior_weight: float = 1.0  # pull toward the network's pose: the degrees of freedom contacts leave free stay put
+    sideways_weight: float = 1e3  # no flexed PIP/DIP bent sideways past `SIDEWAYS_FREE`
     reach: int = 4  # frames either side of a disagreement over which the correction fades in and out
     batch_frames: int = 4096  # frames optimised at once (memory of one batch)
+
+
+#: a flexed PIP/DIP may bend sideways this far (radians) before the fit's sideways term acts: the signature's
+#: limit less a margin
+SIDEWAYS_FREE = np.radians(SIDEWAYS_LIMIT - 5.0)
+
+
+def _sideways_excess(pose: HandPose) -> torch.Tensor:
+    """(F, 8) how far each PIP/DIP's curl-axis alignment (`hinge_flexion_and_alignment`) drops below that of a
+    `SIDEWAYS_FREE` sideways bend, counted in full from `SIDEWAYS_FLEXION` on, fading in over the 20 deg below."""
+    flexion, alignment = hinge_flexion_and_alignment(pose.positions)
+    weight = ((flexion - np.radians(SIDEWAYS_FLEXION - 20.0)) / np.radians(20.0)).clamp(0.0, 1.0)
+    return weight * torch.relu(float(np.cos(SIDEWAYS_FREE)) - alignment)
 
 
 def _pose_pad_gaps(hand: HandModel, pose: HandPose) -> torch.Tensor:
@@ -57,10 +81,28 @@ def disagreement(source_hand: HandModel, source_q: np.ndarray, target_hand: Hand
     is all that is kept of a long clip's gaps)."""
     out = np.empty(len(source_q), dtype=bool)
     for first, end in frame_chunks(len(source_q)):
-        touching_source = pad_gaps(source_hand, source_q[first:end]) < CONTACT_TOLERANCE
-        touching_target = pad_gaps(target_hand, target_q[first:end]) < CONTACT_TOLERANCE
-        out[first:end] = (touching_source != touching_target).any(-1)
+        out[first:end] = gaps_disagree(pad_gaps(source_hand, source_q[first:end]),
+                                       pad_gaps(target_hand, target_q[first:end]))
     return out
+
+
+def gaps_disagree(source_gaps: np.ndarray, target_gaps: np.ndarray) -> np.ndarray:
+    """(T,) bool from (T, 10) pad gaps: some pair touches (the metric's tolerance) on one hand and not on the
+    other, or the thumb is at a fingertip (the signature's looser `THUMB_TOUCH`) on one and not on the other."""
+    pads = (source_gaps < CONTACT_TOLERANCE) != (target_gaps < CONTACT_TOLERANCE)
+    thumb = (source_gaps[:, _THUMB] < THUMB_TOUCH) != (target_gaps[:, _THUMB] < THUMB_TOUCH)
+    return pads.any(-1) | thumb.any(-1)
+
+
+def thumb_touch_loss(gaps: torch.Tensor, source_gaps: torch.Tensor) -> torch.Tensor:
+    """Mean over frames of the squared misses of the thumb-to-fingertip gaps (F, 10 pad gaps) against the
+    signature's `THUMB_TOUCH`: a thumb at a fingertip in the source (an OK sign's 3%, under it but no pad
+    contact) is kept under 0.8 times it, one away from it beyond 1.2 times it. Without it, opening a thumb
+    the network had pressed onto the index (a pad contact the source does not make) let it fly off."""
+    near = source_gaps[:, _THUMB] < THUMB_TOUCH
+    gap = gaps[:, _THUMB]
+    miss = torch.where(near, torch.relu(gap - 0.8 * THUMB_TOUCH), torch.relu(1.2 * THUMB_TOUCH - gap))
+    return miss.square().sum(-1).mean()
 
 
 def runs_around(frames: np.ndarray, reach: int) -> list[tuple[int, int]]:
@@ -92,10 +134,9 @@ def fit_contacts_to_gaps(source_gaps: np.ndarray, hand: HandModel, q_tbs: np.nda
     """(T, 15, 4) ``q_tbs`` on ``hand`` with its pad contacts made to agree with ``source_gaps`` (T, 10), pad
     gaps in hand lengths measured elsewhere (a tracked hand's keypoints, say), as `fit_contacts` does."""
     out = np.asarray(q_tbs, dtype=np.float32)
-    touching = source_gaps < CONTACT_TOLERANCE
     frames = np.zeros(len(out), dtype=bool)
     for first, end in frame_chunks(len(out)):
-        frames[first:end] = (touching[first:end] != (pad_gaps(hand, out[first:end]) < CONTACT_TOLERANCE)).any(-1)
+        frames[first:end] = gaps_disagree(source_gaps[first:end], pad_gaps(hand, out[first:end]))
     return _fit_frames(out, frames, lambda idx: source_gaps[idx], hand, config)
 
 
@@ -131,7 +172,7 @@ def _fit_runs(q: np.ndarray, source_gaps: np.ndarray, lengths: list[int], hand: 
               config: ContactFitConfig) -> np.ndarray:
     """(F, 15, 4) rotations of the concatenated runs (``lengths`` frames each) after the fit."""
     with torch.no_grad():
-        start = quat_to_tbs_euler(torch.as_tensor(q, dtype=torch.float32))
+        start = quat_to_tbs_euler_past_lock(torch.as_tensor(q, dtype=torch.float32))
     source = torch.as_tensor(source_gaps)
     # each run's correction sits between two zero frames: second differences across them tie its ends
     # to zero, and no difference spans two runs
@@ -143,15 +184,17 @@ def _fit_runs(q: np.ndarray, source_gaps: np.ndarray, lengths: list[int], hand: 
     for step in range(config.steps):
         report(step / config.steps)  # and where a cancel stops the fit
         angles = start + correction
-        gaps = _pose_pad_gaps(hand, forward_kinematics(hand, tbs_euler_to_quat(angles)))
+        pose = forward_kinematics(hand, tbs_euler_to_quat(angles))
+        gaps = _pose_pad_gaps(hand, pose)
         padded = correction.new_zeros(padded_len, *correction.shape[1:]).index_copy(0, slots, correction)
         smooth = (padded[2:] - 2 * padded[1:-1] + padded[:-2]).square().sum((-1, -2)).mean()
-        loss = (config.contact_weight * contact_loss(gaps, source)
+        loss = (config.contact_weight * (contact_loss(gaps, source) + thumb_touch_loss(gaps, source))
                 + config.anatomy_weight * angle_loss(angles)
                 + config.smoothness_weight * smooth
-                + config.prior_weight * correction.square().sum((-1, -2)).mean())
+                + config.prior_weight * correction.square().sum((-1, -2)).mean()
+                + config.sideways_weight * _sideways_excess(pose).square().sum(-1).mean())
         optimiser.zero_grad()
         loss.backward()
         optimiser.step()
     with torch.no_grad():
-        return tbs_euler_to_quat(clamp_bends(start + correction)).numpy()
+        return tbs_euler_to_quat(clamp_bend_change(start, start + correction)).numpy()

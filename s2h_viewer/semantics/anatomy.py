@@ -61,6 +61,16 @@ def clamp_bends(angles: torch.Tensor, margin: float = math.radians(1.0)) -> torc
     return torch.stack([angles[..., 0], bend, angles[..., 2]], -1)
 
 
+def clamp_bend_change(start: torch.Tensor, angles: torch.Tensor, margin: float = math.radians(1.0)) -> torch.Tensor:
+    """(..., 15, 3) ``angles`` (``start`` corrected) with each bend kept within its limits (`clamp_bends`), or
+    where ``start`` already lies outside them, no further out: a correction never adds a violation, and never
+    snaps a pose it was not asked to change (a 103 deg knuckle of a fist stays 103)."""
+    dtype = angles.dtype
+    low = torch.minimum(BEND_LOW.to(dtype), start[..., 1])
+    high = torch.maximum(BEND_HIGH.to(dtype) - margin, start[..., 1])
+    return torch.stack([angles[..., 0], torch.minimum(torch.maximum(angles[..., 1], low), high), angles[..., 2]], -1)
+
+
 def anatomical_loss(q_tbs: torch.Tensor) -> torch.Tensor:
     """L_ana: sum over joints of squared excesses, averaged over frames (scalar, radians^2)."""
     return angle_loss(quat_to_tbs_euler(q_tbs))

@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import torch
 
 from s2h_viewer.hand import topology as topo
 
@@ -44,6 +45,22 @@ def flexion_and_sideways(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     along = np.abs((axis * across[:, None]).sum(-1)) / np.maximum(sin, 1e-12)
     sideways = np.degrees(np.arccos(np.clip(along, 0.0, 1.0)))
     return flexion, np.where(flexion > MIN_FLEXION_DEG, sideways, np.nan)
+
+
+def hinge_flexion_and_alignment(positions: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
+    """(T, 8) flexion in radians of `HINGE_JOINTS` and the |cosine| between each one's flexion axis and the palm's
+    across axis (1: a clean curl, 0: bending sideways), from (T, 21, 3) positions: `flexion_and_sideways`
+    smooth and differentiable (no arccos), for optimisers that must not bend a finger sideways."""
+    joints = torch.as_tensor([j for _, j in HINGE_JOINTS])
+    into = positions[:, joints] - positions[:, torch.as_tensor(topo.PARENTS)[joints]]
+    out = positions[:, joints + 1] - positions[:, joints]
+    axis = torch.linalg.cross(into, out)
+    sin = axis.norm(dim=-1)
+    flexion = torch.atan2(sin, (into * out).sum(-1))
+    index_mcp, pinky_mcp = topo.JOINT_NAMES.index("index_mcp"), topo.JOINT_NAMES.index("pinky_mcp")
+    across = positions[:, pinky_mcp] - positions[:, index_mcp]
+    across = across / across.norm(dim=-1, keepdim=True).clamp_min(1e-12)
+    return flexion, (axis * across[:, None]).sum(-1).abs() / sin.clamp_min(1e-12)
 
 
 @dataclass(frozen=True)
