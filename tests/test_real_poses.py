@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 import torch
 
+from wild_rigs import rerolled_glb
 from s2h_viewer.annotate.solver import PALM_EVIDENCE, solve_tbs_frames
 from s2h_viewer.cli import main
 from s2h_viewer.hand.kinematics import forward_kinematics
@@ -27,6 +28,7 @@ POSES = ROOT / "assets/motions/real/godot_hand_poses_r.gltf"
 POSED_RIG = ROOT / "assets/motions/real/godot_hand_r_posed_rig.gltf"
 HUMAN = ROOT / "assets/hands/real/human-female.glb"
 GODOT_R = ROOT / "assets/hands/real/godot_hand_r.gltf"
+WEBXR_R = ROOT / "assets/hands/webxr/generic-hand-right.glb"
 
 
 @pytest.fixture(scope="module")
@@ -122,6 +124,27 @@ def test_the_contact_fit_opens_invented_contacts_without_bending_fingers_sideway
     kept = [sum(not lost for lost in pose_differences(rig, motion.q_tbs, target, q, motion.labels).values())
             for q in (start, fitted)]
     assert kept[1] >= kept[0] + 10, kept
+
+
+@pytest.mark.parametrize("rig, degrees", [(HUMAN, 20.0), (HUMAN, 90.0), (WEBXR_R, 20.0)])
+def test_a_rig_with_its_finger_bones_rolled_otherwise_reads_the_same_frames_and_retarget(poses, rig, degrees, tmp_path):
+    """The same avatar from another exporter (finger bones rolled about themselves, skin and pose unchanged): its
+    frames and what TBS Copy makes of the poses are the same. At 25 deg the solver took a rolled bone axis as
+    the hinge (the RPM avatar's index rolled 30 deg: its frames followed the roll, 30 deg off)."""
+    motion, source = poses
+    side = "right" if rig == HUMAN else None
+    hands = [load_hand_file(path, RigOptions(side=side))
+             for path in (rig, rerolled_glb(rig, tmp_path / f"rolled_{rig.name}", degrees))]
+    bend = [hand.rest_frames[:, :, 1] for hand in hands]
+    off = np.degrees(np.arccos(np.clip(np.abs((bend[0] * bend[1]).sum(-1)), 0.0, 1.0)))
+    assert off.max() < 3.0, off.round(1)
+    moved = [retarget(motion, source, hand, "tbs_copy").q_tbs for hand in hands]
+    kept = [sum(not lost for lost in pose_differences(source, motion.q_tbs, hand, q, motion.labels).values())
+            for hand, q in zip(hands, moved)]
+    assert kept[0] == kept[1], kept
+    positions = [forward_kinematics(hand, torch.as_tensor(q, dtype=torch.float64)).positions.numpy() / hand.hand_length
+                 for hand, q in zip(hands, moved)]
+    assert np.abs(positions[0] - positions[1]).max() < 0.02
 
 
 def test_the_guard_never_adds_a_loss(poses):

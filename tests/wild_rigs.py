@@ -160,3 +160,43 @@ def per_dof_bvh(source: Path, out: Path) -> Path:
     motion += [" ".join(f"{v:.6f}" for v in row) for row in table]
     out.write_text("\n".join(lines + ["MOTION"] + motion) + "\n")
     return out
+
+
+def rerolled_glb(source: Path, out: Path, degrees: float, pattern: str = r"(?i)thumb|index|middle|ring|pinky|little"
+                 ) -> Path:
+    """The same skinned avatar with every finger bone (a skin joint whose name matches ``pattern`` and that has a
+    child) rolled ``degrees`` about its bone: its rest rotation turned, its children and its inverse bind matrix
+    turned back, so the skin and the pose are the same and only the bones' local axes differ (as two exporters,
+    or two riggers' roll settings, leave them). Animations are dropped (their keys hold the old axes)."""
+    from scipy.spatial.transform import Rotation
+
+    gltf = pygltflib.GLTF2().load(str(source))
+    blob = bytearray(gltf.binary_blob())
+    skin = gltf.skins[0]
+    accessor = gltf.accessors[skin.inverseBindMatrices]
+    view = gltf.bufferViews[accessor.bufferView]
+    start = (view.byteOffset or 0) + (accessor.byteOffset or 0)
+    ibm = np.frombuffer(bytes(blob[start:start + 64 * accessor.count]), dtype="<f4").reshape(-1, 4, 4).transpose(0, 2, 1)
+    ibm = ibm.astype(np.float64)
+    for slot, n in enumerate(skin.joints):
+        node = gltf.nodes[n]
+        if not re.search(pattern, node.name or "") or not node.children:
+            continue
+        child = gltf.nodes[node.children[0]]
+        direction = np.asarray(child.translation or [0.0, 0.0, 0.0], dtype=float)
+        if np.linalg.norm(direction) < 1e-9:
+            continue
+        roll = Rotation.from_rotvec(np.radians(degrees) * direction / np.linalg.norm(direction))
+        node.rotation = (Rotation.from_quat(node.rotation or [0.0, 0.0, 0.0, 1.0]) * roll).as_quat().tolist()
+        for c in node.children:
+            kid = gltf.nodes[c]
+            kid.translation = roll.inv().apply(kid.translation or [0.0, 0.0, 0.0]).tolist()
+            kid.rotation = (roll.inv() * Rotation.from_quat(kid.rotation or [0.0, 0.0, 0.0, 1.0])).as_quat().tolist()
+        turn = np.eye(4)
+        turn[:3, :3] = roll.inv().as_matrix()
+        ibm[slot] = turn @ ibm[slot]
+    blob[start:start + 64 * accessor.count] = ibm.transpose(0, 2, 1).astype("<f4").tobytes()
+    gltf.animations = []
+    gltf.set_binary_blob(bytes(blob))
+    gltf.save_binary(str(out))
+    return out

@@ -5,10 +5,11 @@ thumb at the fingertips the source's thumb is at (the pose signature's looser to
 A network trained on procedural hands brings pads close on a hand it never saw, but not always within
 the 1.5% tolerance that makes a touch (DESIGN.md section 5). This pass takes its output as given and
 optimises a correction of the TBS Euler angles on the frames where a pad pair is touching on one hand and
-apart on the other (or the thumb at a fingertip, `gaps_disagree`), and on ``reach`` frames either side, where the correction fades to zero (a
+apart on the other (or the thumb at a fingertip, `gaps_disagree`, or a finger bent sideways), and on ``reach`` frames either side, where the correction fades to zero (a
 smoothness term ties each run's ends to zero): elsewhere the retarget is returned bit for bit. Loss:
-the contact term (`semantics.contacts.contact_loss`), L_ana on the angles, smoothness, and a pull to the
-network's pose, and a sideways term: no flexed PIP/DIP bent more than `SIDEWAYS_FREE` out of the curl
+the contact term (`semantics.contacts.contact_loss`), L_ana on what the correction adds to the angles' excess
+(a twist the network or the source's frames put there is not undone: "untwisting" a Godot fist's pinky
+knuckle opened it 22 deg), smoothness, a pull to the network's pose, and a sideways term: no flexed PIP/DIP bent more than `SIDEWAYS_FREE` out of the curl
 plane (on the Godot hand, opening the ring-pinky touch of fists bent the pinky DIP 45 deg sideways
 without it). The angles are read with the twist within +-90 deg (`quat_to_tbs_euler_past_lock`): a
 knuckle of a fist bent past 90 read as twisted 160 deg, and the anatomy term "untwisted" it. Bends
@@ -29,10 +30,10 @@ from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.rotations import quat_to_tbs_euler_past_lock, tbs_euler_to_quat
 from s2h_viewer.retarget.progress import report, stage
 from s2h_viewer.retarget.threads import torch_threads
-from s2h_viewer.semantics.anatomy import angle_loss, clamp_bend_change
+from s2h_viewer.semantics.anatomy import angle_excess, clamp_bend_change
 from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, PAD_PAIRS, contact_gaps, contact_loss
 from s2h_viewer.semantics.flexion import hinge_flexion_and_alignment
-from s2h_viewer.semantics.signature import SIDEWAYS_FLEXION, SIDEWAYS_LIMIT, THUMB_PAIRS, THUMB_TOUCH
+from s2h_viewer.semantics.signature import SIDEWAYS_FLEXION, SIDEWAYS_LIMIT, THUMB_PAIRS, THUMB_TOUCH, frame_sideways
 
 #: the thumb-to-fingertip pairs, as indices into the pad pairs (the thumb's come first in both)
 _THUMB = list(THUMB_PAIRS)
@@ -77,13 +78,25 @@ def pad_gaps(hand: HandModel, q_tbs: np.ndarray) -> np.ndarray:
 
 def disagreement(source_hand: HandModel, source_q: np.ndarray, target_hand: HandModel, target_q: np.ndarray
                  ) -> np.ndarray:
-    """(T,) bool: frames where some pad pair touches on one hand and not on the other (one bool per frame
-    is all that is kept of a long clip's gaps)."""
+    """(T,) bool: frames where some pad pair touches on one hand and not on the other (`gaps_disagree`), or
+    the target bends a finger sideways past the signature's limit and the source does not (one bool per
+    frame is all that is kept of a long clip's gaps)."""
     out = np.empty(len(source_q), dtype=bool)
     for first, end in frame_chunks(len(source_q)):
         out[first:end] = gaps_disagree(pad_gaps(source_hand, source_q[first:end]),
                                        pad_gaps(target_hand, target_q[first:end]))
+        out[first:end] |= _bent_sideways(source_hand, source_q[first:end], target_hand, target_q[first:end])
     return out
+
+
+def _bent_sideways(source_hand: HandModel, source_q: np.ndarray, target_hand: HandModel, target_q: np.ndarray
+                   ) -> np.ndarray:
+    """(T,) bool: the target's worst flexed PIP/DIP bends sideways past `SIDEWAYS_LIMIT` and past the source's + 5
+    (the signature's rule, `semantics.signature.frame_sideways`)."""
+    with torch.no_grad():
+        sideways = [frame_sideways(forward_kinematics(hand, torch.as_tensor(q, dtype=torch.float64)).positions.numpy())
+                    for hand, q in ((source_hand, source_q), (target_hand, target_q))]
+    return sideways[1] > np.maximum(SIDEWAYS_LIMIT, sideways[0] + 5.0)
 
 
 def gaps_disagree(source_gaps: np.ndarray, target_gaps: np.ndarray) -> np.ndarray:
@@ -173,6 +186,7 @@ def _fit_runs(q: np.ndarray, source_gaps: np.ndarray, lengths: list[int], hand: 
     """(F, 15, 4) rotations of the concatenated runs (``lengths`` frames each) after the fit."""
     with torch.no_grad():
         start = quat_to_tbs_euler_past_lock(torch.as_tensor(q, dtype=torch.float32))
+        start_excess = angle_excess(start)  # what the retarget already has is not the fit's to undo
     source = torch.as_tensor(source_gaps)
     # each run's correction sits between two zero frames: second differences across them tie its ends
     # to zero, and no difference spans two runs
@@ -189,7 +203,7 @@ def _fit_runs(q: np.ndarray, source_gaps: np.ndarray, lengths: list[int], hand: 
         padded = correction.new_zeros(padded_len, *correction.shape[1:]).index_copy(0, slots, correction)
         smooth = (padded[2:] - 2 * padded[1:-1] + padded[:-2]).square().sum((-1, -2)).mean()
         loss = (config.contact_weight * (contact_loss(gaps, source) + thumb_touch_loss(gaps, source))
-                + config.anatomy_weight * angle_loss(angles)
+                + config.anatomy_weight * torch.relu(angle_excess(angles) - start_excess).square().sum((-1, -2)).mean()
                 + config.smoothness_weight * smooth
                 + config.prior_weight * correction.square().sum((-1, -2)).mean()
                 + config.sideways_weight * _sideways_excess(pose).square().sum(-1).mean())
