@@ -47,18 +47,20 @@ def flexion_and_sideways(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     return flexion, np.where(flexion > MIN_FLEXION_DEG, sideways, np.nan)
 
 
+_INDEX_MCP, _PINKY_MCP = topo.JOINT_NAMES.index("index_mcp"), topo.JOINT_NAMES.index("pinky_mcp")
+
+
 def hinge_flexion_and_alignment(positions: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
     """(T, 8) flexion in radians of `HINGE_JOINTS` and the |cosine| between each one's flexion axis and the palm's
     across axis (1: a clean curl, 0: bending sideways), from (T, 21, 3) positions: `flexion_and_sideways`
     smooth and differentiable (no arccos), for optimisers that must not bend a finger sideways."""
-    joints = torch.as_tensor([j for _, j in HINGE_JOINTS])
-    into = positions[:, joints] - positions[:, torch.as_tensor(topo.PARENTS)[joints]]
-    out = positions[:, joints + 1] - positions[:, joints]
-    axis = torch.linalg.cross(into, out)
+    chains = positions[:, 5:].reshape(len(positions), topo.N_FINGERS - 1, 4, 3)  # index..pinky, MCP to tip
+    bones = chains[:, :, 1:] - chains[:, :, :-1]  # MCP->PIP, PIP->DIP, DIP->tip: slices, not gathers
+    into, out = bones[:, :, :2], bones[:, :, 1:]  # (T, 4, 2, 3): the PIP's and the DIP's, HINGE_JOINTS' order
+    axis = torch.linalg.cross(into, out).flatten(1, 2)
     sin = axis.norm(dim=-1)
-    flexion = torch.atan2(sin, (into * out).sum(-1))
-    index_mcp, pinky_mcp = topo.JOINT_NAMES.index("index_mcp"), topo.JOINT_NAMES.index("pinky_mcp")
-    across = positions[:, pinky_mcp] - positions[:, index_mcp]
+    flexion = torch.atan2(sin, (into * out).sum(-1).flatten(1, 2))
+    across = positions[:, _PINKY_MCP] - positions[:, _INDEX_MCP]
     across = across / across.norm(dim=-1, keepdim=True).clamp_min(1e-12)
     return flexion, (axis * across[:, None]).sum(-1).abs() / sin.clamp_min(1e-12)
 
