@@ -275,6 +275,8 @@ def test_a_menu_export_asks_its_frames_and_the_menu_loads_corrections(window, qt
     exported, _ = load_motion_file(path)
     assert exported.n_frames == mode.comparison.n_frames  # the whole clip, as chosen (not the marked range)
     assert load_corrections(tmp_path / "menu.corrections.json").frames == mode.comparison.n_frames
+    win.activateWindow()  # the dialogs gone (no window manager here): the window takes the keys again
+    qtbot.waitUntil(win.isActiveWindow, timeout=5000)
     QTest.keyClick(win, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
     assert not mode.selected_result().corrections
     shown = answer(choose_file(tmp_path / "menu.corrections.json"))
