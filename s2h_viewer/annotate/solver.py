@@ -9,7 +9,8 @@ surface squarely, with the splay ray along the finger's thinner (pad-to-back) se
 The loss cannot tell the back of a finger from its pad (a section is nearly symmetric), so the sign
 is fixed afterwards by one rule: a finger's splay axis points out of the back of the hand (the palm
 normal), the thumb's toward the back of the hand and the thumb side together. All 15 x N_ANGLES x 2
-rays go into one ray query (embree through trimesh when installed).
+rays go into one ray query (embree through trimesh when installed). The thumb CMC, inside the thenar pad
+with no section of its own, takes its frame from the palm (`thumb_cmc_frame`), on every hand alike.
 """
 
 from __future__ import annotations
@@ -52,6 +53,15 @@ TRUST_RAYS = 0.8
 #: 7 deg of the palm plane's (a Mixamo hand); at 25 deg the RPM avatar's index bones rolled 30 deg otherwise
 #: (another exporter's roll, `tests/wild_rigs.rerolled_glb`) were still taken, and its frames followed the roll
 RIG_AXIS_DEGREES = 12.0
+#: the thumb CMC's bend axis in the palm axes (`palm_axes`: x to the middle knuckle, y toward the thumb, z out of
+#: the back), made perpendicular to the metacarpal: a convention, as the CMC's rays read the thenar pad. Taken
+#: from the thumb's rays or a rig's bone axis, its roll about the metacarpal lay 15-45 deg apart between real
+#: rigs (WebXR, Meta), so one TBS rotation turned the metacarpal another way on each hand: TBS Copy of the
+#: authored poses onto the Meta hand followed their thumb across the palm at 0.24. The direction is the
+#: procedural hands' (least squares over the 12; each hand's own within 0.5-8 deg of it).
+THUMB_CMC_BEND = (-0.133, 0.159, -0.978)
+#: `TbsSolution.basis` of the thumb CMC, framed by `thumb_cmc_frame`
+THUMB_CONVENTION = "thumb CMC convention"
 
 
 @dataclass
@@ -65,7 +75,8 @@ class TbsSolution:
     width: np.ndarray  # (15,) side-to-side half width (bend rays), metres
     fallback: np.ndarray  # (15,) bool: no candidate hit, the frame comes from the palm plane
     diagnostics: list[str] = field(default_factory=list)
-    #: (15,) what decided each bend axis: "rays", "rig bone axis" (the rays could not tell), "palm plane"
+    #: (15,) what decided each bend axis: "rays", "rig bone axis" (the rays could not tell), "palm plane",
+    #: `THUMB_CONVENTION` (the thumb CMC)
     basis: list[str] = field(default_factory=lambda: ["rays"] * topo.N_ARTICULATED)
 
     @property
@@ -112,7 +123,21 @@ def palm_plane_frames(positions: np.ndarray) -> np.ndarray:
     back = back_directions(positions)
     z = back - twist * np.einsum("ij,ij->i", back, twist)[:, None]
     z /= np.linalg.norm(z, axis=1, keepdims=True)
-    return np.stack([twist, np.cross(z, twist), z], axis=2)
+    frames = np.stack([twist, np.cross(z, twist), z], axis=2)
+    frames[0] = thumb_cmc_frame(positions)
+    return frames
+
+
+def thumb_cmc_frame(positions: np.ndarray) -> np.ndarray:
+    """(3, 3) the thumb CMC's TBS frame from a right hand's (21, 3) rest joint positions (wrist at the origin):
+    twist along the metacarpal, bend `THUMB_CMC_BEND` in the palm axes made perpendicular to it."""
+    cmc = topo.joint_index("thumb_cmc")
+    twist = positions[cmc + 1] - positions[cmc]
+    twist = twist / np.linalg.norm(twist)
+    bend = palm_axes(positions) @ np.asarray(THUMB_CMC_BEND)
+    bend -= twist * (bend @ twist)
+    bend /= np.linalg.norm(bend)
+    return np.stack([twist, bend, np.cross(twist, bend)], axis=1)
 
 
 def _ray_intersector(mesh: trimesh.Trimesh):
@@ -241,6 +266,9 @@ def solve_tbs_frames(hand: HandModel, n_angles: int = N_ANGLES, bone_axes: np.nd
     palm_bend = across - twist * (twist @ across)[:, None]
     palm_bend /= np.linalg.norm(palm_bend, axis=1, keepdims=True)
     _overrule_unsure_rays(frames, confidence, basis, diagnostics, palm_bend, guess[:, :, 2], bone_axes, fallback)
+    frames[0] = guess[0]  # the thumb CMC: `thumb_cmc_frame`, whatever its rays or its rig read
+    if not fallback[0]:
+        basis[0] = THUMB_CONVENTION
     return TbsSolution(frames, confidence, hit.mean(axis=1), thickness, width, fallback, diagnostics, basis)
 
 

@@ -5,11 +5,15 @@ thumb at the fingertips the source's thumb is at (the pose signature's looser to
 A network trained on procedural hands brings pads close on a hand it never saw, but not always within
 the 1.5% tolerance that makes a touch (DESIGN.md section 5). This pass takes its output as given and
 optimises a correction of the TBS Euler angles on the frames where a pad pair is touching on one hand and
-apart on the other (or the thumb at a fingertip, `gaps_disagree`, or a finger bent sideways), and on ``reach`` frames either side, where the correction fades to zero (a
-smoothness term ties each run's ends to zero): elsewhere the retarget is returned bit for bit. Loss:
-the contact term (`semantics.contacts.contact_loss`), L_ana on what the correction adds to the angles' excess
-(a twist the network or the source's frames put there is not undone: "untwisting" a Godot fist's pinky
-knuckle opened it 22 deg), smoothness, a pull to the network's pose, and a sideways term: no flexed PIP/DIP bent more than `SIDEWAYS_FREE` out of the curl
+apart on the other (or the thumb at a fingertip, `gaps_disagree`, or a finger bent sideways), and on
+``reach`` frames either side, where the correction fades to zero (a smoothness term ties each run's ends to
+zero): elsewhere the retarget is returned bit for bit. Loss: the contact term
+(`semantics.contacts.contact_loss`), L_ana on what the correction adds to the angles' excess (a twist the
+network or the source's frames put there is not undone: "untwisting" a Godot fist's pinky knuckle opened it
+22 deg), smoothness, a pull to the network's pose (harder on the thumb's CMC, so a finger comes to the thumb
+before the thumb leaves the path the source's takes), a curl term (no finger's curl moved further from the
+source's than the signature's margin allows: a bent ring finger curled to meet the thumb is a pose lost), and
+a sideways term: no flexed PIP/DIP bent more than `SIDEWAYS_FREE` out of the curl
 plane (on the Godot hand, opening the ring-pinky touch of fists bent the pinky DIP 45 deg sideways
 without it). The angles are read with the twist within +-90 deg (`quat_to_tbs_euler_past_lock`): a
 knuckle of a fist bent past 90 read as twisted 160 deg, and the anatomy term "untwisted" it. Bends
@@ -33,7 +37,8 @@ from s2h_viewer.retarget.threads import torch_threads
 from s2h_viewer.semantics.anatomy import angle_excess, clamp_bend_change
 from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, PAD_PAIRS, contact_gaps, contact_loss
 from s2h_viewer.semantics.flexion import hinge_flexion_and_alignment
-from s2h_viewer.semantics.signature import SIDEWAYS_FLEXION, SIDEWAYS_LIMIT, THUMB_PAIRS, THUMB_TOUCH, frame_sideways
+from s2h_viewer.semantics.signature import (CURL_MARGIN, SIDEWAYS_FLEXION, SIDEWAYS_LIMIT, THUMB_PAIRS, THUMB_TOUCH,
+                                            finger_curls, frame_sideways)
 
 #: the thumb-to-fingertip pairs, as indices into the pad pairs (the thumb's come first in both)
 _THUMB = list(THUMB_PAIRS)
@@ -41,13 +46,15 @@ _THUMB = list(THUMB_PAIRS)
 
 @dataclass(frozen=True)
 class ContactFitConfig:
-    steps: int = 60
+    steps: int = 90
     learning_rate: float = 0.03
     contact_weight: float = 2e3
     anatomy_weight: float = 10.0
     smoothness_weight: float = 100.0
     prior_weight: float = 1.0  # pull toward the network's pose: the degrees of freedom contacts leave free stay put
     sideways_weight: float = 1e3  # no flexed PIP/DIP bent sideways past `SIDEWAYS_FREE`
+    thumb_prior_weight: float = 5.0  # the thumb CMC pulled this much harder: fingers move to the thumb first
+    curl_weight: float = 1e3  # no finger's curl moved further from the source's than `CURL_FREE` (`_curl_excess`)
     reach: int = 4  # frames either side of a disagreement over which the correction fades in and out
     batch_frames: int = 4096  # frames optimised at once (memory of one batch)
 
@@ -63,6 +70,29 @@ def _sideways_excess(pose: HandPose) -> torch.Tensor:
     flexion, alignment = hinge_flexion_and_alignment(pose.positions)
     weight = ((flexion - np.radians(SIDEWAYS_FLEXION - 20.0)) / np.radians(20.0)).clamp(0.0, 1.0)
     return weight * torch.relu(float(np.cos(SIDEWAYS_FREE)) - alignment)
+
+
+#: a finger's curl may move this far (radians) from the source's before the fit's curl term acts: the
+#: signature's margin less 10 deg
+CURL_FREE = np.radians(CURL_MARGIN - 10.0)
+#: per finger index..pinky, its chain from the wrist to the tip (what `semantics.signature.finger_curls` sums)
+_CURL_CHAINS = [[0, *range(1 + 4 * f, 5 + 4 * f)] for f in range(1, 5)]
+
+
+def pose_curls(positions: torch.Tensor) -> torch.Tensor:
+    """(F, 4) radians: `semantics.signature.finger_curls` of (F, 21, 3) positions, with gradients (atan2 of the
+    bones' cross and dot: no arccos, whose slope is infinite at a straight finger)."""
+    bones = positions[:, _CURL_CHAINS].diff(dim=2)
+    a, b = bones[:, :, :-1], bones[:, :, 1:]
+    cross = (torch.linalg.cross(a, b).square().sum(-1) + 1e-12).sqrt()
+    return torch.atan2(cross, (a * b).sum(-1)).sum(-1)
+
+
+def _curl_excess(curls: torch.Tensor, source_curls: torch.Tensor, start_curls: torch.Tensor) -> torch.Tensor:
+    """(F, 4) how far each finger's curl is from the source's beyond `CURL_FREE`, or beyond where the retarget
+    had it, if further: the fit may not turn a bent finger curled to meet the thumb (Pinch Ring's ring)."""
+    allowed = torch.clamp((start_curls - source_curls).abs(), min=float(CURL_FREE))
+    return torch.relu((curls - source_curls).abs() - allowed)
 
 
 def _pose_pad_gaps(hand: HandModel, pose: HandPose) -> torch.Tensor:
@@ -139,7 +169,12 @@ def fit_contacts(source_q: np.ndarray, source_hand: HandModel, target_hand: Hand
     source_q = np.asarray(source_q)
     out = np.asarray(target_q, dtype=np.float32)
     frames = disagreement(source_hand, source_q, target_hand, out)
-    return _fit_frames(out, frames, lambda idx: pad_gaps(source_hand, source_q[idx]), target_hand, config)
+
+    def source_at(idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        with torch.no_grad():
+            pose = forward_kinematics(source_hand, torch.as_tensor(source_q[idx], dtype=torch.float32))
+            return _pose_pad_gaps(source_hand, pose).numpy(), np.radians(finger_curls(pose.positions.numpy()))
+    return _fit_frames(out, frames, source_at, target_hand, config)
 
 
 def fit_contacts_to_gaps(source_gaps: np.ndarray, hand: HandModel, q_tbs: np.ndarray,
@@ -150,17 +185,18 @@ def fit_contacts_to_gaps(source_gaps: np.ndarray, hand: HandModel, q_tbs: np.nda
     frames = np.zeros(len(out), dtype=bool)
     for first, end in frame_chunks(len(out)):
         frames[first:end] = gaps_disagree(source_gaps[first:end], pad_gaps(hand, out[first:end]))
-    return _fit_frames(out, frames, lambda idx: source_gaps[idx], hand, config)
+    return _fit_frames(out, frames, lambda idx: (source_gaps[idx], None), hand, config)
 
 
-def _fit_frames(out: np.ndarray, disagree: np.ndarray, source_gaps_at, hand: HandModel, config: ContactFitConfig
+def _fit_frames(out: np.ndarray, disagree: np.ndarray, source_at, hand: HandModel, config: ContactFitConfig
                 ) -> np.ndarray:
-    """The fit of `fit_contacts` on the runs around the ``disagree`` frames, source gaps from ``source_gaps_at``."""
+    """The fit of `fit_contacts` on the runs around the ``disagree`` frames; ``source_at(frames)``: the source's
+    pad gaps there and its finger curls (radians; None: not known, as of a tracked hand's gaps)."""
     batches = _batches(runs_around(disagree, config.reach), config.batch_frames)
     for i, batch in enumerate(batches):
         frames = np.concatenate([np.arange(a, b) for a, b in batch])
         with stage(i / len(batches), (i + 1) / len(batches)), torch_threads(1):
-            out[frames] = _fit_runs(out[frames], source_gaps_at(frames), [b - a for a, b in batch], hand, config)
+            out[frames] = _fit_runs(out[frames], *source_at(frames), [b - a for a, b in batch], hand, config)
     report(1.0)
     return out
 
@@ -181,12 +217,15 @@ def _batches(runs: list[tuple[int, int]], batch_frames: int) -> list[list[tuple[
     return batches
 
 
-def _fit_runs(q: np.ndarray, source_gaps: np.ndarray, lengths: list[int], hand: HandModel,
-              config: ContactFitConfig) -> np.ndarray:
+def _fit_runs(q: np.ndarray, source_gaps: np.ndarray, source_curls: np.ndarray | None, lengths: list[int],
+              hand: HandModel, config: ContactFitConfig) -> np.ndarray:
     """(F, 15, 4) rotations of the concatenated runs (``lengths`` frames each) after the fit."""
     with torch.no_grad():
         start = quat_to_tbs_euler_past_lock(torch.as_tensor(q, dtype=torch.float32))
         start_excess = angle_excess(start)  # what the retarget already has is not the fit's to undo
+        if source_curls is not None:
+            source_curls = torch.as_tensor(source_curls, dtype=torch.float32)
+            start_curls = pose_curls(forward_kinematics(hand, torch.as_tensor(q, dtype=torch.float32)).positions)
     source = torch.as_tensor(source_gaps)
     # each run's correction sits between two zero frames: second differences across them tie its ends
     # to zero, and no difference spans two runs
@@ -194,6 +233,8 @@ def _fit_runs(q: np.ndarray, source_gaps: np.ndarray, lengths: list[int], hand: 
     slots = torch.as_tensor(np.concatenate([o + 1 + np.arange(n) for o, n in zip(offsets, lengths)]))
     padded_len = int(offsets[-1] + lengths[-1] + 2)
     correction = torch.zeros(len(q), *start.shape[1:], requires_grad=True)
+    prior_scale = torch.ones(start.shape[1])
+    prior_scale[0] = config.thumb_prior_weight  # the thumb CMC
     optimiser = torch.optim.Adam([correction], lr=config.learning_rate)
     for step in range(config.steps):
         report(step / config.steps)  # and where a cancel stops the fit
@@ -205,8 +246,11 @@ def _fit_runs(q: np.ndarray, source_gaps: np.ndarray, lengths: list[int], hand: 
         loss = (config.contact_weight * (contact_loss(gaps, source) + thumb_touch_loss(gaps, source))
                 + config.anatomy_weight * torch.relu(angle_excess(angles) - start_excess).square().sum((-1, -2)).mean()
                 + config.smoothness_weight * smooth
-                + config.prior_weight * correction.square().sum((-1, -2)).mean()
+                + config.prior_weight * (correction.square().sum(-1) * prior_scale).sum(-1).mean()
                 + config.sideways_weight * _sideways_excess(pose).square().sum(-1).mean())
+        if source_curls is not None:
+            loss = loss + config.curl_weight * _curl_excess(pose_curls(pose.positions), source_curls,
+                                                            start_curls).square().sum(-1).mean()
         optimiser.zero_grad()
         loss.backward()
         optimiser.step()

@@ -14,6 +14,7 @@ import numpy as np
 import torch
 
 from s2h_viewer.hand import topology as topo
+from s2h_viewer.hand.model import palm_axes
 
 MIN_FLEXION_DEG = 10.0
 #: a joint's tightest curls: frames where it flexes at least this share of its largest flexion in the clip
@@ -119,38 +120,48 @@ def bend_angles(positions: np.ndarray, joint: int) -> np.ndarray:
     return _bend(np.asarray(positions, dtype=np.float64), np.array([joint]))[1][:, 0]
 
 
-#: the thumb's three joints, as (name, index into the 21 joints)
-THUMB_JOINTS: tuple[tuple[str, int], ...] = tuple((name, topo.JOINT_NAMES.index(name))
-                                                  for name in ("thumb_cmc", "thumb_mcp", "thumb_ip"))
+#: the thumb's MCP and IP, as (name, index into the 21 joints): hinges, read by their bends
+THUMB_HINGES: tuple[tuple[str, int], ...] = tuple((name, topo.JOINT_NAMES.index(name))
+                                                  for name in ("thumb_mcp", "thumb_ip"))
+#: what `thumb_angles` reads, in order: the CMC's two degrees of freedom, then the hinges
+THUMB_ANGLES: tuple[str, ...] = ("thumb_cmc_across", "thumb_cmc_lift") + tuple(name for name, _ in THUMB_HINGES)
 #: a thumb joint moving less than this (standard deviation of its angle, degrees) in the source has no motion to follow
 MIN_THUMB_MOTION_DEG = 2.0
 
 
-def thumb_opening(positions: np.ndarray) -> np.ndarray:
-    """(T,) degrees between the thumb's metacarpal (CMC -> MCP) and the index's (wrist -> index MCP): what the
-    CMC does (opposition opens and closes it). The CMC's own bend is not used: the wrist-to-CMC "bone" it is
-    measured from is no bone on most rigs, and sits anywhere from 2 to 5 cm from the wrist."""
+def thumb_metacarpal_angles(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(T,), (T,) degrees: the thumb metacarpal's direction (CMC -> MCP) in the palm frame (`palm_axes`), as its
+    angle across the palm (in the palm plane, from the fingers' direction toward the thumb's side) and its lift
+    out of the palm plane (toward the back of the hand). The CMC turns two ways: each is a motion of its own,
+    and one angle of both (the opening to the index's metacarpal) folds them: TBS Copy, which turns the thumb
+    exactly as the source's, read 0.80 on the WebXR hand where each of these reads 1.00."""
     positions = np.asarray(positions, dtype=np.float64)
+    positions = positions - positions[:, :1]
+    palm = palm_axes(positions)
     names = topo.JOINT_NAMES
-    thumb = positions[:, names.index("thumb_mcp")] - positions[:, names.index("thumb_cmc")]
-    index = positions[:, names.index("index_mcp")] - positions[:, names.index("wrist")]
-    cos = (thumb * index).sum(-1) / np.maximum(np.linalg.norm(thumb, axis=-1) * np.linalg.norm(index, axis=-1), 1e-12)
-    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+    bone = positions[:, names.index("thumb_mcp")] - positions[:, names.index("thumb_cmc")]
+    local = np.einsum("tij,ti->tj", palm, bone)
+    local /= np.maximum(np.linalg.norm(local, axis=-1, keepdims=True), 1e-12)
+    return np.degrees(np.arctan2(local[:, 1], local[:, 0])), np.degrees(np.arcsin(np.clip(local[:, 2], -1.0, 1.0)))
 
 
 def thumb_angles(positions: np.ndarray) -> dict[str, np.ndarray]:
-    """Per thumb joint, (T,) degrees: the CMC's opening (`thumb_opening`), the MCP's and IP's bends."""
-    return {name: thumb_opening(positions) if name == "thumb_cmc" else bend_angles(positions, j)
-            for name, j in THUMB_JOINTS}
+    """Per `THUMB_ANGLES`, (T,) degrees: the CMC's two (`thumb_metacarpal_angles`), the MCP's and IP's bends.
+    No angle is measured from the wrist-to-CMC "bone": it is no bone on most rigs, and sits anywhere from 2 to
+    5 cm from the wrist."""
+    across, lift = thumb_metacarpal_angles(positions)
+    return {"thumb_cmc_across": across, "thumb_cmc_lift": lift,
+            **{name: bend_angles(positions, j) for name, j in THUMB_HINGES}}
 
 
 def thumb_follow(source_positions: np.ndarray, target_positions: np.ndarray) -> dict[str, float]:
-    """Per thumb joint, the correlation over frames of its angle (`thumb_angles`, from positions) on the target
-    with the source's: 1 where the retarget's thumb does what the source's does, whatever the rigs' rest poses;
-    0 where it stays still while the source's moves; NaN for a joint that barely moves in the source."""
+    """Per thumb angle (`THUMB_ANGLES`), the correlation over frames of it on the target (`thumb_angles`, from
+    positions) with the source's: 1 where the retarget's thumb does what the source's does, whatever the rigs'
+    rest poses (and blind to an offset: a thumb held further across the palm throughout reads 1 too); 0 where it
+    stays still while the source's moves; NaN for one that barely moves in the source."""
     source, target = thumb_angles(source_positions), thumb_angles(target_positions)
     out = {}
-    for name, _ in THUMB_JOINTS:
+    for name in THUMB_ANGLES:
         if source[name].std() < MIN_THUMB_MOTION_DEG:
             out[name] = float("nan")
         elif target[name].std() < 1e-6:

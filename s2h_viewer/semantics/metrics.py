@@ -82,8 +82,9 @@ class RetargetScores:
     #: invented on most frames with its first frame ("thumb-middle@120"; empty if none)
     invented_contacts: int = 0
     invented_at: str = ""
-    #: the least correlation, over the thumb's joints that move in the source, of a joint's bend with the
-    #: source's (`semantics.flexion.thumb_follow`; NaN: the source's thumb stays still) and that joint ("thumb_ip")
+    #: the least correlation, over the thumb's angles that move in the source (the CMC's two, the MCP's and IP's
+    #: bends), of an angle with the source's (`semantics.flexion.thumb_follow`; NaN: the source's thumb stays
+    #: still) and that angle ("thumb_ip", "thumb_cmc_lift")
     thumb_follow: float = float("nan")
     thumb_follow_at: str = ""
 
