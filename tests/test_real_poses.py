@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 import torch
 
-from wild_rigs import rerolled_glb
-from s2h_viewer.annotate.solver import PALM_EVIDENCE, solve_tbs_frames
+from wild_rigs import centimetre_glb, rerolled_glb
+from s2h_viewer.annotate.solver import PALM_EVIDENCE, frame_angle_errors, solve_tbs_frames
 from s2h_viewer.cli import main
 from s2h_viewer.hand.kinematics import forward_kinematics
 from s2h_viewer.io.files import RigOptions, load_hand_file, load_motion_file
@@ -283,3 +283,20 @@ def test_the_thumb_cmc_frame_is_the_palms_on_every_hand(poses, rig):
                  for h, q in ((source, motion.q_tbs), (target, moved.q_tbs))]
     follow = thumb_follow(*positions)
     assert follow["thumb_cmc_across"] >= 0.95 and follow["thumb_cmc_lift"] >= 0.95, follow
+
+
+@pytest.mark.parametrize("rig, side", [(HUMAN, "right"), (HUMAN, "left"), (WEBXR_R, None)])
+def test_a_centimetre_export_of_an_avatar_reads_the_same_hand(poses, rig, side, tmp_path):
+    """The same skinned avatar as a centimetre scene exports it (every translation, mesh position and inverse bind
+    matrix 100 times larger, under a root scaled 0.01): the same hand in metres, the same frames found the same
+    way, and the same retarget of the authored poses."""
+    motion, source = poses
+    variant = centimetre_glb(rig, tmp_path / "centimetres.glb")
+    hands = [load_hand_file(path, RigOptions(side=side)) for path in (rig, variant)]
+    np.testing.assert_allclose(hands[1].offsets, hands[0].offsets, atol=1e-6)
+    np.testing.assert_allclose(hands[1].mesh.vertices, hands[0].mesh.vertices, atol=1e-5)
+    assert frame_angle_errors(hands[1].rest_frames, hands[0].rest_frames).max() < 0.01
+    assert hands[1].meta["frame_set_by"] == hands[0].meta["frame_set_by"]
+    positions = [forward_kinematics(hand, torch.as_tensor(retarget(motion, source, hand, "tbs_copy").q_tbs,
+                                                          dtype=torch.float64)).positions.numpy() for hand in hands]
+    np.testing.assert_allclose(positions[1], positions[0], atol=1e-5)

@@ -200,3 +200,47 @@ def rerolled_glb(source: Path, out: Path, degrees: float, pattern: str = r"(?i)t
     gltf.set_binary_blob(bytes(blob))
     gltf.save_binary(str(out))
     return out
+
+
+def centimetre_glb(source: Path, out: Path) -> Path:
+    """The same skinned avatar as an exporter working in centimetres writes it: every node's translation, every
+    mesh position and the inverse bind matrices' translations 100 times larger, under a new root node scaled 0.01
+    (as Blender's and Maya's FBX-to-glTF exports of a cm scene leave it). In world units it is the same avatar.
+    Animations are dropped (their translation keys would need the same factor)."""
+    gltf = pygltflib.GLTF2().load(str(source))
+    blob = bytearray(gltf.binary_blob())
+
+    def floats(index: int, width: int) -> tuple[int, np.ndarray]:
+        accessor = gltf.accessors[index]
+        view = gltf.bufferViews[accessor.bufferView]
+        start = (view.byteOffset or 0) + (accessor.byteOffset or 0)
+        assert view.byteStride in (None, 0, 4 * width), "interleaved attributes are not handled here"
+        data = bytes(blob[start:start + 4 * width * accessor.count])
+        return start, np.frombuffer(data, dtype="<f4").reshape(-1, width)
+
+    for node in gltf.nodes:
+        if node.translation:
+            node.translation = [100.0 * v for v in node.translation]
+        if node.matrix:
+            node.matrix = [v * 100.0 if i in (12, 13, 14) else v for i, v in enumerate(node.matrix)]
+    positions = {p.attributes.POSITION for mesh in gltf.meshes for p in mesh.primitives}
+    positions |= {t.get("POSITION") if isinstance(t, dict) else getattr(t, "POSITION", None)
+                  for mesh in gltf.meshes for p in mesh.primitives for t in (p.targets or [])}  # morph offsets too
+    for index in sorted(i for i in positions if i is not None):
+        start, values = floats(index, 3)
+        blob[start:start + values.nbytes] = (values * 100.0).astype("<f4").tobytes()
+        accessor = gltf.accessors[index]
+        if accessor.min and accessor.max:
+            accessor.min, accessor.max = [100.0 * v for v in accessor.min], [100.0 * v for v in accessor.max]
+    for skin in gltf.skins:
+        start, ibm = floats(skin.inverseBindMatrices, 16)
+        ibm = ibm.copy()
+        ibm[:, 12:15] *= 100.0  # column-major: the translation is the last column
+        blob[start:start + ibm.nbytes] = ibm.astype("<f4").tobytes()
+    scene = gltf.scenes[gltf.scene or 0]
+    gltf.nodes.append(pygltflib.Node(name="Centimetres", scale=[0.01] * 3, children=list(scene.nodes)))
+    scene.nodes = [len(gltf.nodes) - 1]
+    gltf.animations = []
+    gltf.set_binary_blob(bytes(blob))
+    gltf.save_binary(str(out))
+    return out
