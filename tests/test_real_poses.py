@@ -305,10 +305,13 @@ def test_a_centimetre_export_of_an_avatar_reads_the_same_hand(poses, rig, side, 
 def test_where_the_fingers_cannot_reach_a_thumb_held_near_its_path_the_thumb_goes_to_them(poses):
     """The VRM 1.0 robot (no skin: palm-plane frames): with the thumb CMC pulled 5x toward the network's pose, the
     fit closed only 28% of the poses' pad touches (its fingers cannot reach the thumb there); the frames still
-    disagreeing are fitted again with the thumb pulled like any joint, and the touches are made, none invented."""
+    disagreeing are fitted again with the thumb pulled like any joint, and the touches are made (ASRN's guard then
+    takes the frame or so the fit makes a touch the source does not)."""
     from s2h_viewer.retarget.asrn.inference import network_retarget
     motion, source = poses
     robot = load_hand_file(ROOT / "assets/hands/real/debug_robot.vrm", RigOptions(side="right"))
     network = network_retarget("asrn", motion.q_tbs, source, robot)
     scores = score_retarget(source, motion.q_tbs, robot, fit_contacts(motion.q_tbs, source, robot, network.copy()))
-    assert scores.contact_recall >= 0.9 and scores.contact_precision >= 0.95, scores
+    assert scores.contact_recall >= 0.9 and scores.contact_precision >= 0.9, scores
+    asrn = score_retarget(source, motion.q_tbs, robot, retarget(motion, source, robot, "asrn").q_tbs)
+    assert asrn.contact_recall >= 0.9 and asrn.contact_precision >= 0.99, asrn

@@ -200,7 +200,9 @@ def _fit_frames(out: np.ndarray, disagree: np.ndarray, source_at, hand: HandMode
         left = _fit_pass(out, disagree, source_at, hand, config)
     if config.thumb_prior_weight != 1.0 and left.any():
         with stage(0.8, 1.0):
-            _fit_pass(out, left, source_at, hand, dataclasses.replace(config, thumb_prior_weight=1.0))
+            # half the steps: a handful of frames, from where the first pass left them
+            again = dataclasses.replace(config, thumb_prior_weight=1.0, steps=config.steps // 2)
+            _fit_pass(out, left, source_at, hand, again)
     report(1.0)
     return out
 
