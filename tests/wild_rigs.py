@@ -162,6 +162,16 @@ def per_dof_bvh(source: Path, out: Path) -> Path:
     return out
 
 
+def _accessor_floats(gltf: pygltflib.GLTF2, blob: bytearray, index: int, width: int) -> tuple[int, np.ndarray]:
+    """Where accessor ``index`` starts in ``blob`` and its float32 values, ``width`` per element (tightly packed)."""
+    accessor = gltf.accessors[index]
+    view = gltf.bufferViews[accessor.bufferView]
+    start = (view.byteOffset or 0) + (accessor.byteOffset or 0)
+    assert view.byteStride in (None, 0, 4 * width), "interleaved attributes are not handled here"
+    data = bytes(blob[start:start + 4 * width * accessor.count])
+    return start, np.frombuffer(data, dtype="<f4").reshape(-1, width)
+
+
 def rerolled_glb(source: Path, out: Path, degrees: float, pattern: str = r"(?i)thumb|index|middle|ring|pinky|little"
                  ) -> Path:
     """The same skinned avatar with every finger bone (a skin joint whose name matches ``pattern`` and that has a
@@ -173,11 +183,8 @@ def rerolled_glb(source: Path, out: Path, degrees: float, pattern: str = r"(?i)t
     gltf = pygltflib.GLTF2().load(str(source))
     blob = bytearray(gltf.binary_blob())
     skin = gltf.skins[0]
-    accessor = gltf.accessors[skin.inverseBindMatrices]
-    view = gltf.bufferViews[accessor.bufferView]
-    start = (view.byteOffset or 0) + (accessor.byteOffset or 0)
-    ibm = np.frombuffer(bytes(blob[start:start + 64 * accessor.count]), dtype="<f4").reshape(-1, 4, 4).transpose(0, 2, 1)
-    ibm = ibm.astype(np.float64)
+    start, ibm = _accessor_floats(gltf, blob, skin.inverseBindMatrices, 16)
+    ibm = ibm.reshape(-1, 4, 4).transpose(0, 2, 1).astype(np.float64)
     for slot, n in enumerate(skin.joints):
         node = gltf.nodes[n]
         if not re.search(pattern, node.name or "") or not node.children:
@@ -195,7 +202,8 @@ def rerolled_glb(source: Path, out: Path, degrees: float, pattern: str = r"(?i)t
         turn = np.eye(4)
         turn[:3, :3] = roll.inv().as_matrix()
         ibm[slot] = turn @ ibm[slot]
-    blob[start:start + 64 * accessor.count] = ibm.transpose(0, 2, 1).astype("<f4").tobytes()
+    data = ibm.transpose(0, 2, 1).astype("<f4").tobytes()
+    blob[start:start + len(data)] = data
     gltf.animations = []
     gltf.set_binary_blob(bytes(blob))
     gltf.save_binary(str(out))
@@ -210,14 +218,6 @@ def centimetre_glb(source: Path, out: Path) -> Path:
     gltf = pygltflib.GLTF2().load(str(source))
     blob = bytearray(gltf.binary_blob())
 
-    def floats(index: int, width: int) -> tuple[int, np.ndarray]:
-        accessor = gltf.accessors[index]
-        view = gltf.bufferViews[accessor.bufferView]
-        start = (view.byteOffset or 0) + (accessor.byteOffset or 0)
-        assert view.byteStride in (None, 0, 4 * width), "interleaved attributes are not handled here"
-        data = bytes(blob[start:start + 4 * width * accessor.count])
-        return start, np.frombuffer(data, dtype="<f4").reshape(-1, width)
-
     for node in gltf.nodes:
         if node.translation:
             node.translation = [100.0 * v for v in node.translation]
@@ -227,13 +227,13 @@ def centimetre_glb(source: Path, out: Path) -> Path:
     positions |= {t.get("POSITION") if isinstance(t, dict) else getattr(t, "POSITION", None)
                   for mesh in gltf.meshes for p in mesh.primitives for t in (p.targets or [])}  # morph offsets too
     for index in sorted(i for i in positions if i is not None):
-        start, values = floats(index, 3)
+        start, values = _accessor_floats(gltf, blob, index, 3)
         blob[start:start + values.nbytes] = (values * 100.0).astype("<f4").tobytes()
         accessor = gltf.accessors[index]
         if accessor.min and accessor.max:
             accessor.min, accessor.max = [100.0 * v for v in accessor.min], [100.0 * v for v in accessor.max]
     for skin in gltf.skins:
-        start, ibm = floats(skin.inverseBindMatrices, 16)
+        start, ibm = _accessor_floats(gltf, blob, skin.inverseBindMatrices, 16)
         ibm = ibm.copy()
         ibm[:, 12:15] *= 100.0  # column-major: the translation is the last column
         blob[start:start + ibm.nbytes] = ibm.astype("<f4").tobytes()

@@ -39,8 +39,8 @@ from s2h_viewer.retarget.threads import torch_threads
 from s2h_viewer.semantics.anatomy import angle_excess, clamp_bend_change
 from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, PAD_PAIRS, contact_gaps, contact_loss
 from s2h_viewer.semantics.flexion import hinge_flexion_and_alignment
-from s2h_viewer.semantics.signature import (CURL_MARGIN, SIDEWAYS_FLEXION, SIDEWAYS_LIMIT, THUMB_PAIRS, THUMB_TOUCH,
-                                            finger_curls, frame_sideways)
+from s2h_viewer.semantics.signature import (CURL_CHAINS, CURL_MARGIN, SIDEWAYS_FLEXION, SIDEWAYS_LIMIT, THUMB_PAIRS,
+                                            THUMB_TOUCH, frame_sideways)
 
 #: the thumb-to-fingertip pairs, as indices into the pad pairs (the thumb's come first in both)
 _THUMB = list(THUMB_PAIRS)
@@ -77,14 +77,12 @@ def _sideways_excess(pose: HandPose) -> torch.Tensor:
 #: a finger's curl may move this far (radians) from the source's before the fit's curl term acts: the
 #: signature's margin less 10 deg
 CURL_FREE = np.radians(CURL_MARGIN - 10.0)
-#: per finger index..pinky, its chain from the wrist to the tip (what `semantics.signature.finger_curls` sums)
-_CURL_CHAINS = [[0, *range(1 + 4 * f, 5 + 4 * f)] for f in range(1, 5)]
 
 
 def pose_curls(positions: torch.Tensor) -> torch.Tensor:
     """(F, 4) radians: `semantics.signature.finger_curls` of (F, 21, 3) positions, with gradients (atan2 of the
     bones' cross and dot: no arccos, whose slope is infinite at a straight finger)."""
-    bones = positions[:, _CURL_CHAINS].diff(dim=2)
+    bones = positions[:, CURL_CHAINS].diff(dim=2)
     a, b = bones[:, :, :-1], bones[:, :, 1:]
     cross = (torch.linalg.cross(a, b).square().sum(-1) + 1e-12).sqrt()
     return torch.atan2(cross, (a * b).sum(-1)).sum(-1)
@@ -175,7 +173,7 @@ def fit_contacts(source_q: np.ndarray, source_hand: HandModel, target_hand: Hand
     def source_at(idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         with torch.no_grad():
             pose = forward_kinematics(source_hand, torch.as_tensor(source_q[idx], dtype=torch.float32))
-            return _pose_pad_gaps(source_hand, pose).numpy(), np.radians(finger_curls(pose.positions.numpy()))
+            return _pose_pad_gaps(source_hand, pose).numpy(), pose_curls(pose.positions).numpy()  # read as the target's
     return _fit_frames(out, frames, source_at, target_hand, config)
 
 

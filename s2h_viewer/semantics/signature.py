@@ -43,17 +43,17 @@ class PoseSignature:
         return ["extended" if c < EXTENDED_BELOW else "curled" if c > CURLED_ABOVE else "bent" for c in self.curl]
 
 
+#: per finger index..pinky, its chain of joints from the wrist to the tip: what a curl sums the bends of
+CURL_CHAINS: list[list[int]] = [[0, *range(1 + 4 * f, 5 + 4 * f)] for f in range(1, topo.N_FINGERS)]
+
+
 def finger_curls(positions: np.ndarray) -> np.ndarray:
     """(T, 4) curl in degrees of index..pinky: the angles between consecutive bones from the wrist-to-MCP
     line to the tip, summed."""
-    out = np.zeros((len(positions), topo.N_FINGERS - 1))
-    for f in range(1, topo.N_FINGERS):
-        chain = positions[:, [0, *range(1 + 4 * f, 5 + 4 * f)]]
-        bones = np.diff(chain, axis=1)
-        bones /= np.maximum(np.linalg.norm(bones, axis=-1, keepdims=True), 1e-12)
-        cos = np.clip((bones[:, :-1] * bones[:, 1:]).sum(-1), -1.0, 1.0)
-        out[:, f - 1] = np.degrees(np.arccos(cos)).sum(-1)
-    return out
+    bones = np.diff(positions[:, CURL_CHAINS], axis=2)
+    bones /= np.maximum(np.linalg.norm(bones, axis=-1, keepdims=True), 1e-12)
+    cos = np.clip((bones[:, :, :-1] * bones[:, :, 1:]).sum(-1), -1.0, 1.0)
+    return np.degrees(np.arccos(cos)).sum(-1)
 
 
 def signatures(hand: HandModel, q_tbs: np.ndarray) -> list[PoseSignature]:
