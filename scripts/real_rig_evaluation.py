@@ -24,7 +24,8 @@ RIGS = (("real/godot_hand_r.gltf", None), ("real/godot_hand_l.gltf", None), ("re
         ("real/human-female.glb", "left"), ("RPM_Template_Mesh_XR.glb", "right"), ("RPM_Template_Mesh_XR.glb", "left"),
         ("r_hand_skeletal_lowres.fbx", None), ("l_hand_skeletal_lowres.fbx", None),
         ("webxr/generic-hand-right.glb", None), ("webxr/generic-hand-left.glb", None),
-        ("real/debug_robot.vrm", "right"), ("real/debug_robot.vrm", "left"))
+        ("real/debug_robot.vrm", "right"), ("real/debug_robot.vrm", "left"),
+        ("real/cryptovoxels.vrm", "right"), ("real/cryptovoxels.vrm", "left"))
 
 
 def main() -> None:
