@@ -118,6 +118,42 @@ def test_a_vrm0_humanoid_map_naming_no_thumb_is_completed_from_the_finger_chains
     assert motion.n_frames == 378 and rig.meta["rig_joints"]["thumb_cmc"] == f"Thumb0_{mark}"
 
 
+@pytest.mark.parametrize("side", ["right", "left"])
+def test_a_fingertip_is_the_distal_bones_tail_not_what_an_exporter_hung_below_it(side):
+    """cryptovoxels.vrm ends some fingers in ``LittleFinger3_R_End`` with a ``LittleFinger3_R_End_end`` leaf below
+    it, others in ``IndexFinger3_R_end``: the tip is the distal bone's tail either way. Taking the leaf made the
+    ring and pinky (the left middle too) a phalanx too long and the two hands 0.107 and 0.135 m."""
+    from s2h_viewer.hand import topology as topo
+    mark = side[0].upper()
+    mapping = recognise_file(CRYPTOVOXELS, RigOptions(side=side))
+    assert mapping.joints["pinky_tip"] == f"LittleFinger3_{mark}_End"
+    assert mapping.joints["ring_tip"] == f"RingFinger3_{mark}_End"
+    assert mapping.joints["index_tip"] == f"IndexFinger3_{mark}_end"
+    hand = load_hand_file(CRYPTOVOXELS, RigOptions(side=side))
+    bones = np.linalg.norm(hand.offsets, axis=1)
+    for finger in ("middle", "ring", "pinky"):  # the last phalanx no longer than the middle one
+        tip = topo.joint_index(f"{finger}_tip")
+        assert bones[tip] < 1.1 * bones[tip - 1], (finger, bones[tip - 1:tip + 1])
+
+
+def test_a_mitten_mesh_gives_its_fingers_no_frames_or_widths_of_its_own():
+    """cryptovoxels.vrm's hand is one low-poly paddle (140 vertices): a finger's section there spans its
+    neighbours, read 0.11-0.13 of the hand as fingertip radii (3x a real hand's) and made fingers side by side
+    touch: ASRN's contact precision on the authored poses 0.64. The solver says the mesh does not part them,
+    trusts none of their rays, and the radii are the procedural hands' proportions."""
+    from s2h_viewer.annotate.solver import DEFAULT_RADIUS_FRACTIONS, solve_tbs_frames
+    from s2h_viewer.hand import topology as topo
+    hand = load_hand_file(CRYPTOVOXELS, RigOptions(side="right"))
+    solution = solve_tbs_frames(hand)
+    lines = [line for line in solution.diagnostics if "the mesh does not part it from its neighbours" in line]
+    assert [line.split(":")[0] for line in lines] == ["middle", "ring", "pinky"]
+    assert "rays" not in solution.basis and (solution.confidence <= 0.6).all()
+    np.testing.assert_allclose(hand.radii[topo.TIP_JOINTS], DEFAULT_RADIUS_FRACTIONS[topo.TIP_JOINTS]
+                               * hand.hand_length)
+    separate = solve_tbs_frames(load_hand_file(FEMALE, RigOptions(side="right")))
+    assert not any("does not part" in line for line in separate.diagnostics)
+
+
 def test_a_humanoid_map_naming_few_fingers_is_completed_as_the_full_one_and_refused_in_its_own_words(tmp_path):
     """Made from debug_robot.vrm: a map without its middle finger and thumb distal, and one without the whole
     thumb and index, give the full map's joints; one whose wrist is a finger bone is refused, naming the file's
@@ -242,6 +278,17 @@ def test_meta_hand_skeletons_with_marker_nodes_are_read_by_their_names_and_their
     assert [anonymous.index(by_shape.joints[f"{f}_mcp" if f != "thumb" else "thumb_cmc"]) for f in
             ("thumb", "index", "middle", "ring", "pinky")] == [names.index(f"b_r_{f}1") for f in
                                                               ("thumb", "index", "middle", "ring", "pinky")]
+    # the tips named as their distal bone's tail, each with an exporter's leaf below it (cryptovoxels' kind)
+    tails = [f"{anonymous[parents[i]]}_End" if n.endswith("_null") else n for i, n in enumerate(names)]
+    tails = [t if t.endswith(("_marker", "_End")) else a for t, a in zip(tails, anonymous)]
+    leaves = [i for i, n in enumerate(tails) if n.endswith("_End")]
+    extended = tails + [f"{tails[i]}_end" for i in leaves]
+    beyond = positions[leaves] + (positions[leaves] - positions[[parents[i] for i in leaves]])
+    by_tails = recognise_file(write_gltf_skeleton(tmp_path / "tails.gltf", extended, parents + leaves,
+                                                  np.vstack([positions, beyond])))
+    assert by_tails.scheme == "topology"
+    assert [by_tails.joints[f"{f}_tip"] for f in ("thumb", "index", "middle", "ring", "pinky")] == [
+        tails[names.index(f"b_r_{f}_null")] for f in ("thumb", "index", "middle", "ring", "pinky")]
     out = tmp_path / "on_meta.glb"
     done = run_cli("retarget", "--motion", str(GESTURES), "--target", str(tmp_path / "meta_l.gltf"),
                    "--method", "tbs_copy", "--out", str(out), "--quiet")

@@ -53,6 +53,11 @@ TRUST_RAYS = 0.8
 #: 7 deg of the palm plane's (a Mixamo hand); at 25 deg the RPM avatar's index bones rolled 30 deg otherwise
 #: (another exporter's roll, `tests/wild_rigs.rerolled_glb`) were still taken, and its frames followed the roll
 RIG_AXIS_DEGREES = 12.0
+#: a finger's PIP or DIP section measured wider, side to side, than this fraction of the way to the nearest
+#: neighbouring finger's bone is not the finger's own: the mesh does not part the fingers (a low-poly mitten,
+#: cryptovoxels.vrm: 0.81-1.35), so its rays and widths say nothing of the finger. Separate fingers read
+#: 0.17-0.34 (human-female, Godot, WebXR); knuckles, joined by the webbing, are left out (up to 1.37 there)
+PARTED_FRACTION = 0.6
 #: the thumb CMC's bend axis in the palm axes (`palm_axes`: x to the middle knuckle, y toward the thumb, z out of
 #: the back), made perpendicular to the metacarpal: a convention, as the CMC's rays read the thenar pad. Taken
 #: from the thumb's rays or a rig's bone axis, its roll about the metacarpal lay 15-45 deg apart between real
@@ -259,6 +264,12 @@ def solve_tbs_frames(hand: HandModel, n_angles: int = N_ANGLES, bone_axes: np.nd
                 if confidence[j] < LOW_CONFIDENCE:
                     diagnostics.append(f"{name}: low confidence {confidence[j]:.2f} ({note}); review the frame")
             frames[j] = np.stack([twist[j], np.cross(z, twist[j]), z], axis=1)
+    for f, how_wide in _unparted_fingers(positions, width):
+        members = slice(3 * f, 3 * f + 3)
+        confidence[members], thickness[members], width[members] = 0.0, np.nan, np.nan
+        diagnostics.append(f"{topo.FINGERS[f]}: the mesh does not part it from its neighbours (its section "
+                           f"{how_wide:.0%} of the way to the next finger's bone: a mitten?); its rays and width "
+                           f"are not its own, review the frames")
     if bone_axes is None and "rig_scheme" in hand.meta:
         bone_axes = hand.rig_frames[1:]
     basis = ["palm plane" if fallback[j] else "rays" for j in range(n_joints)]
@@ -270,6 +281,30 @@ def solve_tbs_frames(hand: HandModel, n_angles: int = N_ANGLES, bone_axes: np.nd
     if not fallback[0]:
         basis[0] = THUMB_CONVENTION
     return TbsSolution(frames, confidence, hit.mean(axis=1), thickness, width, fallback, diagnostics, basis)
+
+
+def _unparted_fingers(positions: np.ndarray, width: np.ndarray) -> list[tuple[int, float]]:
+    """(finger, width over the gap) of each finger but the thumb whose PIP or DIP half width (15,) reaches
+    `PARTED_FRACTION` of the way to a neighbouring finger's bone of the same level."""
+    bones = [(positions[j], positions[j + 1]) for j in topo.ARTICULATED_JOINTS]
+    unparted = []
+    for f in range(1, topo.N_FINGERS):
+        ratios = []
+        for level in (1, 2):
+            j = 3 * f + level
+            if not np.isfinite(width[j]):
+                continue
+            centre = 0.5 * (bones[j][0] + bones[j][1])
+            gap = min(_distance_to_segment(centre, *bones[3 * g + level]) for g in (f - 1, f + 1) if 1 <= g <= 4)
+            ratios.append(width[j] / max(gap, 1e-12))
+        if ratios and max(ratios) >= PARTED_FRACTION:
+            unparted.append((f, max(ratios)))
+    return unparted
+
+
+def _distance_to_segment(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
+    t = np.clip((point - a) @ (b - a) / max((b - a) @ (b - a), 1e-24), 0.0, 1.0)
+    return float(np.linalg.norm(point - (a + t * (b - a))))
 
 
 def _angle_between_lines(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -25,6 +25,8 @@ from s2h_viewer.hand.rig_mapping import (SCHEMES, SIDES, RigMapping, best_name_m
 SURE = 0.5
 #: normalised name endings of helper nodes (`is_helper`)
 HELPER_SUFFIXES = ("marker",)
+#: normalised endings an exporter appends to a bone's name for the node at its tail (`is_tail`)
+TAIL_SUFFIXES = ("end", "tip", "nub", "leaf")
 TEMPLATE_HINT = "write a joint map (`s2h rig FILE` writes an editable template) and pass it with --joint-map"
 
 
@@ -44,6 +46,15 @@ class Skeleton:
                 out[p].append(i)
         return out
 
+    def is_tail(self, bone: int) -> bool:
+        """Whether ``bone`` marks its parent's tail, named as its parent plus a `TAIL_SUFFIXES` ending
+        (``LittleFinger3_R_End``): a fingertip, whatever an exporter hung below it (``LittleFinger3_R_End_end``)."""
+        parent = self.parents[bone]
+        if parent < 0:
+            return False
+        name, base = normalise_name(self.names[bone]), normalise_name(self.names[parent])
+        return name.startswith(base) and name[len(base):] in TAIL_SUFFIXES
+
 
 def is_helper(name: str) -> bool:
     """A node that marks a point on the hand and is no bone: Meta's ``r_index_finger_pad_marker`` and its kind,
@@ -61,17 +72,18 @@ class FingerChains:
 
 
 def finger_chains(skeleton: Skeleton, wrist: int, children: list[list[int]] | None = None) -> FingerChains:
-    """Chains of >= 3 bones under ``wrist``: each ends at a leaf; a bone with several children starts new ones."""
+    """Chains of >= 3 bones under ``wrist``: each ends at a leaf or a bone's tail (`Skeleton.is_tail`); a bone
+    with several children starts new ones."""
     children = children or skeleton.children()
     chains, between, short = [], [], []
     stack = [(c, []) for c in children[wrist]]
     while stack:
         node, chain = stack.pop()
         chain = chain + [node]
-        if len(children[node]) == 1:
-            stack.append((children[node][0], chain))
-        elif not children[node]:
+        if skeleton.is_tail(node) or not children[node]:
             (chains if len(chain) >= 3 else short).append(chain)
+        elif len(children[node]) == 1:
+            stack.append((children[node][0], chain))
         else:  # a palm bone carrying several fingers: its own chain so far are palm bones too
             between.extend(chain)
             stack.extend((c, []) for c in children[node])
@@ -237,12 +249,12 @@ def complete_humanoid_map(skeleton: Skeleton, joints: dict[str, str], side: str,
 
 
 def _add_leaf_tips(skeleton: Skeleton, mapping: RigMapping) -> None:
-    """A humanoid map names no tips: a distal bone's only child, a leaf, is its finger's tip."""
+    """A humanoid map names no tips: a distal bone's only child, a leaf or its tail, is its finger's tip."""
     children = skeleton.children()
     lookup = {n: i for i, n in enumerate(skeleton.names)}
     for tip in mapping.missing_tips:
         kids = children[lookup[mapping.joints[topo.JOINT_NAMES[topo.joint_index(tip) - 1]]]]
-        if len(kids) == 1 and not children[kids[0]]:
+        if len(kids) == 1 and (not children[kids[0]] or skeleton.is_tail(kids[0])):
             mapping.joints[tip] = skeleton.names[kids[0]]
 
 
