@@ -37,7 +37,7 @@ from s2h_viewer.hand.rotations import quat_to_tbs_euler_past_lock, tbs_euler_to_
 from s2h_viewer.retarget.progress import report, stage
 from s2h_viewer.retarget.threads import torch_threads
 from s2h_viewer.semantics.anatomy import angle_excess, clamp_bend_change
-from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, PAD_PAIRS, contact_gaps, contact_loss
+from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, contact_loss, pad_pair_gaps
 from s2h_viewer.semantics.flexion import hinge_flexion_and_alignment
 from s2h_viewer.semantics.signature import (CURL_CHAINS, CURL_MARGIN, SIDEWAYS_FLEXION, SIDEWAYS_LIMIT, THUMB_PAIRS,
                                             THUMB_TOUCH, frame_sideways)
@@ -97,7 +97,7 @@ def _curl_excess(curls: torch.Tensor, source_curls: torch.Tensor, start_curls: t
 
 def _pose_pad_gaps(hand: HandModel, pose: HandPose) -> torch.Tensor:
     """(T, 10) fingertip-pad gaps of a posed hand in units of its length (what the fit compares)."""
-    return contact_gaps(hand, pose)[:, PAD_PAIRS] / hand.hand_length
+    return pad_pair_gaps(hand, pose) / hand.hand_length
 
 
 def pad_gaps(hand: HandModel, q_tbs: np.ndarray) -> np.ndarray:

@@ -54,15 +54,28 @@ def _palm_box(hand: HandModel) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return frame, lower, upper
 
 
+def _pad_radii(hand: HandModel, dtype: torch.dtype) -> tuple[torch.Tensor, torch.Tensor]:
+    """(21,) joint radii and (5,) fingertip pad radii of ``hand``."""
+    radii = torch.as_tensor(hand.radii, dtype=dtype)
+    return radii, radii[topo.TIP_JOINTS - 1] + PAD_FRACTION * (radii[topo.TIP_JOINTS] - radii[topo.TIP_JOINTS - 1])
+
+
+_PAD_A, _PAD_B = (list(side) for side in zip(*combinations(range(5), 2)))
+
+
+def pad_pair_gaps(hand: HandModel, pose: HandPose) -> torch.Tensor:
+    """(T, 10) surface gaps in metres of the fingertip pad pairs (``CONTACT_PAIRS[PAD_PAIRS]``): what the
+    contact fit, run at every step, needs of `contact_gaps`."""
+    pads = pad_centres(pose.positions)
+    _, pad_r = _pad_radii(hand, pads.dtype)
+    return (pads[:, _PAD_A] - pads[:, _PAD_B]).norm(dim=-1) - pad_r[_PAD_A] - pad_r[_PAD_B]
+
+
 def contact_gaps(hand: HandModel, pose: HandPose) -> torch.Tensor:
     """(T, 15) surface gaps in metres for ``CONTACT_PAIRS`` (negative = interpenetrating)."""
     dtype = pose.positions.dtype
     pads = pad_centres(pose.positions)
-    radii = torch.as_tensor(hand.radii, dtype=dtype)
-    pad_r = radii[topo.TIP_JOINTS - 1] + PAD_FRACTION * (radii[topo.TIP_JOINTS] - radii[topo.TIP_JOINTS - 1])
-    ia, ib = zip(*combinations(range(5), 2))
-    tip_gap = (pads[:, list(ia)] - pads[:, list(ib)]).norm(dim=-1) - pad_r[list(ia)] - pad_r[list(ib)]
-
+    radii, pad_r = _pad_radii(hand, dtype)
     frame, lower, upper = (torch.as_tensor(a, dtype=dtype) for a in _palm_box(hand))
 
     def palm_gap(points: torch.Tensor, point_r: torch.Tensor) -> torch.Tensor:
@@ -72,7 +85,7 @@ def contact_gaps(hand: HandModel, pose: HandPose) -> torch.Tensor:
 
     tips = pose.positions[:, topo.TIP_JOINTS]
     palm = torch.minimum(palm_gap(pads, pad_r), palm_gap(tips, radii[topo.TIP_JOINTS]))
-    return torch.cat([tip_gap, palm], -1)
+    return torch.cat([pad_pair_gaps(hand, pose), palm], -1)
 
 
 def contact_loss(gaps: torch.Tensor, source_gaps: torch.Tensor, tolerance: float = CONTACT_TOLERANCE) -> torch.Tensor:

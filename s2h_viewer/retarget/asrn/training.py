@@ -37,7 +37,7 @@ from s2h_viewer.retarget.asrn.dataset import (Batch, TrainingSet, build_training
 from s2h_viewer.retarget.asrn.features import SEMANTIC_SIZE, feature_size, semantic_features
 from s2h_viewer.retarget.asrn.model import RetargetNet, apply_residual
 from s2h_viewer.semantics.anatomy import anatomical_loss
-from s2h_viewer.semantics.contacts import PAD_PAIRS, contact_gaps, contact_loss
+from s2h_viewer.semantics.contacts import PAD_PAIRS, contact_loss, pad_pair_gaps
 from s2h_viewer.semantics.similarity import semantic_similarity
 
 GRADIENT_CLIP = 1.0
@@ -107,7 +107,7 @@ def batch_loss(model: RetargetNet, data: TrainingSet, batch: Batch, config: Trai
     loss = mse + config.semantic_weight * semantic + config.anatomy_weight * anatomy
     parts = {"loss": loss, "mse": mse, "semantic": semantic, "anatomy": anatomy}
     if config.contact_weight:
-        gaps = contact_gaps(hand, pose)[:, PAD_PAIRS] / hand.hand_length
+        gaps = pad_pair_gaps(hand, pose) / hand.hand_length
         parts["contact"] = contact_loss(gaps, batch.source_gaps.reshape(len(gaps), -1)[:, PAD_PAIRS])
         loss = parts["loss"] = loss + config.contact_weight * parts["contact"]
     return loss, {k: v.item() for k, v in parts.items()}
