@@ -136,17 +136,38 @@ def test_a_fingertip_is_the_distal_bones_tail_not_what_an_exporter_hung_below_it
         assert bones[tip] < 1.1 * bones[tip - 1], (finger, bones[tip - 1:tip + 1])
 
 
-def test_a_mitten_mesh_gives_its_fingers_no_frames_or_widths_of_its_own():
+def test_a_complete_vrm0_map_takes_each_tip_from_below_its_distal_bone_alike(tmp_path):
+    """The same avatar with a humanoid map naming every bone (nothing completed from the chains): each tip is
+    the distal bone's tail found below it, the ``_End`` bone where one is there, as with the partial map."""
+    import pygltflib
+    gltf = pygltflib.GLTF2().load_binary(str(CRYPTOVOXELS))
+    names = [node.name for node in gltf.nodes]
+    bones = gltf.extensions["VRM"]["humanoid"]["humanBones"]
+    for side, mark in (("right", "R"), ("left", "L")):
+        for level, suffix in zip(("Proximal", "Intermediate", "Distal"), ("0", "1", "2")):
+            bones.append({"bone": f"{side}Thumb{level}", "node": names.index(f"Thumb{suffix}_{mark}")})
+        bones.append({"bone": f"{side}IndexDistal", "node": names.index(f"IndexFinger3_{mark}")})
+    complete = tmp_path / "complete_map.vrm"
+    gltf.save_binary(str(complete))
+    for side in ("right", "left"):
+        mapping = recognise_file(complete, RigOptions(side=side))
+        partial = recognise_file(CRYPTOVOXELS, RigOptions(side=side))
+        assert not mapping.notes and mapping.joints == partial.joints
+
+
+@pytest.mark.parametrize("side, unparted", [("right", ["middle", "ring", "pinky"]), ("left", ["middle", "ring"])])
+def test_a_mitten_mesh_gives_its_fingers_no_frames_or_widths_of_its_own(side, unparted):
     """cryptovoxels.vrm's hand is one low-poly paddle (140 vertices): a finger's section there spans its
     neighbours, read 0.11-0.13 of the hand as fingertip radii (3x a real hand's) and made fingers side by side
     touch: ASRN's contact precision on the authored poses 0.64. The solver says the mesh does not part them,
-    trusts none of their rays, and the radii are the procedural hands' proportions."""
+    trusts none of their rays, and the radii are the procedural hands' proportions (the left pinky's joints lie
+    outside the mesh: no ray hits it at all)."""
     from s2h_viewer.annotate.solver import DEFAULT_RADIUS_FRACTIONS, solve_tbs_frames
     from s2h_viewer.hand import topology as topo
-    hand = load_hand_file(CRYPTOVOXELS, RigOptions(side="right"))
+    hand = load_hand_file(CRYPTOVOXELS, RigOptions(side=side))
     solution = solve_tbs_frames(hand)
     lines = [line for line in solution.diagnostics if "the mesh does not part it from its neighbours" in line]
-    assert [line.split(":")[0] for line in lines] == ["middle", "ring", "pinky"]
+    assert [line.split(":")[0] for line in lines] == unparted
     assert "rays" not in solution.basis and (solution.confidence <= 0.6).all()
     np.testing.assert_allclose(hand.radii[topo.TIP_JOINTS], DEFAULT_RADIUS_FRACTIONS[topo.TIP_JOINTS]
                                * hand.hand_length)
