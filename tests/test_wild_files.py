@@ -136,6 +136,33 @@ def test_a_fingertip_is_the_distal_bones_tail_not_what_an_exporter_hung_below_it
         assert bones[tip] < 1.1 * bones[tip - 1], (finger, bones[tip - 1:tip + 1])
 
 
+def test_a_named_rig_without_tip_bones_takes_the_tails_an_exporter_wrote(tmp_path):
+    """Mixamo names without the ``Index4`` tips, as a Blender export with leaf bones writes them (``Index3_end``):
+    the tails are the tips, where they are, not a guess extrapolated from the finger; without them the tips are
+    extrapolated as before, and a leaf not named as the distal bone's tail is not taken for one."""
+    from s2h_viewer import samples
+    from s2h_viewer.hand import topology as topo
+    from wild_rigs import write_gltf_skeleton
+    truth = samples.load_sample_hand("birch").rest_positions
+    names = ["mixamorig:RightHand"] + [f"mixamorig:RightHand{f.capitalize()}{i}" for f in topo.FINGERS
+                                       for i in (1, 2, 3, 4)]
+    tips = [topo.joint_index(f"{f}_tip") for f in topo.FINGERS]
+    for tail, taken in (("{}_end", True), ("{}_gem", False)):
+        named = [tail.format(names[j - 1]) if j in tips else n for j, n in enumerate(names)]
+        rig = write_gltf_skeleton(tmp_path / f"mixamo{tail[2:]}.gltf", named, list(topo.PARENTS), truth)
+        mapping = recognise_file(rig)
+        assert mapping.scheme == "mixamo"
+        assert (mapping.joints.get("index_tip") == named[topo.joint_index("index_tip")]) == taken
+        if taken:  # the last phalanges as long as the file has them
+            offsets = np.linalg.norm(load_hand_file(rig).offsets[tips], axis=1)
+            np.testing.assert_allclose(offsets, np.linalg.norm(truth[tips] - truth[np.array(tips) - 1], axis=1),
+                                       rtol=1e-5)
+    no_tips = [n for j, n in enumerate(names) if j not in tips]
+    parents = [no_tips.index(names[p]) if p >= 0 else -1 for j, p in enumerate(topo.PARENTS) if j not in tips]
+    rig = write_gltf_skeleton(tmp_path / "mixamo_no_tips.gltf", no_tips, parents, np.delete(truth, tips, 0))
+    assert "index_tip" not in recognise_file(rig).joints
+
+
 def test_a_complete_vrm0_map_takes_each_tip_from_below_its_distal_bone_alike(tmp_path):
     """The same avatar with a humanoid map naming every bone (nothing completed from the chains): each tip is
     the distal bone's tail found below it, the ``_End`` bone where one is there, as with the partial map."""

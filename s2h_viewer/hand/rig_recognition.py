@@ -248,13 +248,14 @@ def complete_humanoid_map(skeleton: Skeleton, joints: dict[str, str], side: str,
                        f"{joints['wrist']!r} ({added})"]
 
 
-def _add_leaf_tips(skeleton: Skeleton, mapping: RigMapping) -> None:
-    """A humanoid map names no tips: a distal bone's only child, a leaf or its tail, is its finger's tip."""
+def _add_leaf_tips(skeleton: Skeleton, mapping: RigMapping, tails_only: bool = False) -> None:
+    """Tips the mapping lacks (a humanoid map names none, a scheme may not): a distal bone's only child, its tail
+    (`Skeleton.is_tail`) or, but with ``tails_only``, any leaf, is its finger's tip."""
     children = skeleton.children()
     lookup = {n: i for i, n in enumerate(skeleton.names)}
     for tip in mapping.missing_tips:
         kids = children[lookup[mapping.joints[topo.JOINT_NAMES[topo.joint_index(tip) - 1]]]]
-        if len(kids) == 1 and (not children[kids[0]] or skeleton.is_tail(kids[0])):
+        if len(kids) == 1 and (skeleton.is_tail(kids[0]) or not (tails_only or children[kids[0]])):
             mapping.joints[tip] = skeleton.names[kids[0]]
 
 
@@ -310,6 +311,7 @@ def recognise_rig(skeleton: Skeleton, source: str | Path, side: str | None = Non
         hand_sides = sides_named([by_name.joints[n] for n in by_name.joints])
         if len(named) == 2 and side is None:
             by_name.notes.append("the rig has both hands; the right one is taken (--side left for the other)")
+        _add_leaf_tips(skeleton, by_name, tails_only=True)  # a Blender export's ``Index3_end``, Rigify's kind
         return _settle_side(skeleton, by_name, side, hand_sides)
     if scheme is not None:
         raise UnrecognisedRigError(source, f"cannot map the {chosen} hand ({scheme} names): "
