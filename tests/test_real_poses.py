@@ -225,6 +225,28 @@ def test_the_thumb_cmc_is_read_both_ways_it_turns(sample_hands, gestures):
     assert 2.0 < across.std() and 2.0 < lift.std()  # the source moves both ways
 
 
+def test_a_thumb_hinge_passing_straight_is_read_about_its_axis_not_folded(poses, sample_hands):
+    """The WebXR thumb's MCP is near straight at rest: TBS Copy of the authored poses, which turns it as the source's,
+    bends it through straight, and its unsigned bend between the bones folds there (it read 0.61); read signed
+    about the hinge's axis it follows (0.95). A left hand reads as its mirrored right one; a thumb that stays
+    still or moves backwards still reads as not following."""
+    from s2h_viewer.hand import topology as topo
+    from s2h_viewer.hand.mirror import reflection
+    from s2h_viewer.semantics.flexion import bend_angles, signed_hinge_bends
+    motion, source = poses
+    target = load_hand_file(WEBXR_R)
+    moved = retarget(motion, source, target, "tbs_copy")
+    positions = [forward_kinematics(h, torch.as_tensor(q, dtype=torch.float64)).positions.numpy()
+                 for h, q in ((source, motion.q_tbs), (target, moved.q_tbs))]
+    mcp = topo.joint_index("thumb_mcp")
+    assert np.corrcoef(*(bend_angles(p, mcp) for p in positions))[0, 1] < 0.7  # the fold
+    assert thumb_follow(*positions)["thumb_mcp"] >= 0.9
+    np.testing.assert_allclose(signed_hinge_bends(positions[1] @ reflection().T, mcp),
+                               signed_hinge_bends(positions[1], mcp), atol=1e-9)
+    backwards = thumb_follow(positions[0], positions[1][::-1])
+    assert backwards["thumb_mcp"] < 0.5 and backwards["thumb_ip"] < 0.5, backwards
+
+
 def test_the_contact_fit_brings_fingers_to_the_thumb_before_the_thumb_to_them(sample_hands, gestures):
     """The gestures' pinch onto the WebXR hand: the network leaves thumb and index apart. Its CMC pulled as hard as
     any finger joint, the fit met the index by lifting the thumb out of the palm plane where the source's drops 13

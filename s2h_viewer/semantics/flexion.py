@@ -145,13 +145,37 @@ def thumb_metacarpal_angles(positions: np.ndarray) -> tuple[np.ndarray, np.ndarr
     return np.degrees(np.arctan2(local[:, 1], local[:, 0])), np.degrees(np.arcsin(np.clip(local[:, 2], -1.0, 1.0)))
 
 
+def signed_hinge_bends(positions: np.ndarray, joint: int) -> np.ndarray:
+    """(T,) degrees joint ``joint`` (of the 21, with a child) bends about its dominant axis over the (T, 21, 3)
+    frames, signed: positive where the bone out of it turns across the palm (away from the thumb's side of the
+    bone into it). The unsigned bend between the bones (`bend_angles`) folds where a joint passes straight: the
+    WebXR thumb's MCP, near straight at rest, read 0.61 for TBS Copy of the authored poses, which turns it as the
+    source's; read about its axis, 0.95. The axis is the clip's (the principal direction of the bend axes in the
+    frame of the bone into the joint and the palm normal), so a hand's own hinge is read, whatever its frames."""
+    positions = np.asarray(positions, dtype=np.float64)
+    positions = positions - positions[:, :1]
+    into = positions[:, joint] - positions[:, topo.PARENTS[joint]]
+    out = positions[:, joint + 1] - positions[:, joint]
+    x = into / np.maximum(np.linalg.norm(into, axis=-1, keepdims=True), 1e-12)
+    out = out / np.maximum(np.linalg.norm(out, axis=-1, keepdims=True), 1e-12)
+    normal = palm_axes(positions)[:, :, 2]
+    z = normal - x * (normal * x).sum(-1, keepdims=True)
+    z /= np.maximum(np.linalg.norm(z, axis=-1, keepdims=True), 1e-12)
+    frame = np.stack([x, np.cross(z, x), z], axis=-1)  # columns: the bone, across it, out of the back
+    axes = np.einsum("tij,ti->tj", frame, np.cross(x, out))
+    axis = np.linalg.svd(axes, full_matrices=False)[2][0]
+    if axis[2] > 0:  # a turn about it must take the bone toward -y: across the palm
+        axis = -axis
+    return np.degrees(np.arctan2(axes @ axis, (x * out).sum(-1)))
+
+
 def thumb_angles(positions: np.ndarray) -> dict[str, np.ndarray]:
-    """Per `THUMB_ANGLES`, (T,) degrees: the CMC's two (`thumb_metacarpal_angles`), the MCP's and IP's bends.
-    No angle is measured from the wrist-to-CMC "bone": it is no bone on most rigs, and sits anywhere from 2 to
-    5 cm from the wrist."""
+    """Per `THUMB_ANGLES`, (T,) degrees: the CMC's two (`thumb_metacarpal_angles`), the MCP's and IP's bends
+    about their axes (`signed_hinge_bends`). No angle is measured from the wrist-to-CMC "bone": it is no bone on
+    most rigs, and sits anywhere from 2 to 5 cm from the wrist."""
     across, lift = thumb_metacarpal_angles(positions)
     return {"thumb_cmc_across": across, "thumb_cmc_lift": lift,
-            **{name: bend_angles(positions, j) for name, j in THUMB_HINGES}}
+            **{name: signed_hinge_bends(positions, j) for name, j in THUMB_HINGES}}
 
 
 def thumb_follow(source_positions: np.ndarray, target_positions: np.ndarray) -> dict[str, float]:
