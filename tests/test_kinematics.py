@@ -12,8 +12,8 @@ from scipy.spatial.transform import Rotation
 from conftest import random_tbs_motion
 from s2h_viewer.errors import InvalidHandError
 from s2h_viewer.hand import topology as topo
-from s2h_viewer.hand.kinematics import (forward_kinematics, identity_motion, rest_motion, rig_local_to_tbs,
-                                        tbs_to_rig_local)
+from s2h_viewer.hand.kinematics import (forward_kinematics, identity_motion, joint_positions, rest_motion,
+                                        rig_local_to_tbs, tbs_to_rig_local)
 from s2h_viewer.hand.mirror import mirror_hand, mirror_motion
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
@@ -69,6 +69,13 @@ def test_batched_fk_equals_the_per_joint_reference(skeleton_hands, rng):
             positions, frames = fk_frame(hand, q[t].numpy())
             np.testing.assert_allclose(pose.positions[t].numpy(), positions, atol=1e-12)
             np.testing.assert_allclose(pose.frames[t].numpy(), frames, atol=1e-12)
+        # the positions alone (the contact fit's FK), with their gradients
+        np.testing.assert_allclose(joint_positions(hand, q).numpy(), pose.positions.numpy(), atol=1e-12)
+        leaf = q.clone().requires_grad_(True)
+        grads = [torch.autograd.grad(fk(hand, leaf).square().sum(), leaf)[0].numpy()
+                 for fk in (joint_positions, lambda h, x: forward_kinematics(h, x).positions)]
+        np.testing.assert_allclose(grads[0], grads[1], atol=1e-12)
+        assert np.abs(grads[0]).sum() > 0
 
 
 def test_tbs_rig_local_round_trip_on_random_rotations(skeleton_hands, rng):

@@ -121,16 +121,8 @@ def _quat_products(table: torch.Tensor, a: torch.Tensor, b: torch.Tensor) -> tor
     return table @ (a[..., :, None, :] * b[..., None, :, :]).flatten(-3, -2)
 
 
-def forward_kinematics(hand: HandModel, q_tbs: torch.Tensor | np.ndarray) -> HandPose:
-    """(T, 15, 4) TBS quaternions (w, x, y, z) -> joint positions and global TBS frames.
-
-    Vectorised over frames and joints; loops only over the levels of a finger chain, composing
-    quaternions (``g_j = g_p * l_j * r_j``). The work runs with the frames last (``(joint, 4, T)``), so
-    every kernel is a small matrix times long contiguous rows: one product per joint turns the
-    quaternion's outer product ``g g^T`` into its frame and its child's bone vector at once. The
-    rotations are transposed in once and the result out once.
-    Differentiable in ``q_tbs``; dtype follows ``q_tbs`` (float32 for numpy input).
-    """
+def _global_turns(hand: HandModel, q_tbs: torch.Tensor | np.ndarray) -> tuple[torch.Tensor, torch.Tensor, _Chain]:
+    """(q (T, 15, 4), the joints' global turns ``outer(g, g)`` (15, 16, T), the hand's FK constants)."""
     q = _as_tensor(q_tbs, torch.float32)
     if q.ndim != 3 or q.shape[1:] != (topo.N_ARTICULATED, 4):
         raise ValueError(f"q_tbs must have shape (T, 15, 4), got {tuple(q.shape)}")
@@ -143,21 +135,48 @@ def forward_kinematics(hand: HandModel, q_tbs: torch.Tensor | np.ndarray) -> Han
     for level in (1, 2):
         turns.append(_quat_products(chain.quat_product, turns[-1], local[:, level]))
     turn = torch.stack(turns, 1).view(topo.N_ARTICULATED, 4, n_frames)  # g_j: (joint, 4, T)
-    outer = (turn[:, :, None] * turn[:, None]).view(topo.N_ARTICULATED, 16, n_frames)
-    frame_bone = torch.bmm(chain.frame_and_bone, outer).view(5, 3, 12, n_frames)  # (finger, level, 9 + 3, T)
+    return q, (turn[:, :, None] * turn[:, None]).view(topo.N_ARTICULATED, 16, n_frames), chain
 
+
+def _positions(q: torch.Tensor, chain: _Chain, bones: torch.Tensor) -> torch.Tensor:
+    """(T, 21, 3) joint positions from each joint's child bone ``R(g) offset`` (5, 3, 3, T)."""
+    n_frames = q.shape[0]
+    positions = q.new_empty(topo.N_JOINTS, 3, n_frames)
+    positions[0] = 0.0
+    by_finger = positions[1:].view(5, 4, 3, n_frames)
+    by_finger[:, 0] = chain.first
+    by_finger[:, 1:] = chain.first[:, None] + bones.cumsum(1)  # x_j = x_p + M_p offset_j
+    return positions.permute(2, 0, 1).contiguous()
+
+
+def forward_kinematics(hand: HandModel, q_tbs: torch.Tensor | np.ndarray) -> HandPose:
+    """(T, 15, 4) TBS quaternions (w, x, y, z) -> joint positions and global TBS frames.
+
+    Vectorised over frames and joints; loops only over the levels of a finger chain, composing
+    quaternions (``g_j = g_p * l_j * r_j``). The work runs with the frames last (``(joint, 4, T)``), so
+    every kernel is a small matrix times long contiguous rows: one product per joint turns the
+    quaternion's outer product ``g g^T`` into its frame and its child's bone vector at once. The
+    rotations are transposed in once and the result out once.
+    Differentiable in ``q_tbs``; dtype follows ``q_tbs`` (float32 for numpy input).
+    """
+    q, outer, chain = _global_turns(hand, q_tbs)
+    n_frames = q.shape[0]
+    frame_bone = torch.bmm(chain.frame_and_bone, outer).view(5, 3, 12, n_frames)  # (finger, level, 9 + 3, T)
     frames = q.new_empty(topo.N_JOINTS, 9, n_frames)  # every joint's frame, frames last, then transposed once
     frames[0] = torch.eye(3, dtype=q.dtype).view(9, 1)
     by_finger = frames[1:].view(5, 4, 9, n_frames)
     by_finger[:, :3] = frame_bone[:, :, :9]
     by_finger[:, 3] = frame_bone[:, 2, :9]  # a tip takes its parent's frame
-    positions = q.new_empty(topo.N_JOINTS, 3, n_frames)
-    positions[0] = 0.0
-    by_finger = positions[1:].view(5, 4, 3, n_frames)
-    by_finger[:, 0] = chain.first
-    by_finger[:, 1:] = chain.first[:, None] + frame_bone[:, :, 9:].cumsum(1)  # x_j = x_p + M_p offset_j
-    return HandPose(positions=positions.permute(2, 0, 1).contiguous(),
+    return HandPose(positions=_positions(q, chain, frame_bone[:, :, 9:]),
                     frames=frames.permute(2, 0, 1).contiguous().view(n_frames, topo.N_JOINTS, 3, 3))
+
+
+def joint_positions(hand: HandModel, q_tbs: torch.Tensor | np.ndarray) -> torch.Tensor:
+    """(T, 21, 3) the positions of `forward_kinematics` without its frames: an optimiser that reads only where
+    the joints are (the contact fit, at every step) builds a quarter of the products."""
+    q, outer, chain = _global_turns(hand, q_tbs)
+    bones = torch.matmul(chain.frame_and_bone[:, 9:], outer)  # (15, 3, T)
+    return _positions(q, chain, bones.view(5, 3, 3, q.shape[0]))
 
 
 def _tbs_in_parent_rig_frame(hand: HandModel, dtype: torch.dtype) -> torch.Tensor:

@@ -31,7 +31,7 @@ import numpy as np
 import torch
 
 from s2h_viewer.hand.chunks import frame_chunks
-from s2h_viewer.hand.kinematics import HandPose, forward_kinematics
+from s2h_viewer.hand.kinematics import joint_positions
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.rotations import quat_to_tbs_euler_past_lock, tbs_euler_to_quat
 from s2h_viewer.retarget.progress import report, stage
@@ -66,10 +66,10 @@ class ContactFitConfig:
 SIDEWAYS_FREE = np.radians(SIDEWAYS_LIMIT - 5.0)
 
 
-def _sideways_excess(pose: HandPose) -> torch.Tensor:
+def _sideways_excess(positions: torch.Tensor) -> torch.Tensor:
     """(F, 8) how far each PIP/DIP's curl-axis alignment (`hinge_flexion_and_alignment`) drops below that of a
     `SIDEWAYS_FREE` sideways bend, counted in full from `SIDEWAYS_FLEXION` on, fading in over the 20 deg below."""
-    flexion, alignment = hinge_flexion_and_alignment(pose.positions)
+    flexion, alignment = hinge_flexion_and_alignment(positions)
     weight = ((flexion - np.radians(SIDEWAYS_FLEXION - 20.0)) / np.radians(20.0)).clamp(0.0, 1.0)
     return weight * torch.relu(float(np.cos(SIDEWAYS_FREE)) - alignment)
 
@@ -95,15 +95,15 @@ def _curl_excess(curls: torch.Tensor, source_curls: torch.Tensor, start_curls: t
     return torch.relu((curls - source_curls).abs() - allowed)
 
 
-def _pose_pad_gaps(hand: HandModel, pose: HandPose) -> torch.Tensor:
+def _pose_pad_gaps(hand: HandModel, positions: torch.Tensor) -> torch.Tensor:
     """(T, 10) fingertip-pad gaps of a posed hand in units of its length (what the fit compares)."""
-    return pad_pair_gaps(hand, pose) / hand.hand_length
+    return pad_pair_gaps(hand, positions) / hand.hand_length
 
 
 def pad_gaps(hand: HandModel, q_tbs: np.ndarray) -> np.ndarray:
     """(T, 10) fingertip-pad gaps in units of the hand's length."""
     with torch.no_grad():
-        return _pose_pad_gaps(hand, forward_kinematics(hand, torch.as_tensor(q_tbs, dtype=torch.float32))).numpy()
+        return _pose_pad_gaps(hand, joint_positions(hand, torch.as_tensor(q_tbs, dtype=torch.float32))).numpy()
 
 
 def disagreement(source_hand: HandModel, source_q: np.ndarray, target_hand: HandModel, target_q: np.ndarray
@@ -124,7 +124,7 @@ def _bent_sideways(source_hand: HandModel, source_q: np.ndarray, target_hand: Ha
     """(T,) bool: the target's worst flexed PIP/DIP bends sideways past `SIDEWAYS_LIMIT` and past the source's + 5
     (the signature's rule, `semantics.signature.frame_sideways`)."""
     with torch.no_grad():
-        sideways = [frame_sideways(forward_kinematics(hand, torch.as_tensor(q, dtype=torch.float64)).positions.numpy())
+        sideways = [frame_sideways(joint_positions(hand, torch.as_tensor(q, dtype=torch.float64)).numpy())
                     for hand, q in ((source_hand, source_q), (target_hand, target_q))]
     return sideways[1] > np.maximum(SIDEWAYS_LIMIT, sideways[0] + 5.0)
 
@@ -172,8 +172,8 @@ def fit_contacts(source_q: np.ndarray, source_hand: HandModel, target_hand: Hand
 
     def source_at(idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         with torch.no_grad():
-            pose = forward_kinematics(source_hand, torch.as_tensor(source_q[idx], dtype=torch.float32))
-            return _pose_pad_gaps(source_hand, pose).numpy(), pose_curls(pose.positions).numpy()  # read as the target's
+            positions = joint_positions(source_hand, torch.as_tensor(source_q[idx], dtype=torch.float32))
+            return _pose_pad_gaps(source_hand, positions).numpy(), pose_curls(positions).numpy()  # read as the target's
     return _fit_frames(out, frames, source_at, target_hand, config)
 
 
@@ -243,7 +243,7 @@ def _fit_runs(q: np.ndarray, source_gaps: np.ndarray, source_curls: np.ndarray |
         start_excess = angle_excess(start)  # what the retarget already has is not the fit's to undo
         if source_curls is not None:
             source_curls = torch.as_tensor(source_curls, dtype=torch.float32)
-            start_curls = pose_curls(forward_kinematics(hand, torch.as_tensor(q, dtype=torch.float32)).positions)
+            start_curls = pose_curls(joint_positions(hand, torch.as_tensor(q, dtype=torch.float32)))
     source = torch.as_tensor(source_gaps)
     # each run's correction sits between two zero frames: second differences across them tie its ends
     # to zero, and no difference spans two runs
@@ -257,17 +257,17 @@ def _fit_runs(q: np.ndarray, source_gaps: np.ndarray, source_curls: np.ndarray |
     for step in range(config.steps):
         report(step / config.steps)  # and where a cancel stops the fit
         angles = start + correction
-        pose = forward_kinematics(hand, tbs_euler_to_quat(angles))
-        gaps = _pose_pad_gaps(hand, pose)
+        positions = joint_positions(hand, tbs_euler_to_quat(angles))
+        gaps = _pose_pad_gaps(hand, positions)
         padded = correction.new_zeros(padded_len, *correction.shape[1:]).index_copy(0, slots, correction)
         smooth = (padded[2:] - 2 * padded[1:-1] + padded[:-2]).square().sum((-1, -2)).mean()
         loss = (config.contact_weight * (contact_loss(gaps, source) + thumb_touch_loss(gaps, source))
                 + config.anatomy_weight * torch.relu(angle_excess(angles) - start_excess).square().sum((-1, -2)).mean()
                 + config.smoothness_weight * smooth
                 + config.prior_weight * (correction.square().sum(-1) * prior_scale).sum(-1).mean()
-                + config.sideways_weight * _sideways_excess(pose).square().sum(-1).mean())
+                + config.sideways_weight * _sideways_excess(positions).square().sum(-1).mean())
         if source_curls is not None:
-            loss = loss + config.curl_weight * _curl_excess(pose_curls(pose.positions), source_curls,
+            loss = loss + config.curl_weight * _curl_excess(pose_curls(positions), source_curls,
                                                             start_curls).square().sum(-1).mean()
         optimiser.zero_grad()
         loss.backward()

@@ -63,10 +63,10 @@ def _pad_radii(hand: HandModel, dtype: torch.dtype) -> tuple[torch.Tensor, torch
 _PAD_A, _PAD_B = (list(side) for side in zip(*combinations(range(5), 2)))
 
 
-def pad_pair_gaps(hand: HandModel, pose: HandPose) -> torch.Tensor:
-    """(T, 10) surface gaps in metres of the fingertip pad pairs (``CONTACT_PAIRS[PAD_PAIRS]``): what the
-    contact fit, run at every step, needs of `contact_gaps`."""
-    pads = pad_centres(pose.positions)
+def pad_pair_gaps(hand: HandModel, positions: torch.Tensor) -> torch.Tensor:
+    """(T, 10) surface gaps in metres of the fingertip pad pairs (``CONTACT_PAIRS[PAD_PAIRS]``) of (T, 21, 3)
+    joint positions: what the contact fit, run at every step, needs of `contact_gaps`."""
+    pads = pad_centres(positions)
     _, pad_r = _pad_radii(hand, pads.dtype)
     return (pads[:, _PAD_A] - pads[:, _PAD_B]).norm(dim=-1) - pad_r[_PAD_A] - pad_r[_PAD_B]
 
@@ -85,7 +85,7 @@ def contact_gaps(hand: HandModel, pose: HandPose) -> torch.Tensor:
 
     tips = pose.positions[:, topo.TIP_JOINTS]
     palm = torch.minimum(palm_gap(pads, pad_r), palm_gap(tips, radii[topo.TIP_JOINTS]))
-    return torch.cat([pad_pair_gaps(hand, pose), palm], -1)
+    return torch.cat([pad_pair_gaps(hand, pose.positions), palm], -1)
 
 
 def contact_loss(gaps: torch.Tensor, source_gaps: torch.Tensor, tolerance: float = CONTACT_TOLERANCE) -> torch.Tensor:

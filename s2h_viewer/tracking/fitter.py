@@ -153,12 +153,11 @@ def _keep_recorded_contacts(hand: HandModel, q: np.ndarray, keypoints: np.ndarra
     close a pinch (`retarget.contact_fit`, with the keypoints' own pad gaps as the source)."""
     import torch
 
-    from s2h_viewer.hand.kinematics import HandPose
     from s2h_viewer.retarget.contact_fit import fit_contacts_to_gaps, pad_gaps
     from s2h_viewer.semantics.contacts import pad_pair_gaps
 
     points = torch.as_tensor(keypoints, dtype=torch.float32)
-    recorded = pad_pair_gaps(hand, HandPose(points, torch.zeros(*points.shape, 3))).numpy()
+    recorded = pad_pair_gaps(hand, points).numpy()
     recorded = recorded / hand.hand_length
     if not use.all():  # filled frames: the keypoints there are not recorded ones, the fit stands as it is
         recorded[~use] = pad_gaps(hand, q[~use])
