@@ -180,3 +180,28 @@ def test_render_compare_refuses_frames_the_clip_has_not(sample_hands, tmp_path, 
         assert err.startswith("s2h: error: ") and said in err and len(err.strip().splitlines()) == 1
         assert out == "e.png" or f"has {n} frames (0 to {n - 1})" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["one.npz"]
+
+
+def test_a_mitten_avatars_bones_are_drawn_over_its_skin(sample_hands, tmp_path):
+    """cryptovoxels.vrm's hand is one paddle that does not part the fingers (the solver says so): its skin cannot
+    show what they do, so its skeleton is drawn over the skin made see-through, the overlay switched off or not;
+    a hand whose mesh parts its fingers keeps its skin as it is."""
+    import pyvista as pv
+
+    from s2h_viewer.io.files import RigOptions, load_hand_file
+    from s2h_viewer.render.compare_scene import SKELETON_OPACITY, ViewOptions, apply_options, grid_layout, populate
+    from s2h_viewer.retarget.comparison import build_comparison
+    from s2h_viewer.samples import ASSETS_DIR
+
+    mitten = load_hand_file(ASSETS_DIR / "hands" / "real" / "cryptovoxels.vrm", RigOptions(side="right"))
+    assert mitten.meta["unparted_fingers"] == ["middle", "ring", "pinky"]
+    source = sample_hands["birch"]
+    comparison = build_comparison(synthesize(["fist"], source, seed=0), source, [mitten, sample_hands["iris"]],
+                                  ["tbs_copy"])
+    plotter = pv.Plotter(off_screen=True, window_size=(900, 400), **grid_layout(comparison))
+    hands, _ = populate(plotter, comparison)
+    apply_options(plotter, hands, ViewOptions())
+    drawn = {hand.hand.name: (hand.overlay.show_skeleton, hand.mesh_actor.prop.opacity) for hand in hands}
+    plotter.close()
+    assert drawn[mitten.name] == (True, pytest.approx(SKELETON_OPACITY))
+    assert drawn["iris"] == (False, 1.0) and drawn["birch"] == (False, 1.0)

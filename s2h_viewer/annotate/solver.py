@@ -83,6 +83,8 @@ class TbsSolution:
     #: (15,) what decided each bend axis: "rays", "rig bone axis" (the rays could not tell), "palm plane",
     #: `THUMB_CONVENTION` (the thumb CMC)
     basis: list[str] = field(default_factory=lambda: ["rays"] * topo.N_ARTICULATED)
+    #: fingers the mesh does not part from their neighbours (a mitten): its skin cannot show what they do
+    unparted: tuple[str, ...] = ()
 
     @property
     def needs_review(self) -> np.ndarray:
@@ -264,7 +266,8 @@ def solve_tbs_frames(hand: HandModel, n_angles: int = N_ANGLES, bone_axes: np.nd
                 if confidence[j] < LOW_CONFIDENCE:
                     diagnostics.append(f"{name}: low confidence {confidence[j]:.2f} ({note}); review the frame")
             frames[j] = np.stack([twist[j], np.cross(z, twist[j]), z], axis=1)
-    for f, how_wide in _unparted_fingers(positions, width):
+    unparted = _unparted_fingers(positions, width)
+    for f, how_wide in unparted:
         members = slice(3 * f, 3 * f + 3)
         confidence[members], thickness[members], width[members] = 0.0, np.nan, np.nan
         diagnostics.append(f"{topo.FINGERS[f]}: the mesh does not part it from its neighbours (its section "
@@ -280,7 +283,8 @@ def solve_tbs_frames(hand: HandModel, n_angles: int = N_ANGLES, bone_axes: np.nd
     frames[0] = guess[0]  # the thumb CMC: `thumb_cmc_frame`, whatever its rays or its rig read
     if not fallback[0]:
         basis[0] = THUMB_CONVENTION
-    return TbsSolution(frames, confidence, hit.mean(axis=1), thickness, width, fallback, diagnostics, basis)
+    return TbsSolution(frames, confidence, hit.mean(axis=1), thickness, width, fallback, diagnostics, basis,
+                       tuple(topo.FINGERS[f] for f, _ in unparted))
 
 
 def _unparted_fingers(positions: np.ndarray, width: np.ndarray) -> list[tuple[int, float]]:

@@ -232,6 +232,7 @@ def annotate(hand: HandModel, source: Path, hinge_evidence: Path | None = None,
     hand.meta["annotation"] = how
     if solution is not None:
         diagnostics = solution.diagnostics
+        hand.meta["unparted_fingers"] = list(solution.unparted)
     if solution is not None or diagnostics or refused:
         hand.meta["solver_diagnostics"] = ([refused] if refused else []) + diagnostics
     hand.validate()

@@ -693,8 +693,10 @@ SKELETON_OPACITY = 0.4  # the skin's opacity at most while the skeleton overlay 
 def apply_options(plotter: pv.Plotter, hands: list[PosedHand], options: ViewOptions, camera: bool = True) -> None:
     """Opacity and overlays; with ``camera``, the camera preset too (else the camera stays where it is)."""
     for hand in hands:
-        hand.set_opacity(min(options.opacity, SKELETON_OPACITY) if options.skeleton else options.opacity)
-        hand.overlay.set_visible(options.skeleton, options.contacts)
+        # a skin that does not part the fingers (a mitten) cannot show them: its bones are always drawn
+        skeleton_on = options.skeleton or bool(hand.hand.meta.get("unparted_fingers"))
+        hand.set_opacity(min(options.opacity, SKELETON_OPACITY) if skeleton_on else options.opacity)
+        hand.overlay.set_visible(skeleton_on, options.contacts)
         if hand.keypoints is not None:
             hand.keypoints.set_visible(options.keypoints)
     if camera:
