@@ -10,7 +10,7 @@ apart on the other (or the thumb at a fingertip, `gaps_disagree`, or a finger be
 zero): elsewhere the retarget is returned bit for bit. Loss: the contact term
 (`semantics.contacts.contact_loss`), L_ana on what the correction adds to the angles' excess (a twist the
 network or the source's frames put there is not undone: "untwisting" a Godot fist's pinky knuckle opened it
-22 deg), smoothness, a pull to the network's pose (harder on the thumb's CMC, so a finger comes to the thumb
+22 deg), smoothness, a pull to the network's pose (harder on the thumb's CMC, most on its lift, so a finger comes to the thumb
 before the thumb leaves the path the source's takes), a curl term (no finger's curl moved further from the
 source's than the signature's margin allows: a bent ring finger curled to meet the thumb is a pose lost), and
 a sideways term: no flexed PIP/DIP bent more than `SIDEWAYS_FREE` out of the curl
@@ -56,6 +56,7 @@ class ContactFitConfig:
     prior_weight: float = 1.0  # pull toward the network's pose: the degrees of freedom contacts leave free stay put
     sideways_weight: float = 1e3  # no flexed PIP/DIP bent sideways past `SIDEWAYS_FREE`
     thumb_prior_weight: float = 5.0  # the thumb CMC pulled this much harder: fingers move to the thumb first
+    thumb_lift_weight: float = 10.0  # and its splay (the metacarpal's lift out of the palm plane) this much more
     curl_weight: float = 1e3  # no finger's curl moved further from the source's than `CURL_FREE` (`_curl_excess`)
     reach: int = 4  # frames either side of a disagreement over which the correction fades in and out
     batch_frames: int = 4096  # frames optimised at once (memory of one batch)
@@ -196,10 +197,10 @@ def _fit_frames(out: np.ndarray, disagree: np.ndarray, source_at, hand: HandMode
     again with the thumb pulled like any joint (the VRM robot's pad recall: 0.28 with the first pass alone)."""
     with stage(0.0, 0.8):
         left = _fit_pass(out, disagree, source_at, hand, config)
-    if config.thumb_prior_weight != 1.0 and left.any():
+    if (config.thumb_prior_weight, config.thumb_lift_weight) != (1.0, 1.0) and left.any():
         with stage(0.8, 1.0):
             # half the steps: a handful of frames, from where the first pass left them
-            again = dataclasses.replace(config, thumb_prior_weight=1.0, steps=config.steps // 2)
+            again = dataclasses.replace(config, thumb_prior_weight=1.0, thumb_lift_weight=1.0, steps=config.steps // 2)
             _fit_pass(out, left, source_at, hand, again)
     report(1.0)
     return out
@@ -251,8 +252,11 @@ def _fit_runs(q: np.ndarray, source_gaps: np.ndarray, source_curls: np.ndarray |
     slots = torch.as_tensor(np.concatenate([o + 1 + np.arange(n) for o, n in zip(offsets, lengths)]))
     padded_len = int(offsets[-1] + lengths[-1] + 2)
     correction = torch.zeros(len(q), *start.shape[1:], requires_grad=True)
-    prior_scale = torch.ones(start.shape[1])
+    prior_scale = torch.ones(start.shape[1:])  # (joint, twist/bend/splay)
     prior_scale[0] = config.thumb_prior_weight  # the thumb CMC
+    # its splay, the lift: a thumb lifted to meet a fingertip the source's reaches lying in the palm plane read
+    # as not following (the gestures onto the mitten avatar: lift 0.71; 0.82 with it, the touches the same)
+    prior_scale[0, 2] *= config.thumb_lift_weight
     optimiser = torch.optim.Adam([correction], lr=config.learning_rate)
     for step in range(config.steps):
         report(step / config.steps)  # and where a cancel stops the fit
@@ -264,7 +268,7 @@ def _fit_runs(q: np.ndarray, source_gaps: np.ndarray, source_curls: np.ndarray |
         loss = (config.contact_weight * (contact_loss(gaps, source) + thumb_touch_loss(gaps, source))
                 + config.anatomy_weight * torch.relu(angle_excess(angles) - start_excess).square().sum((-1, -2)).mean()
                 + config.smoothness_weight * smooth
-                + config.prior_weight * (correction.square().sum(-1) * prior_scale).sum(-1).mean()
+                + config.prior_weight * (correction.square() * prior_scale).sum((-1, -2)).mean()
                 + config.sideways_weight * _sideways_excess(positions).square().sum(-1).mean())
         if source_curls is not None:
             loss = loss + config.curl_weight * _curl_excess(pose_curls(positions), source_curls,
