@@ -81,6 +81,7 @@ def test_the_solver_says_it_cannot_read_the_real_characters_pinky(human_female, 
     names = [topo.ARTICULATED_NAMES[j] for j in warning.unsure]
     assert {"pinky_mcp", "pinky_pip", "pinky_dip"} <= set(names) and warning.lowest < 0.3
     assert "pinky MCP/PIP/DIP" in warning.banner and "human-female" in warning.describe()
+    assert warning.unparted == () and "mitten" not in warning.describe()  # its mesh parts every finger
     assert frame_warning(sample_hands["iris"]) is None  # a procedural hand's frames are its ground truth
 
 

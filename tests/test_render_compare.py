@@ -188,6 +188,7 @@ def test_a_mitten_avatars_bones_are_drawn_over_its_skin(sample_hands, tmp_path):
     a hand whose mesh parts its fingers keeps its skin as it is."""
     import pyvista as pv
 
+    from s2h_viewer.annotate.trust import frame_warning
     from s2h_viewer.io.files import RigOptions, load_hand_file
     from s2h_viewer.render.compare_scene import SKELETON_OPACITY, ViewOptions, apply_options, grid_layout, populate
     from s2h_viewer.retarget.comparison import build_comparison
@@ -195,6 +196,9 @@ def test_a_mitten_avatars_bones_are_drawn_over_its_skin(sample_hands, tmp_path):
 
     mitten = load_hand_file(ASSETS_DIR / "hands" / "real" / "cryptovoxels.vrm", RigOptions(side="right"))
     assert mitten.meta["unparted_fingers"] == ["middle", "ring", "pinky"]
+    warning = frame_warning(mitten)  # its tooltip says why the bones are drawn
+    assert warning is not None and warning.unparted == ("middle", "ring", "pinky")
+    assert "does not part middle, ring, pinky from their neighbours (a mitten)" in warning.describe()
     source = sample_hands["birch"]
     comparison = build_comparison(synthesize(["fist"], source, seed=0), source, [mitten, sample_hands["iris"]],
                                   ["tbs_copy"])

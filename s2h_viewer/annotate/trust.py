@@ -44,6 +44,7 @@ class FrameWarning:
     unsure: tuple[int, ...]
     guessed: tuple[int, ...]
     lowest: float  # the lowest confidence among the unsure (NaN if none is)
+    unparted: tuple[str, ...] = ()  # fingers its mesh does not part from their neighbours (a mitten)
 
     @property
     def banner(self) -> str:
@@ -61,8 +62,10 @@ class FrameWarning:
         if self.guessed:
             parts.append(f"{_joint_names(list(self.guessed))}: frames from the palm plane (a guess: no rays "
                          f"decided them)")
+        mitten = (f"; its mesh does not part {', '.join(self.unparted)} from their neighbours (a mitten): its bones "
+                  f"are drawn over the skin" if self.unparted else "")
         return (f"{self.hand}: {' and '.join(parts)}; retargets there may bend a finger sideways: check its frames "
-                f"(Annotate > Open hand...)")
+                f"(Annotate > Open hand...){mitten}")
 
 
 def frame_warning(hand: HandModel) -> FrameWarning | None:
@@ -77,4 +80,4 @@ def frame_warning(hand: HandModel) -> FrameWarning | None:
     if not unsure and not guessed:
         return None
     lowest = float(confidence[list(unsure)].min()) if unsure else float("nan")
-    return FrameWarning(hand.name, unsure, guessed, lowest)
+    return FrameWarning(hand.name, unsure, guessed, lowest, tuple(hand.meta.get("unparted_fingers", ())))

@@ -250,7 +250,7 @@ class MainWindow(QMainWindow):
         self._compare_only = [*compare_only, methods_menu, view_menu, fix_menu, play]
         keys = open_hand.shortcut().toString(QKeySequence.SequenceFormat.NativeText)
         self.annotate.view.set_hint(f"Open a hand to annotate: Annotate > {open_hand.text().rstrip('.')} ({keys}), "
-                                    f"or drop a GLB, glTF or FBX file here.")
+                                    f"or drop a GLB, glTF, VRM or FBX file here.")
         self.tabs.currentChanged.connect(self._tab_changed)
         self._tab_changed()
 
