@@ -480,8 +480,8 @@ def test_the_empty_annotate_tab_says_how_to_open_a_hand_and_each_tab_disables_th
     window.tabs.setCurrentWidget(view)
     qtbot.waitUntil(view.hint.isVisible)
     assert not view.interactor.isVisible()  # a hint, not a blank 3D view
-    assert view.hint.text() == ("Open a hand to annotate: Annotate > Open hand (Ctrl+Shift+O), or drop a GLB, glTF "
-                                "or FBX file here.")
+    assert view.hint.text() == ("Open a hand to annotate: Annotate > Open hand (Ctrl+Shift+O), or drop a GLB, glTF, "
+                                "VRM or FBX file here.")
     assert not any(m.isEnabled() for m in compare_menus) and not any(a.isEnabled() for a in compare_actions)
     assert not any(a.isEnabled() for a in annotate_actions)  # no hand yet
     keyboard_to(qtbot, window.tabs)
