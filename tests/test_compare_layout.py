@@ -177,6 +177,9 @@ def test_a_click_on_a_heatmap_row_puts_that_joints_bend_on_the_curve_beside_the_
     row = topo.FINGER_JOINT_NAMES.index("ring_pip")
     qtbot.mouseClick(heatmap.matrix, Qt.MouseButton.LeftButton, pos=QPoint(LEFT + 3 * CELL + 2, TOP + row * CELL + 2))
     assert heatmap.row == row and "ring pip bend" in curve.quantity
+    # the frame number stays readable over the chosen row (drawn in the outline's white, it vanished)
+    corner = np.asarray(Image.fromqimage(heatmap.matrix.grab().toImage()).convert("L"))[TOP - 20:TOP, :LEFT]
+    assert (corner < 128).sum() > 20
     result, joint = window.compare.selected_result(), topo.JOINT_NAMES.index("ring_pip")
     np.testing.assert_allclose(curve.error, bend_angles(result.pose.positions.numpy(), joint))
     np.testing.assert_allclose(curve.reference, bend_angles(window.comparison.source_pose.positions.numpy(), joint))
@@ -184,6 +187,18 @@ def test_a_click_on_a_heatmap_row_puts_that_joints_bend_on_the_curve_beside_the_
     assert curve.top == max(curve.error.max(), curve.reference.max())
     from s2h_viewer.widgets.error_curve import worst_frames
     np.testing.assert_array_equal(curve.worst, worst_frames(np.abs(curve.error - curve.reference)))  # where they part
+    # the source's curve shows where the two agree (TBS Copy's bends are the source's: the blue line covered
+    # it) and the caption says how far they part
+    from s2h_viewer.widgets.error_curve import REFERENCE_COLOUR
+    assert window.compare.selected_result().method == "tbs_copy"
+    pixels = np.asarray(Image.fromqimage(curve.grab().toImage()).convert("RGB")).astype(int)
+    grey = (np.abs(pixels - np.array(REFERENCE_COLOUR.getRgb()[:3])).max(-1) < 8).sum()
+    assert grey > curve.width()  # the band shows on both sides of the line along the whole clip
+    assert np.abs(curve.error - curve.reference).max() < 0.05 and curve.apart() == ", the same as the source's"
+    dm = next(key for key in window.compare.shown_keys() if key.method == "dm")
+    window.compare.select(dm)
+    gap = np.abs(curve.error - curve.reference)
+    assert gap.max() > 0.05 and curve.apart() == f", apart by at most {gap.max():.1f} (frame {int(gap.argmax())})"
     window.sideways_curve.trigger()  # the choices exclude each other
     assert not window.angle_curve.isChecked() and curve.reference is None
 

@@ -565,7 +565,7 @@ class CompareMode(QWidget):
             joint = self.curve_joint + 1  # a heatmap row: the finger joints follow the wrist
             name = spaced(topo.JOINT_NAMES[joint - 1 if joint in topo.TIP_JOINTS else joint])
             self.curve.set_curve(bend_angles(result.pose.positions.numpy(), joint), label(result),
-                                 f"{name} bend, deg (grey: the source's)",
+                                 f"{name} bend, deg (grey band: the source's)",
                                  reference=bend_angles(self.comparison.source_pose.positions.numpy(), joint))
         elif self.curve_shows == SIDEWAYS_CURVE:
             self.curve.set_curve(sideways_curve(result), label(result),

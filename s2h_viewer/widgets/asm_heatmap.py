@@ -93,6 +93,7 @@ class _Matrix(QWidget):
             if heatmap.row is not None:  # the joint chosen (its angle curve): its row outlined
                 painter.setPen(QColor("white"))
                 painter.drawRect(CELLS.left(), TOP + heatmap.row * CELL, CELLS.width() - 1, CELL - 1)
+            painter.setPen(self.palette().windowText().color())  # not the outline's white: on white, unseen
             painter.drawText(QRect(0, 0, LEFT - 3, TOP - 3), Qt.AlignmentFlag.AlignRight |
                              Qt.AlignmentFlag.AlignBottom, f"frame {heatmap.frame}")
 

@@ -84,6 +84,17 @@ class ErrorCurve(QWidget):
                         f"the worst frames.")
         self.update()
 
+    def apart(self) -> str:
+        """How far the curve and its reference part at most, and where (empty without a reference): TBS Copy's
+        bends are the source's, so its curve covers the grey one, and a user saw no grey curve at all."""
+        if self.reference is None:
+            return ""
+        gap = np.abs(self.error - self.reference)
+        frame = int(gap.argmax())
+        if gap[frame] < 0.05:  # as shown, to its decimal: no frame stands out
+            return ", the same as the source's"
+        return f", apart by at most {gap[frame]:.1f} (frame {frame})"
+
     def set_keys(self, frames: np.ndarray) -> None:
         """Mark the frames the shown retarget's corrections key (diamonds on the frame axis)."""
         self.keys = np.asarray(frames, dtype=int)
@@ -156,7 +167,7 @@ class ErrorCurve(QWidget):
                 painter.drawLine(QPointF(x, 0), QPointF(x, axis))
         step = max(1, len(self.error) // max(1, self.width()))  # at most one point per pixel
         if self.reference is not None:
-            painter.setPen(QPen(REFERENCE_COLOUR, 1.5))
+            painter.setPen(QPen(REFERENCE_COLOUR, 5))  # a band under the curve: seen where the two agree too
             painter.drawPolyline(QPolygonF([QPointF(self._x(f), self._y(self.reference[f]))
                                             for f in range(0, len(self.reference), step)]))
         points = [QPointF(self._x(f), self._y(self.error[f])) for f in range(0, len(self.error), step)]
@@ -176,7 +187,7 @@ class ErrorCurve(QWidget):
         keyed = f", keys at {len(self.keys)} frame{'s' * (len(self.keys) != 1)} (orange)" if len(self.keys) else ""
         painter.setPen(QPen(QColor("black"), 1))
         painter.drawText(MARGIN + 2, self.height() - 4,
-                         f"{self.quantity} ({self.title})   max {self.error.max():.3f}{keyed}")
+                         f"{self.quantity} ({self.title})   max {self.error.max():.3f}{self.apart()}{keyed}")
         painter.end()
         return pixmap
 
