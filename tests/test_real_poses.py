@@ -341,3 +341,35 @@ def test_where_the_fingers_cannot_reach_a_thumb_held_near_its_path_the_thumb_goe
     assert scores.contact_recall >= 0.9 and scores.contact_precision >= 0.9, scores
     asrn = score_retarget(source, motion.q_tbs, robot, retarget(motion, source, robot, "asrn").q_tbs)
     assert asrn.contact_recall >= 0.9 and asrn.contact_precision >= 0.99, asrn
+
+
+def test_a_thumb_out_to_its_side_is_read_and_kept(poses):
+    """A thumbs-up and a shaka copied onto the Meta hand (its rest thumb lies along the fingers, 14 deg across: the
+    Godot rig's 71) held the thumb in front of the palm, and the signature read them kept. Now the thumb out to its
+    side is part of it, where the source's touches no fingertip: TBS Copy loses it there, not on the Godot hand; the
+    contact fit brings it out (ASRN's thumbs-up thumb within 10 deg of the source's), and without its thumb-out term
+    the poses stay lost. Only that way: a thumb held further out than the source's loses nothing."""
+    from s2h_viewer.retarget.asrn.inference import network_retarget
+    from s2h_viewer.retarget.contact_fit import ContactFitConfig
+    from s2h_viewer.semantics.signature import THUMB_OUT_ABOVE, THUMB_OUT_BIT
+    motion, rig = poses
+    meta = load_hand_file(ROOT / "assets/hands/real/r_hand_skeletal_lowres.fbx")
+    frames = dict(held_poses(motion.labels))
+    source = signatures(rig, motion.q_tbs[[frames["Thumb"], frames["Surfer"], frames["OK"]]])
+    assert source[0].thumb_out > 45 and source[1].thumb_out > THUMB_OUT_ABOVE and source[2].thumb_contacts.any()
+    copied = pose_differences(rig, motion.q_tbs, meta, motion.q_tbs, motion.labels)
+    assert any(what.startswith("thumb not out to its side") for what in copied["Thumb"]), copied["Thumb"]
+    assert any(what.startswith("thumb not out to its side") for what in copied["Surfer"]), copied["Surfer"]
+    godot = pose_differences(rig, motion.q_tbs, load_hand_file(GODOT_R), motion.q_tbs, motion.labels)
+    assert not any("thumb not out" in what for lost in godot.values() for what in lost)
+    network = network_retarget("asrn", motion.q_tbs, rig, meta)
+    for weight, expect_lost in ((0.0, True), (ContactFitConfig().thumb_out_weight, False)):
+        fitted = fit_contacts(motion.q_tbs, rig, meta, network.copy(), ContactFitConfig(thumb_out_weight=weight))
+        lost = ((loss_masks(rig, motion.q_tbs, meta, fitted) >> THUMB_OUT_BIT) & 1).astype(bool)
+        assert lost[frames["Thumb"]] == expect_lost and lost[frames["Surfer"]] == expect_lost, weight
+    asrn = signatures(meta, retarget(motion, rig, meta, "asrn").q_tbs[[frames["Thumb"]]])[0]
+    assert abs(asrn.thumb_out - source[0].thumb_out) < 10, asrn.thumb_out
+    # the other way round: the source's thumb held in (its rest) and the target's out loses nothing
+    out = signatures(meta, motion.q_tbs[[frames["Thumb"]]])[0]
+    assert not ((loss_masks(meta, motion.q_tbs[[frames["Thumb"]]], rig, motion.q_tbs[[frames["Thumb"]]])
+                 >> THUMB_OUT_BIT) & 1).any() and out.thumb_out < THUMB_OUT_ABOVE

@@ -5,15 +5,17 @@ thumb at the fingertips the source's thumb is at (the pose signature's looser to
 A network trained on procedural hands brings pads close on a hand it never saw, but not always within
 the 1.5% tolerance that makes a touch (DESIGN.md section 5). This pass takes its output as given and
 optimises a correction of the TBS Euler angles on the frames where a pad pair is touching on one hand and
-apart on the other (or the thumb at a fingertip, `gaps_disagree`, or a finger bent sideways), and on
+apart on the other (or the thumb at a fingertip, `gaps_disagree`, a finger bent sideways, or a thumb the source
+holds out to its side held in: `semantics.signature.thumb_out_lost`), and on
 ``reach`` frames either side, where the correction fades to zero (a smoothness term ties each run's ends to
 zero): elsewhere the retarget is returned bit for bit. Loss: the contact term
 (`semantics.contacts.contact_loss`), L_ana on what the correction adds to the angles' excess (a twist the
 network or the source's frames put there is not undone: "untwisting" a Godot fist's pinky knuckle opened it
 22 deg), smoothness, a pull to the network's pose (harder on the thumb's CMC, most on its lift, so a finger comes to the thumb
 before the thumb leaves the path the source's takes), a curl term (no finger's curl moved further from the
-source's than the signature's margin allows: a bent ring finger curled to meet the thumb is a pose lost), and
-a sideways term: no flexed PIP/DIP bent more than `SIDEWAYS_FREE` out of the curl
+source's than the signature's margin allows: a bent ring finger curled to meet the thumb is a pose lost), a
+thumb-out term (a thumb the source holds out to its side, a thumbs-up's, brought out as far: on the Meta hand,
+whose rest thumb lies along the fingers, the network held it in front of the palm), and a sideways term: no flexed PIP/DIP bent more than `SIDEWAYS_FREE` out of the curl
 plane (on the Godot hand, opening the ring-pinky touch of fists bent the pinky DIP 45 deg sideways
 without it). The angles are read with the twist within +-90 deg (`quat_to_tbs_euler_past_lock`): a
 knuckle of a fist bent past 90 read as twisted 160 deg, and the anatomy term "untwisted" it. Bends
@@ -38,9 +40,10 @@ from s2h_viewer.retarget.progress import report, stage
 from s2h_viewer.retarget.threads import torch_threads
 from s2h_viewer.semantics.anatomy import angle_excess, clamp_bend_change
 from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, contact_loss, pad_pair_gaps
-from s2h_viewer.semantics.flexion import hinge_flexion_and_alignment
-from s2h_viewer.semantics.signature import (CURL_CHAINS, CURL_MARGIN, SIDEWAYS_FLEXION, SIDEWAYS_LIMIT, THUMB_PAIRS,
-                                            THUMB_TOUCH, frame_sideways)
+from s2h_viewer.semantics.flexion import hinge_flexion_and_alignment, thumb_out
+from s2h_viewer.semantics.signature import (CURL_CHAINS, CURL_MARGIN, SIDEWAYS_FLEXION, SIDEWAYS_LIMIT,
+                                            THUMB_OUT_ABOVE, THUMB_PAIRS, THUMB_TOUCH, frame_sideways,
+                                            thumb_out_lost)
 
 #: the thumb-to-fingertip pairs, as indices into the pad pairs (the thumb's come first in both)
 _THUMB = list(THUMB_PAIRS)
@@ -58,6 +61,7 @@ class ContactFitConfig:
     thumb_prior_weight: float = 5.0  # the thumb CMC pulled this much harder: fingers move to the thumb first
     thumb_lift_weight: float = 10.0  # and its splay (the metacarpal's lift out of the palm plane) this much more
     curl_weight: float = 1e3  # no finger's curl moved further from the source's than `CURL_FREE` (`_curl_excess`)
+    thumb_out_weight: float = 1e3  # the thumb out to its side as the source's (`_thumb_out_allowed`)
     reach: int = 4  # frames either side of a disagreement over which the correction fades in and out
     batch_frames: int = 4096  # frames optimised at once (memory of one batch)
 
@@ -96,6 +100,26 @@ def _curl_excess(curls: torch.Tensor, source_curls: torch.Tensor, start_curls: t
     return torch.relu((curls - source_curls).abs() - allowed)
 
 
+#: how far (radians) the fit may leave the thumb pointing less out to its side than the source's, where the source's
+#: is out (`semantics.signature.THUMB_OUT_ABOVE`) and touches no fingertip, and the retarget lost that: pulled this
+#: near (to the margin's edge, a thumbs-up's thumb stood out no further than the signature's threshold)
+THUMB_OUT_FREE = np.radians(5.0)
+
+
+def _thumb_out_allowed(source_out: torch.Tensor, start_out: torch.Tensor, source_gaps: torch.Tensor) -> torch.Tensor:
+    """(F,) radians the thumb may point less out to its side (`semantics.flexion.thumb_out`) than the source's:
+    `THUMB_OUT_FREE` where the retarget lost the source's thumb out (a thumbs-up's thumb in front of the Meta hand's
+    palm: `semantics.signature.thumb_out_lost`), as far as the retarget had it elsewhere (the fit does not make it
+    worse); unbounded where the source's thumb is not out or touches a fingertip (the touch terms place it)."""
+    touches = (source_gaps[:, _THUMB] < THUMB_TOUCH).any(-1)
+    source_deg = np.degrees(source_out.numpy())
+    lost = torch.as_tensor(thumb_out_lost(source_deg, np.degrees(start_out.numpy()), touches.numpy()))
+    allowed = torch.where(lost, torch.full_like(start_out, float(THUMB_OUT_FREE)),
+                          torch.clamp(source_out - start_out, min=float(THUMB_OUT_FREE)))
+    free = touches | torch.as_tensor(source_deg <= THUMB_OUT_ABOVE)
+    return torch.where(free, torch.full_like(allowed, float("inf")), allowed)
+
+
 def _pose_pad_gaps(hand: HandModel, positions: torch.Tensor) -> torch.Tensor:
     """(T, 10) fingertip-pad gaps of a posed hand in units of its length (what the fit compares)."""
     return pad_pair_gaps(hand, positions) / hand.hand_length
@@ -109,25 +133,30 @@ def pad_gaps(hand: HandModel, q_tbs: np.ndarray) -> np.ndarray:
 
 def disagreement(source_hand: HandModel, source_q: np.ndarray, target_hand: HandModel, target_q: np.ndarray
                  ) -> np.ndarray:
-    """(T,) bool: frames where some pad pair touches on one hand and not on the other (`gaps_disagree`), or
-    the target bends a finger sideways past the signature's limit and the source does not (one bool per
-    frame is all that is kept of a long clip's gaps)."""
+    """(T,) bool: frames where some pad pair touches on one hand and not on the other (`gaps_disagree`), the
+    target bends a finger sideways past the signature's limit and the source does not, or holds its thumb out to
+    its side where the source's is not or the other way round (one bool per frame is all that is kept of a long
+    clip's gaps)."""
     out = np.empty(len(source_q), dtype=bool)
     for first, end in frame_chunks(len(source_q)):
-        out[first:end] = gaps_disagree(pad_gaps(source_hand, source_q[first:end]),
-                                       pad_gaps(target_hand, target_q[first:end]))
-        out[first:end] |= _bent_sideways(source_hand, source_q[first:end], target_hand, target_q[first:end])
+        source_gaps = pad_gaps(source_hand, source_q[first:end])
+        out[first:end] = gaps_disagree(source_gaps, pad_gaps(target_hand, target_q[first:end]))
+        out[first:end] |= _shape_lost(source_hand, source_q[first:end], target_hand, target_q[first:end],
+                                      (source_gaps[:, _THUMB] < THUMB_TOUCH).any(-1))
     return out
 
 
-def _bent_sideways(source_hand: HandModel, source_q: np.ndarray, target_hand: HandModel, target_q: np.ndarray
-                   ) -> np.ndarray:
-    """(T,) bool: the target's worst flexed PIP/DIP bends sideways past `SIDEWAYS_LIMIT` and past the source's + 5
-    (the signature's rule, `semantics.signature.frame_sideways`)."""
+def _shape_lost(source_hand: HandModel, source_q: np.ndarray, target_hand: HandModel, target_q: np.ndarray,
+                source_touches: np.ndarray) -> np.ndarray:
+    """(T,) bool: the target's worst flexed PIP/DIP bends sideways past `SIDEWAYS_LIMIT` and past the source's + 5,
+    or its thumb is out to its side where the source's is not or the other way round, the source's touching no
+    fingertip (the signature's rules, `semantics.signature`)."""
     with torch.no_grad():
-        sideways = [frame_sideways(joint_positions(hand, torch.as_tensor(q, dtype=torch.float64)).numpy())
-                    for hand, q in ((source_hand, source_q), (target_hand, target_q))]
-    return sideways[1] > np.maximum(SIDEWAYS_LIMIT, sideways[0] + 5.0)
+        positions = [joint_positions(hand, torch.as_tensor(q, dtype=torch.float64))
+                     for hand, q in ((source_hand, source_q), (target_hand, target_q))]
+    sideways = [frame_sideways(p.numpy()) for p in positions]
+    out = [np.degrees(thumb_out(p).numpy()) for p in positions]
+    return (sideways[1] > np.maximum(SIDEWAYS_LIMIT, sideways[0] + 5.0)) | thumb_out_lost(*out, source_touches)
 
 
 def gaps_disagree(source_gaps: np.ndarray, target_gaps: np.ndarray) -> np.ndarray:
@@ -171,10 +200,11 @@ def fit_contacts(source_q: np.ndarray, source_hand: HandModel, target_hand: Hand
     out = np.asarray(target_q, dtype=np.float32)
     frames = disagreement(source_hand, source_q, target_hand, out)
 
-    def source_at(idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def source_at(idx: np.ndarray) -> SourceFrames:
         with torch.no_grad():
             positions = joint_positions(source_hand, torch.as_tensor(source_q[idx], dtype=torch.float32))
-            return _pose_pad_gaps(source_hand, positions).numpy(), pose_curls(positions).numpy()  # read as the target's
+            # read as the target's
+            return SourceFrames(_pose_pad_gaps(source_hand, positions), pose_curls(positions), thumb_out(positions))
     return _fit_frames(out, frames, source_at, target_hand, config)
 
 
@@ -186,13 +216,24 @@ def fit_contacts_to_gaps(source_gaps: np.ndarray, hand: HandModel, q_tbs: np.nda
     frames = np.zeros(len(out), dtype=bool)
     for first, end in frame_chunks(len(out)):
         frames[first:end] = gaps_disagree(source_gaps[first:end], pad_gaps(hand, out[first:end]))
-    return _fit_frames(out, frames, lambda idx: (source_gaps[idx], None), hand, config)
+    return _fit_frames(out, frames, lambda idx: SourceFrames(torch.as_tensor(source_gaps[idx])), hand, config)
+
+
+@dataclass(frozen=True)
+class SourceFrames:
+    """What the fit matches on some frames of the source: (F, 10) pad gaps in hand lengths, (F, 4) finger curls
+    and (F,) how far the thumb points out to its side (radians; None where not known, as of a tracked hand's
+    gaps)."""
+
+    gaps: torch.Tensor
+    curls: torch.Tensor | None = None
+    thumb_out: torch.Tensor | None = None
 
 
 def _fit_frames(out: np.ndarray, disagree: np.ndarray, source_at, hand: HandModel, config: ContactFitConfig
                 ) -> np.ndarray:
     """The fit of `fit_contacts` on the runs around the ``disagree`` frames; ``source_at(frames)``: the source's
-    pad gaps there and its finger curls (radians; None: not known, as of a tracked hand's gaps). Frames whose
+    `SourceFrames` there. Frames whose
     touches still disagree after it, where the fingers could not reach a thumb held near its path, are fitted
     again with the thumb pulled like any joint (the VRM robot's pad recall: 0.28 with the first pass alone)."""
     with stage(0.0, 0.8):
@@ -213,10 +254,10 @@ def _fit_pass(out: np.ndarray, disagree: np.ndarray, source_at, hand: HandModel,
     batches = _batches(runs_around(disagree, config.reach), config.batch_frames)
     for i, batch in enumerate(batches):
         frames = np.concatenate([np.arange(a, b) for a, b in batch])
-        source_gaps, source_curls = source_at(frames)
+        source = source_at(frames)
         with stage(i / len(batches), (i + 1) / len(batches)), torch_threads(1):
-            out[frames] = _fit_runs(out[frames], source_gaps, source_curls, [b - a for a, b in batch], hand, config)
-        left[frames] = gaps_disagree(source_gaps, pad_gaps(hand, out[frames])) & disagree[frames]
+            out[frames] = _fit_runs(out[frames], source, [b - a for a, b in batch], hand, config)
+        left[frames] = gaps_disagree(source.gaps.numpy(), pad_gaps(hand, out[frames])) & disagree[frames]
     return left
 
 
@@ -236,16 +277,17 @@ def _batches(runs: list[tuple[int, int]], batch_frames: int) -> list[list[tuple[
     return batches
 
 
-def _fit_runs(q: np.ndarray, source_gaps: np.ndarray, source_curls: np.ndarray | None, lengths: list[int],
-              hand: HandModel, config: ContactFitConfig) -> np.ndarray:
+def _fit_runs(q: np.ndarray, source_frames: SourceFrames, lengths: list[int], hand: HandModel,
+              config: ContactFitConfig) -> np.ndarray:
     """(F, 15, 4) rotations of the concatenated runs (``lengths`` frames each) after the fit."""
+    source = source_frames.gaps
     with torch.no_grad():
         start = quat_to_tbs_euler_past_lock(torch.as_tensor(q, dtype=torch.float32))
         start_excess = angle_excess(start)  # what the retarget already has is not the fit's to undo
-        if source_curls is not None:
-            source_curls = torch.as_tensor(source_curls, dtype=torch.float32)
-            start_curls = pose_curls(joint_positions(hand, torch.as_tensor(q, dtype=torch.float32)))
-    source = torch.as_tensor(source_gaps)
+        start_positions = joint_positions(hand, torch.as_tensor(q, dtype=torch.float32))
+        start_curls = pose_curls(start_positions)
+        if source_frames.thumb_out is not None:
+            out_allowed = _thumb_out_allowed(source_frames.thumb_out, thumb_out(start_positions), source)
     # each run's correction sits between two zero frames: second differences across them tie its ends
     # to zero, and no difference spans two runs
     offsets = np.cumsum([0] + [n + 2 for n in lengths[:-1]])
@@ -270,9 +312,12 @@ def _fit_runs(q: np.ndarray, source_gaps: np.ndarray, source_curls: np.ndarray |
                 + config.smoothness_weight * smooth
                 + config.prior_weight * (correction.square() * prior_scale).sum((-1, -2)).mean()
                 + config.sideways_weight * _sideways_excess(positions).square().sum(-1).mean())
-        if source_curls is not None:
-            loss = loss + config.curl_weight * _curl_excess(pose_curls(positions), source_curls,
+        if source_frames.curls is not None:
+            loss = loss + config.curl_weight * _curl_excess(pose_curls(positions), source_frames.curls,
                                                             start_curls).square().sum(-1).mean()
+        if source_frames.thumb_out is not None:
+            miss = torch.relu(source_frames.thumb_out - thumb_out(positions) - out_allowed)
+            loss = loss + config.thumb_out_weight * miss.square().mean()
         optimiser.zero_grad()
         loss.backward()
         optimiser.step()

@@ -75,7 +75,8 @@ class RetargetScores:
     sideways_at: str = ""
     source_sideways_deg: float = float("nan")
     #: share of frames whose signature (`semantics.signature.loss_masks`: each finger extended, bent or curled,
-    #: the thumb's touches, no finger bending sideways, no invented pad contact) is the source's: it drops where
+    #: the thumb's touches, a thumb out to its side where the source's is, no finger bending sideways, no invented
+    #: pad contact) is the source's: it drops where
     #: one finger is visibly wrong, which the clip-wide S_finger averages away
     signature_kept: float = float("nan")
     #: frames where the retarget makes a contact (any of the 15 pairs) the source does not, and the pair

@@ -1,6 +1,7 @@
 """A pose's signature, what a viewer reads off a hand at a glance: each finger extended, bent or curled;
-which fingertips the thumb touches; no finger curling sideways. A retarget keeps a pose when its
-signature matches the source's (issue 26: scoring authored poses on real rigs)."""
+which fingertips the thumb touches, or whether it stands out to the side (a thumbs-up) where it touches
+none; no finger curling sideways. A retarget keeps a pose when its signature matches the source's (issue
+26: scoring authored poses on real rigs)."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.kinematics import HandPose, forward_kinematics
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.semantics.contacts import CONTACT_PAIRS, contact_gaps
-from s2h_viewer.semantics.flexion import HINGE_JOINTS, flexion_and_sideways
+from s2h_viewer.semantics.flexion import HINGE_JOINTS, flexion_and_sideways, thumb_out
 
 #: a finger's curl (its MCP, PIP and DIP flexion summed, degrees) below which it reads extended, above
 #: which curled; a curl within `CURL_MARGIN` of the source's is kept whatever the words
@@ -26,6 +27,13 @@ SIDEWAYS_LIMIT, SIDEWAYS_FLEXION = 25.0, 45.0
 #: around an object 7% and more
 THUMB_TOUCH = 0.05
 THUMB_PAIRS = tuple(i for i, pair in enumerate(CONTACT_PAIRS) if "thumb" in pair and "palm" not in pair)
+#: a thumb pointing further out to its side than this (degrees, `semantics.flexion.thumb_out`) reads as out (a
+#: thumbs-up, a shaka: the authored ones 40-52); a retarget loses it where its thumb is not out and points
+#: `THUMB_OUT_MARGIN` less out than the source's (the Meta hand's shaka: 18 deg, a thumb in front of the palm; the
+#: character's 32 stands out). Only that way: rigs hold their thumbs 20 deg apart at rest, and one held further
+#: out than the source's changes no gesture. Read only where the source's thumb touches no fingertip: a touch says
+#: where a thumb is.
+THUMB_OUT_ABOVE, THUMB_OUT_MARGIN = 35.0, 20.0
 
 
 @dataclass(frozen=True)
@@ -37,6 +45,7 @@ class PoseSignature:
     thumb_contacts: np.ndarray
     sideways: float
     sideways_joint: str = ""  # the PIP/DIP bending the most sideways ("ring_dip"), "" if none flexes enough
+    thumb_out: float = 0.0  # degrees the thumb points out to its side (`semantics.flexion.thumb_out`)
 
     @property
     def states(self) -> list[str]:
@@ -63,13 +72,14 @@ def signatures(hand: HandModel, q_tbs: np.ndarray) -> list[PoseSignature]:
     positions = pose.positions.numpy()
     contacts = contact_gaps(hand, pose).numpy()[:, list(THUMB_PAIRS)] < THUMB_TOUCH * hand.hand_length
     curls = finger_curls(positions)
+    out = np.degrees(thumb_out(pose.positions).numpy())
     flexion, sideways = flexion_and_sideways(positions)
     sideways = np.where(flexion >= SIDEWAYS_FLEXION, sideways, np.nan)
     none = np.isnan(sideways).all(axis=1)
     which = np.argmax(np.nan_to_num(sideways, nan=-1.0), axis=1)
     worst = np.where(none, np.nan, np.nan_to_num(sideways, nan=-1.0)[np.arange(len(which)), which])
-    return [PoseSignature(curls[t], contacts[t], float(worst[t]), "" if none[t] else HINGE_JOINTS[which[t]][0])
-            for t in range(len(positions))]
+    return [PoseSignature(curls[t], contacts[t], float(worst[t]), "" if none[t] else HINGE_JOINTS[which[t]][0],
+                          float(out[t])) for t in range(len(positions))]
 
 
 def differences(source: PoseSignature, target: PoseSignature) -> list[str]:
@@ -81,12 +91,23 @@ def differences(source: PoseSignature, target: PoseSignature) -> list[str]:
     for f, (a, b) in enumerate(zip(source.thumb_contacts, target.thumb_contacts)):
         if a != b:
             out.append(f"thumb-{topo.FINGERS[f + 1]} contact {'lost' if a else 'invented'}")
+    if thumb_out_lost(source.thumb_out, target.thumb_out, source.thumb_contacts.any()):
+        out.append(f"thumb not out to its side ({target.thumb_out:.0f} deg, the source: {source.thumb_out:.0f})")
     limit = max(SIDEWAYS_LIMIT, (0.0 if np.isnan(source.sideways) else source.sideways) + 5.0)
     if target.sideways > limit:
         joint = target.sideways_joint.replace("_", " ").replace("pip", "PIP").replace("dip", "DIP")
         source_deg = "no joint flexed enough" if np.isnan(source.sideways) else f"{source.sideways:.0f}"
         out.append(f"{joint} bends {target.sideways:.0f} deg sideways (the source: {source_deg})")
     return out
+
+
+def thumb_out_lost(source_deg, target_deg, source_touches):
+    """Whether the source's thumb is out to its side and the target's is not (`THUMB_OUT_ABOVE`, pointing
+    `THUMB_OUT_MARGIN` less out), the source's touching no fingertip: floats or arrays of degrees
+    (`semantics.flexion.thumb_out`) and of whether the source's thumb touches a fingertip."""
+    source_deg, target_deg = np.asarray(source_deg), np.asarray(target_deg)
+    return ((source_deg > THUMB_OUT_ABOVE) & (target_deg <= THUMB_OUT_ABOVE)
+            & (source_deg - target_deg > THUMB_OUT_MARGIN) & ~np.asarray(source_touches))
 
 
 def held_poses(labels: np.ndarray) -> list[tuple[str, int]]:
@@ -111,8 +132,8 @@ def pose_differences(source_hand: HandModel, source_q: np.ndarray, target_hand: 
 
 
 #: bits of `loss_masks`: finger states (index..pinky), thumb-tip touches (index..pinky), sideways, a pad
-#: contact (the metric's 1.5% tolerance) the source does not make
-STATE_BITS, TOUCH_BITS, SIDEWAYS_BIT, INVENTED_BIT = 0, 4, 8, 9
+#: contact (the metric's 1.5% tolerance) the source does not make, the thumb out to its side or not
+STATE_BITS, TOUCH_BITS, SIDEWAYS_BIT, INVENTED_BIT, THUMB_OUT_BIT = 0, 4, 8, 9, 10
 
 
 def frame_sideways(positions: np.ndarray) -> np.ndarray:
@@ -122,14 +143,17 @@ def frame_sideways(positions: np.ndarray) -> np.ndarray:
     return np.where(flexion >= SIDEWAYS_FLEXION, np.nan_to_num(sideways), 0.0).max(axis=1)
 
 
-def _frame_features(hand: HandModel, pose: HandPose) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """(T, 4) curls, (T, 4) thumb touches, (T,) `frame_sideways`, (T, 10) pad contacts at the metric's tolerance."""
+def _frame_features(hand: HandModel, pose: HandPose
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(T, 4) curls, (T, 4) thumb touches, (T,) `frame_sideways`, (T, 10) pad contacts at the metric's tolerance,
+    (T,) degrees the thumb points out to its side."""
     from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, PAD_PAIRS
     with torch.no_grad():
         gaps = contact_gaps(hand, pose).numpy() / hand.hand_length
+        out = np.degrees(thumb_out(pose.positions).numpy())
     positions = pose.positions.numpy()
     return (finger_curls(positions), gaps[:, list(THUMB_PAIRS)] < THUMB_TOUCH, frame_sideways(positions),
-            gaps[:, PAD_PAIRS] < CONTACT_TOLERANCE)
+            gaps[:, PAD_PAIRS] < CONTACT_TOLERANCE, out)
 
 
 def loss_masks(source_hand: HandModel, source_q: np.ndarray, target_hand: HandModel, target_q: np.ndarray
@@ -145,8 +169,8 @@ def loss_masks(source_hand: HandModel, source_q: np.ndarray, target_hand: HandMo
 def pose_loss_masks(source_hand: HandModel, source_pose: HandPose, target_hand: HandModel, target_pose: HandPose
                     ) -> np.ndarray:
     """`loss_masks` from FK already done (float64 poses): scoring a retarget has both."""
-    src_curl, src_touch, src_side, src_pads = _frame_features(source_hand, source_pose)
-    tgt_curl, tgt_touch, tgt_side, tgt_pads = _frame_features(target_hand, target_pose)
+    src_curl, src_touch, src_side, src_pads, src_out = _frame_features(source_hand, source_pose)
+    tgt_curl, tgt_touch, tgt_side, tgt_pads, tgt_out = _frame_features(target_hand, target_pose)
 
     def states(curl: np.ndarray) -> np.ndarray:
         return np.where(curl < EXTENDED_BELOW, 0, np.where(curl > CURLED_ABOVE, 2, 1))
@@ -156,4 +180,5 @@ def pose_loss_masks(source_hand: HandModel, source_pose: HandPose, target_hand: 
     mask += ((src_touch != tgt_touch) * (1 << (TOUCH_BITS + np.arange(4)))).sum(-1)
     mask += (tgt_side > np.maximum(SIDEWAYS_LIMIT, src_side + 5.0)) * (1 << SIDEWAYS_BIT)
     mask += (tgt_pads & ~src_pads).any(-1) * (1 << INVENTED_BIT)
+    mask += thumb_out_lost(src_out, tgt_out, src_touch.any(-1)) * (1 << THUMB_OUT_BIT)
     return mask.astype(int)

@@ -30,7 +30,8 @@ COLUMNS = (("Method", None, "retargeting method"), ("Target", None, "target hand
            ("Side-\nways", "sideways_deg", "the worst sideways bend of a PIP/DIP at its tightest curls, degrees "
                                             "(0: a clean curl toward the palm; authored clips reach 8-22)"),
            ("Kept", "signature_kept", "share of frames that keep the source's signature: each finger extended, "
-                                      "bent or curled as in the source, the thumb's touches, no finger bending "
+                                      "bent or curled as in the source, the thumb's touches, a thumb out to "
+                                      "its side where the source's is (a thumbs-up), no finger bending "
                                       "sideways, no invented pad contact (1: every frame)"),
            ("Inv-\nented", "invented_contacts", "frames where the retarget makes a contact the source does not "
                                                "(drawn blue by the contact overlay)"))
