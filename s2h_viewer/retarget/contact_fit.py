@@ -15,9 +15,9 @@ network or the source's frames put there is not undone: "untwisting" a Godot fis
 before the thumb leaves the path the source's takes), a curl term (no finger's curl moved further from the
 source's than the signature's margin allows: a bent ring finger curled to meet the thumb is a pose lost), a
 thumb-out term (a thumb the source holds out to its side, a thumbs-up's, brought out as far: on the Meta hand,
-whose rest thumb lies along the fingers, the network held it in front of the palm), and a sideways term: no flexed PIP/DIP bent more than `SIDEWAYS_FREE` out of the curl
-plane (on the Godot hand, opening the ring-pinky touch of fists bent the pinky DIP 45 deg sideways
-without it). The angles are read with the twist within +-90 deg (`quat_to_tbs_euler_past_lock`): a
+whose rest thumb lies along the fingers, the network held it in front of the palm), and a sideways term: no
+flexed PIP/DIP bent more than `SIDEWAYS_FREE` out of the curl plane (on the Godot hand, opening the ring-pinky
+touch of fists bent the pinky DIP 45 deg sideways without it). The angles are read with the twist within +-90 deg (`quat_to_tbs_euler_past_lock`): a
 knuckle of a fist bent past 90 read as twisted 160 deg, and the anatomy term "untwisted" it. Bends
 moved by the fit stay within their limits, or no further out than they were. All runs of a clip are
 optimised together in one batch, a bounded number of frames at a time; frames whose touches still disagree
@@ -134,9 +134,8 @@ def pad_gaps(hand: HandModel, q_tbs: np.ndarray) -> np.ndarray:
 def disagreement(source_hand: HandModel, source_q: np.ndarray, target_hand: HandModel, target_q: np.ndarray
                  ) -> np.ndarray:
     """(T,) bool: frames where some pad pair touches on one hand and not on the other (`gaps_disagree`), the
-    target bends a finger sideways past the signature's limit and the source does not, or holds its thumb out to
-    its side where the source's is not or the other way round (one bool per frame is all that is kept of a long
-    clip's gaps)."""
+    target bends a finger sideways past the signature's limit and the source does not, or holds in the thumb the
+    source holds out to its side (one bool per frame is all that is kept of a long clip's gaps)."""
     out = np.empty(len(source_q), dtype=bool)
     for first, end in frame_chunks(len(source_q)):
         source_gaps = pad_gaps(source_hand, source_q[first:end])
@@ -149,8 +148,8 @@ def disagreement(source_hand: HandModel, source_q: np.ndarray, target_hand: Hand
 def _shape_lost(source_hand: HandModel, source_q: np.ndarray, target_hand: HandModel, target_q: np.ndarray,
                 source_touches: np.ndarray) -> np.ndarray:
     """(T,) bool: the target's worst flexed PIP/DIP bends sideways past `SIDEWAYS_LIMIT` and past the source's + 5,
-    or its thumb is out to its side where the source's is not or the other way round, the source's touching no
-    fingertip (the signature's rules, `semantics.signature`)."""
+    or its thumb is not out to its side where the source's is and touches no fingertip (the signature's rules,
+    `semantics.signature`)."""
     with torch.no_grad():
         positions = [joint_positions(hand, torch.as_tensor(q, dtype=torch.float64))
                      for hand, q in ((source_hand, source_q), (target_hand, target_q))]
