@@ -250,8 +250,9 @@ def test_a_thumb_hinge_passing_straight_is_read_about_its_axis_not_folded(poses,
 def test_the_contact_fit_brings_fingers_to_the_thumb_before_the_thumb_to_them(sample_hands, gestures):
     """The gestures' pinch onto the WebXR hand: the network leaves thumb and index apart. Its CMC pulled as hard as
     any finger joint, the fit met the index by lifting the thumb out of the palm plane where the source's drops 13
-    deg into it (the lift followed the source's at 0.62 before the CMC's frame was the palm's, 0.72 since); pulled
-    harder toward where it was, the pinch is made and the lift follows (0.90), its lift pulled harder still, 0.94."""
+    deg into it (the lift followed the source's at 0.62 before the CMC's frame was the palm's, 0.72 since, 0.81 with
+    the network trained on thumbs held out); pulled harder toward where it was, the pinch is made and the lift
+    follows (0.90, 0.91), its lift pulled harder still, 0.94 (0.92)."""
     from s2h_viewer.retarget.asrn.inference import network_retarget
     from s2h_viewer.retarget.contact_fit import ContactFitConfig
     source = sample_hands[gestures.hand_name]
@@ -266,29 +267,28 @@ def test_the_contact_fit_brings_fingers_to_the_thumb_before_the_thumb_to_them(sa
         positions = forward_kinematics(hand, torch.as_tensor(fitted, dtype=torch.float64)).positions
         lift[name] = thumb_follow(source_positions.numpy(), positions.numpy())["thumb_cmc_lift"]
         recall[name] = score_retarget(source, gestures.q_tbs, hand, fitted).contact_recall
-    assert lift["like any joint"] < 0.8 < 0.85 < lift["the CMC harder"] < lift["its lift harder still"], lift
+    assert lift["like any joint"] < 0.85 < lift["the CMC harder"] < lift["its lift harder still"], lift
     assert min(recall.values()) >= 0.99, recall
 
 
 def test_the_contact_fit_does_not_curl_a_bent_finger_to_meet_the_thumb():
-    """The left hand's Pinch Ring onto the human-female character: the network leaves the thumb short of the ring
-    tip; the fit, the thumb pulled toward where it was, reached it by curling the ring past the source's bend (the
-    signature: "ring curled, not bent"; so on the RPM, Meta and WebXR hands). No finger's curl may now move further
-    from the source's than the signature's margin allows, or than the network had it: the touch is made and the
-    ring stays bent (shown with the CMC's lift pulled no harder than its other turns: pulled harder, as by default,
-    the lift spares the ring here, and the curl term holds where it would not)."""
+    """The left hand's Pinch Ring onto the WebXR hand: the network leaves the thumb short of the ring tip; the fit,
+    the thumb pulled toward where it was, reached it by curling the ring past the source's bend (the signature:
+    "ring curled, not bent"; so on the Meta hand, both VRM avatars, and on the human-female character with the
+    network trained before the gestures held the thumb out). No finger's curl may now move further from the source's
+    than the signature's margin allows, or than the network had it: the touch is made and the ring stays bent."""
     from s2h_viewer.retarget.asrn.inference import network_retarget
     from s2h_viewer.retarget.contact_fit import ContactFitConfig
     motion, source = load_motion_file(ROOT / "assets/motions/real/godot_hand_poses_l.gltf", None,
                                       RigOptions(animation="all"))
-    target = load_hand_file(HUMAN, RigOptions(side="right"))
+    target = load_hand_file(WEBXR_R)
     network = network_retarget("asrn", motion.q_tbs, source, target)
     lost = {weight: pose_differences(source, motion.q_tbs, target,
                                      fit_contacts(motion.q_tbs, source, target, network.copy(),
-                                                  ContactFitConfig(curl_weight=weight, thumb_lift_weight=1.0)),
+                                                  ContactFitConfig(curl_weight=weight)),
                                      motion.labels)
             for weight in (0.0, ContactFitConfig().curl_weight)}
-    assert lost[0.0]["Pinch Ring"] == ["ring curled, not bent"]
+    assert "ring curled, not bent" in lost[0.0]["Pinch Ring"], lost[0.0]["Pinch Ring"]
     assert not any(lost[ContactFitConfig().curl_weight].values()), lost[ContactFitConfig().curl_weight]
 
 
@@ -347,29 +347,31 @@ def test_a_thumb_out_to_its_side_is_read_and_kept(poses):
     """A thumbs-up and a shaka copied onto the Meta hand (its rest thumb lies along the fingers, 14 deg across: the
     Godot rig's 71) held the thumb in front of the palm, and the signature read them kept. Now the thumb out to its
     side is part of it, where the source's touches no fingertip: TBS Copy loses it there, not on the Godot hand; the
-    contact fit brings it out (ASRN's thumbs-up thumb within 10 deg of the source's), and without its thumb-out term
-    the poses stay lost. Only that way: a thumb held further out than the source's loses nothing."""
-    from s2h_viewer.retarget.asrn.inference import network_retarget
+    contact fit brings it out from TBS Copy's pose (the thumbs-up's thumb within 10 deg of the source's), and
+    without its thumb-out term the poses stay lost; ASRN keeps them. Only that way: a thumb held further out than
+    the source's loses nothing."""
     from s2h_viewer.retarget.contact_fit import ContactFitConfig
     from s2h_viewer.semantics.signature import THUMB_OUT_ABOVE, THUMB_OUT_BIT
     motion, rig = poses
     meta = load_hand_file(ROOT / "assets/hands/real/r_hand_skeletal_lowres.fbx")
     frames = dict(held_poses(motion.labels))
-    source = signatures(rig, motion.q_tbs[[frames["Thumb"], frames["Surfer"], frames["OK"]]])
+    shown = [frames[name] for name in ("Thumb", "Surfer", "OK")]
+    source = signatures(rig, motion.q_tbs[shown])
     assert source[0].thumb_out > 45 and source[1].thumb_out > THUMB_OUT_ABOVE and source[2].thumb_contacts.any()
     copied = pose_differences(rig, motion.q_tbs, meta, motion.q_tbs, motion.labels)
-    assert any(what.startswith("thumb not out to its side") for what in copied["Thumb"]), copied["Thumb"]
-    assert any(what.startswith("thumb not out to its side") for what in copied["Surfer"]), copied["Surfer"]
+    for name in ("Thumb", "Surfer"):
+        assert any(what.startswith("thumb not out to its side") for what in copied[name]), copied[name]
     godot = pose_differences(rig, motion.q_tbs, load_hand_file(GODOT_R), motion.q_tbs, motion.labels)
     assert not any("thumb not out" in what for lost in godot.values() for what in lost)
-    network = network_retarget("asrn", motion.q_tbs, rig, meta)
     for weight, expect_lost in ((0.0, True), (ContactFitConfig().thumb_out_weight, False)):
-        fitted = fit_contacts(motion.q_tbs, rig, meta, network.copy(), ContactFitConfig(thumb_out_weight=weight))
+        start = motion.q_tbs.astype(np.float32)
+        fitted = fit_contacts(motion.q_tbs, rig, meta, start, ContactFitConfig(thumb_out_weight=weight))
         lost = ((loss_masks(rig, motion.q_tbs, meta, fitted) >> THUMB_OUT_BIT) & 1).astype(bool)
-        assert lost[frames["Thumb"]] == expect_lost and lost[frames["Surfer"]] == expect_lost, weight
-    asrn = signatures(meta, retarget(motion, rig, meta, "asrn").q_tbs[[frames["Thumb"]]])[0]
-    assert abs(asrn.thumb_out - source[0].thumb_out) < 10, asrn.thumb_out
-    # the other way round: the source's thumb held in (its rest) and the target's out loses nothing
-    out = signatures(meta, motion.q_tbs[[frames["Thumb"]]])[0]
-    assert not ((loss_masks(meta, motion.q_tbs[[frames["Thumb"]]], rig, motion.q_tbs[[frames["Thumb"]]])
-                 >> THUMB_OUT_BIT) & 1).any() and out.thumb_out < THUMB_OUT_ABOVE
+        assert lost[shown[0]] == expect_lost and lost[shown[1]] == expect_lost, weight
+    assert abs(signatures(meta, fitted[shown[:1]])[0].thumb_out - source[0].thumb_out) < 10
+    asrn = retarget(motion, rig, meta, "asrn").q_tbs
+    assert not ((loss_masks(rig, motion.q_tbs, meta, asrn) >> THUMB_OUT_BIT) & 1).any()
+    # the other way round: the source's thumb held in (the Meta hand's copy) and the target's out loses nothing
+    held_in = motion.q_tbs[shown[:1]]
+    assert signatures(meta, held_in)[0].thumb_out < THUMB_OUT_ABOVE
+    assert not ((loss_masks(meta, held_in, rig, held_in) >> THUMB_OUT_BIT) & 1).any()

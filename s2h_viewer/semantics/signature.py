@@ -28,12 +28,12 @@ SIDEWAYS_LIMIT, SIDEWAYS_FLEXION = 25.0, 45.0
 THUMB_TOUCH = 0.05
 THUMB_PAIRS = tuple(i for i, pair in enumerate(CONTACT_PAIRS) if "thumb" in pair and "palm" not in pair)
 #: a thumb pointing further out to its side than this (degrees, `semantics.flexion.thumb_out`) reads as out (a
-#: thumbs-up, a shaka: the authored ones 40-52); a retarget loses it where its thumb is not out and points
-#: `THUMB_OUT_MARGIN` less out than the source's (the Meta hand's shaka: 18 deg, a thumb in front of the palm; the
-#: character's 32 stands out). Only that way: rigs hold their thumbs 20 deg apart at rest, and one held further
-#: out than the source's changes no gesture. Read only where the source's thumb touches no fingertip: a touch says
-#: where a thumb is.
-THUMB_OUT_ABOVE, THUMB_OUT_MARGIN = 35.0, 20.0
+#: thumbs-up, a shaka: the authored ones 40-52), one pointing less than `THUMB_IN_BELOW` as in (the Meta hand's
+#: copied shaka: 9 deg, its thumb in front of the palm; 24 still lies there, the character's 32 stands out); a
+#: retarget loses the thumb out where its thumb is in and the source's out. Only that way: rigs hold their thumbs 20
+#: deg apart at rest, and one held further out than the source's changes no gesture. Read only where the source's
+#: thumb touches no fingertip: a touch says where a thumb is.
+THUMB_OUT_ABOVE, THUMB_IN_BELOW = 35.0, 25.0
 
 
 @dataclass(frozen=True)
@@ -102,12 +102,11 @@ def differences(source: PoseSignature, target: PoseSignature) -> list[str]:
 
 
 def thumb_out_lost(source_deg, target_deg, source_touches):
-    """Whether the source's thumb is out to its side and the target's is not (`THUMB_OUT_ABOVE`, pointing
-    `THUMB_OUT_MARGIN` less out), the source's touching no fingertip: floats or arrays of degrees
-    (`semantics.flexion.thumb_out`) and of whether the source's thumb touches a fingertip."""
-    source_deg, target_deg = np.asarray(source_deg), np.asarray(target_deg)
-    return ((source_deg > THUMB_OUT_ABOVE) & (target_deg <= THUMB_OUT_ABOVE)
-            & (source_deg - target_deg > THUMB_OUT_MARGIN) & ~np.asarray(source_touches))
+    """Whether the source's thumb is out to its side (`THUMB_OUT_ABOVE`) and the target's in (`THUMB_IN_BELOW`),
+    the source's touching no fingertip: floats or arrays of degrees (`semantics.flexion.thumb_out`) and of whether
+    the source's thumb touches a fingertip."""
+    return ((np.asarray(source_deg) > THUMB_OUT_ABOVE) & (np.asarray(target_deg) < THUMB_IN_BELOW)
+            & ~np.asarray(source_touches))
 
 
 def held_poses(labels: np.ndarray) -> list[tuple[str, int]]:
