@@ -186,7 +186,6 @@ def test_a_click_on_a_heatmap_row_puts_that_joints_bend_on_the_curve_beside_the_
     assert curve.reference.max() > 30  # the clip curls the ring finger: the source's curve is no flat line
     assert curve.top == max(curve.error.max(), curve.reference.max())
     from s2h_viewer.widgets.error_curve import worst_frames
-    np.testing.assert_array_equal(curve.worst, worst_frames(np.abs(curve.error - curve.reference)))  # where they part
     # the source's curve shows where the two agree (TBS Copy's bends are the source's: the blue line covered
     # it) and the caption says how far they part
     from s2h_viewer.widgets.error_curve import REFERENCE_COLOUR
@@ -195,10 +194,12 @@ def test_a_click_on_a_heatmap_row_puts_that_joints_bend_on_the_curve_beside_the_
     grey = (np.abs(pixels - np.array(REFERENCE_COLOUR.getRgb()[:3])).max(-1) < 8).sum()
     assert grey > curve.width()  # the band shows on both sides of the line along the whole clip
     assert np.abs(curve.error - curve.reference).max() < 0.05 and curve.apart() == ", the same as the source's"
+    assert len(curve.worst) == 0 and "worst frames (red): none" in curve.toolTip()  # nothing parts: no red marks
     dm = next(key for key in window.compare.shown_keys() if key.method == "dm")
     window.compare.select(dm)
     gap = np.abs(curve.error - curve.reference)
     assert gap.max() > 0.05 and curve.apart() == f", apart by at most {gap.max():.1f} (frame {int(gap.argmax())})"
+    np.testing.assert_array_equal(curve.worst, worst_frames(gap))  # the red marks: where they part most
     window.sideways_curve.trigger()  # the choices exclude each other
     assert not window.angle_curve.isChecked() and curve.reference is None
 

@@ -14,6 +14,8 @@ MOUSE = (("click the error curve", "jump to that frame"),)
 MISSING_COLOUR = QColor("#d9d9d9")
 OUTSIDE_RANGE_COLOUR, RANGE_COLOUR = QColor("#eeeeee"), QColor("#2e7d32")
 REFERENCE_COLOUR = QColor("#9e9e9e")
+#: a curve within this of its reference everywhere (their units: degrees for a joint's bend) is the same, as shown
+SAME_WITHIN = 0.05
 KEY_COLOUR = QColor("#e8a317")  # a correction's keyed frames (the rotation ring's colour)
 MARGIN = 6  # pixels around the curve: a worst frame's ring (radius 3) at either end stays whole
 
@@ -77,11 +79,15 @@ class ErrorCurve(QWidget):
         self.error, self.title, self.quantity = np.nan_to_num(values), title, quantity
         #: a curve to read it against (the source's joint angle beside the retarget's), grey, on the same axis
         self.reference = None if reference is None else np.nan_to_num(np.asarray(reference, dtype=float))
-        self.worst = worst_frames(self.error if self.reference is None else np.abs(self.error - self.reference))
+        if self.reference is None:
+            self.worst = worst_frames(self.error)
+        else:  # where the two part most; nowhere where they do not part (red marks on a copy's exact bends misled)
+            gap = np.abs(self.error - self.reference)
+            self.worst = worst_frames(gap) if gap.max() >= SAME_WITHIN else np.zeros(0, dtype=int)
         self._curve = None
         self.setToolTip(f"{title}: {quantity}; worst frames (red): "
-                        f"{', '.join(str(f) for f in self.worst)}. {note}Click to jump; ] and [ step between "
-                        f"the worst frames.")
+                        f"{', '.join(str(f) for f in self.worst) or 'none'}. {note}Click to jump; ] and [ step "
+                        f"between the worst frames.")
         self.update()
 
     def apart(self) -> str:
@@ -91,7 +97,7 @@ class ErrorCurve(QWidget):
             return ""
         gap = np.abs(self.error - self.reference)
         frame = int(gap.argmax())
-        if gap[frame] < 0.05:  # as shown, to its decimal: no frame stands out
+        if gap[frame] < SAME_WITHIN:
             return ", the same as the source's"
         return f", apart by at most {gap[frame]:.1f} (frame {frame})"
 
