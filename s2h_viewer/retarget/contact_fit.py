@@ -17,8 +17,9 @@ source's than the signature's margin allows: a bent ring finger curled to meet t
 thumb-out term (a thumb the source holds out to its side, a thumbs-up's, brought out as far: on the Meta hand,
 whose rest thumb lies along the fingers, the network held it in front of the palm), and a sideways term: no
 flexed PIP/DIP bent more than `SIDEWAYS_FREE` out of the curl plane (on the Godot hand, opening the ring-pinky
-touch of fists bent the pinky DIP 45 deg sideways without it). The angles are read with the twist within +-90 deg (`quat_to_tbs_euler_past_lock`): a
-knuckle of a fist bent past 90 read as twisted 160 deg, and the anatomy term "untwisted" it. Bends
+touch of fists bent the pinky DIP 45 deg sideways without it). The angles are read with the twist within +-90
+deg (`quat_to_tbs_euler_past_lock`): a knuckle of a fist bent past 90 read as twisted 160 deg, and the anatomy
+term "untwisted" it. Bends
 moved by the fit stay within their limits, or no further out than they were. All runs of a clip are
 optimised together in one batch, a bounded number of frames at a time; frames whose touches still disagree
 are fitted once more with the thumb free to go to the fingers.
@@ -101,8 +102,8 @@ def _curl_excess(curls: torch.Tensor, source_curls: torch.Tensor, start_curls: t
 
 
 #: how far (radians) the fit may leave the thumb pointing less out to its side than the source's, where the source's
-#: is out (`semantics.signature.THUMB_OUT_ABOVE`), touches no fingertip and the retarget's is in: pulled only out of
-#: the signature's "in" (15 deg short of the source's), a thumbs-up's thumb stood out at 37 deg, the source's 52
+#: is out (`semantics.signature.THUMB_OUT_ABOVE`), touches no fingertip and the retarget's is in (allowed 15 deg
+#: short, the Meta hand's thumbs-up stood out at 37 deg, the source's 52: barely a thumbs-up)
 THUMB_OUT_FREE = np.radians(5.0)
 
 
