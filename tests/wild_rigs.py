@@ -244,3 +244,53 @@ def centimetre_glb(source: Path, out: Path) -> Path:
     gltf.set_binary_blob(bytes(blob))
     gltf.save_binary(str(out))
     return out
+
+
+def mirrored_glb(source: Path, out: Path) -> Path:
+    """The same avatar reflected across its y-z plane, as a modeller's "mirror" makes a right hand of a left one:
+    node translations and mesh positions and normals with x negated, rotations reflected ((x, y, z, w) ->
+    (x, -y, -z, w)), inverse bind matrices conjugated by the reflection, triangles wound the other way so their
+    normals still point out, and the sides in the node names swapped (``Thumb_Proximal_L`` -> ``_R``, ``hand_l``
+    -> ``hand_r``, ``Left`` -> ``Right``). Animations are dropped (their keys would need the same reflection)."""
+    gltf = pygltflib.GLTF2().load(str(source))
+    swap = {"l": "r", "r": "l", "L": "R", "R": "L", "Left": "Right", "Right": "Left", "left": "right", "right": "left"}
+    for node in gltf.nodes:
+        if node.name:
+            node.name = re.sub(r"(?<=[_.\-])[lLrR](?=$|[_.\-])|Left|Right|left|right", lambda m: swap[m.group(0)],
+                               node.name)
+    gltf.convert_buffers(pygltflib.BufferFormat.BINARYBLOB)  # a .gltf's embedded buffers into one blob
+    blob = bytearray(gltf.binary_blob())
+    flip = np.diag([-1.0, 1.0, 1.0, 1.0])
+    for node in gltf.nodes:
+        if node.translation:
+            node.translation = [-node.translation[0], *node.translation[1:]]
+        if node.rotation:
+            x, y, z, w = node.rotation
+            node.rotation = [x, -y, -z, w]
+        if node.matrix:
+            node.matrix = (flip @ np.asarray(node.matrix).reshape(4, 4).T @ flip).T.reshape(-1).tolist()
+    vectors = {i for mesh in gltf.meshes for p in mesh.primitives
+               for i in (p.attributes.POSITION, p.attributes.NORMAL) if i is not None}
+    for index in sorted(vectors):
+        start, values = _accessor_floats(gltf, blob, index, 3)
+        blob[start:start + values.nbytes] = (values * np.array([-1.0, 1.0, 1.0])).astype("<f4").tobytes()
+        accessor = gltf.accessors[index]
+        if accessor.min and accessor.max:
+            accessor.min, accessor.max = [-accessor.max[0], *accessor.min[1:]], [-accessor.min[0], *accessor.max[1:]]
+    for mesh in gltf.meshes:
+        for primitive in mesh.primitives:
+            accessor = gltf.accessors[primitive.indices]
+            view = gltf.bufferViews[accessor.bufferView]
+            dtype = {5121: "<u1", 5123: "<u2", 5125: "<u4"}[accessor.componentType]
+            start = (view.byteOffset or 0) + (accessor.byteOffset or 0)
+            size = np.dtype(dtype).itemsize * accessor.count
+            triangles = np.frombuffer(bytes(blob[start:start + size]), dtype=dtype).reshape(-1, 3)
+            blob[start:start + size] = triangles[:, ::-1].astype(dtype).tobytes()
+    for skin in gltf.skins:
+        start, ibm = _accessor_floats(gltf, blob, skin.inverseBindMatrices, 16)
+        ibm = np.stack([flip @ m.reshape(4, 4).T @ flip for m in ibm.astype(np.float64)]).transpose(0, 2, 1)
+        blob[start:start + ibm.size * 4] = ibm.astype("<f4").tobytes()
+    gltf.animations = []
+    gltf.set_binary_blob(bytes(blob))
+    gltf.save_binary(str(out))
+    return out
