@@ -1,8 +1,8 @@
 """The guard (part of ASRN, issue 26): a learned retarget may not lose, frame by frame, what a simpler
 retarget of the same clip keeps. Where the candidate loses a part of the source's signature (a finger
-extended or curled, a thumb-tip touch, no finger bent sideways: `semantics.signature`) or makes a pad
-contact the source does not, and the fallback does not lose it, the result is blended into the fallback
-there, fading over `REACH` frames either side so no frame pops.
+extended or curled, a thumb-tip touch, a thumb out to its side, no finger bent sideways: `semantics.signature`)
+or makes a pad contact the source does not, and the fallback does not lose it, the result is blended into the
+fallback there, fading over `REACH` frames either side so no frame pops.
 
 Why a guard and not only more training: a network trained on procedural hands meets real rigs and real
 poses it never saw (the Godot poses: fists that put the thumb on the middle fingertip, shaka and horns
