@@ -394,3 +394,30 @@ def test_a_left_hand_and_its_mirrored_right_twin_curl_alike(gestures, sample_han
                                          .positions.numpy())[1] for h in (hand, twin)]
         assert np.array_equal(np.isnan(sideways[0]), np.isnan(sideways[1])), method
         assert np.nanmax(np.abs(sideways[0] - sideways[1])) < 2.0, method
+
+
+def test_asrn_adds_no_bend_violation_the_source_does_not_make():
+    """The WebXR recording onto the Meta hand: ASRN's network bends the thumb MCP back past straight (down to -9
+    deg, the limit is 0) on 83 frames where the recording keeps within it: 4% of the clip's angles violated. Its
+    bends are now kept within the limits, or no further out than the source's: none violate, and every joint whose
+    bend is within them is the network's rotation bit for bit."""
+    from s2h_viewer.retarget.asrn.inference import network_retarget
+    from s2h_viewer.semantics.anatomy import bends_within_source_limits, violation_rate
+    motion, source = load_motion_file(ROOT / "assets/recordings/webxr_hand_poses_right.json")
+    meta = load_hand_file(ROOT / "assets/hands/real/r_hand_skeletal_lowres.fbx")
+    network = network_retarget("asrn", motion.q_tbs, source, meta)
+    assert violation_rate(motion.q_tbs) == 0.0 and violation_rate(network) > 0.02
+    kept = bends_within_source_limits(motion.q_tbs, network)
+    assert violation_rate(kept) == 0.0
+    from s2h_viewer.hand.rotations import quat_to_tbs_euler_past_lock
+    from s2h_viewer.semantics.anatomy import BEND_HIGH, BEND_LOW
+    bends = [quat_to_tbs_euler_past_lock(torch.as_tensor(q, dtype=torch.float64))[..., 1].numpy()
+             for q in (network, motion.q_tbs)]
+    outside = ((bends[0] < np.minimum(BEND_LOW.numpy(), bends[1]) - 1e-9)
+               | (bends[0] > np.maximum(BEND_HIGH.numpy(), bends[1]) + 1e-9))
+    np.testing.assert_array_equal((kept != network).any(-1), outside)  # what moved is what was out, nothing else
+    assert violation_rate(retarget(motion, source, meta, "asrn").q_tbs) == 0.0
+    # a source bent past a limit keeps its own excursion: the network's bend may go as far, not further
+    hyper = network.copy()
+    hyper[:, 1] = [np.cos(np.radians(-10)), 0.0, np.sin(np.radians(-10)), 0.0]  # the thumb MCP bent back 20 deg
+    np.testing.assert_array_equal(bends_within_source_limits(hyper, hyper)[:, 1], hyper[:, 1])

@@ -17,7 +17,8 @@ import numpy as np
 import torch
 
 from s2h_viewer.hand import topology as topo
-from s2h_viewer.hand.rotations import quat_to_tbs_euler
+from s2h_viewer.hand.chunks import frame_chunks
+from s2h_viewer.hand.rotations import quat_to_tbs_euler, quat_to_tbs_euler_past_lock, tbs_euler_to_quat
 
 _THUMB_CMC = topo.ARTICULATED_NAMES.index("thumb_cmc")
 _FINGER_MCPS = [topo.ARTICULATED_NAMES.index(f"{f}_mcp") for f in topo.FINGERS[1:]]
@@ -69,6 +70,24 @@ def clamp_bend_change(start: torch.Tensor, angles: torch.Tensor, margin: float =
     low = torch.minimum(BEND_LOW.to(dtype), start[..., 1])
     high = torch.maximum(BEND_HIGH.to(dtype) - margin, start[..., 1])
     return torch.stack([angles[..., 0], torch.minimum(torch.maximum(angles[..., 1], low), high), angles[..., 2]], -1)
+
+
+def bends_within_source_limits(source_q: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """(T, 15, 4) ``q`` with each joint's bend kept within its limits, or no further out than the source's
+    (`clamp_bend_change`): a retarget adds no bend violation the source does not make (ASRN's network, on the Meta
+    hand, bent the thumb MCP back 9 deg past straight where the WebXR recording's stays within it: 4% of its angles
+    violated). Only the joints whose bend moves change; the others are ``q``'s rotations, bit for bit. A chunk of
+    frames at a time: a long clip's temporaries stay a chunk's."""
+    out = np.array(q, dtype=np.float32)
+    for first, end in frame_chunks(len(out)):
+        with torch.no_grad():
+            angles = quat_to_tbs_euler_past_lock(torch.as_tensor(out[first:end], dtype=torch.float64))
+            source = quat_to_tbs_euler_past_lock(torch.as_tensor(np.asarray(source_q[first:end]), dtype=torch.float64))
+            clamped = clamp_bend_change(source, angles, margin=0.0)
+            moved = (clamped[..., 1] - angles[..., 1]).abs() > 1e-9
+            if moved.any():
+                out[first:end][moved.numpy()] = tbs_euler_to_quat(clamped[moved]).numpy()
+    return out
 
 
 def anatomical_loss(q_tbs: torch.Tensor) -> torch.Tensor:
