@@ -173,9 +173,13 @@ def test_a_click_on_a_heatmap_row_puts_that_joints_bend_on_the_curve_beside_the_
     from s2h_viewer.semantics.flexion import bend_angles
     from s2h_viewer.widgets.asm_heatmap import CELL, LEFT, TOP
     heatmap, curve = window.heatmap, window.compare.curve
-    window.angle_curve.trigger()
+    window.angle_curve.trigger()  # its joint (index PIP at first) framed in the heatmap: where the curve comes from
+    assert heatmap.row == topo.FINGER_JOINT_NAMES.index("index_pip") and "index pip bend" in curve.quantity
+    window.angle_curve.trigger()  # back to the ASM error: no row framed, and a click on a row shows its bend
+    assert heatmap.row is None and curve.reference is None
     row = topo.FINGER_JOINT_NAMES.index("ring_pip")
     qtbot.mouseClick(heatmap.matrix, Qt.MouseButton.LeftButton, pos=QPoint(LEFT + 3 * CELL + 2, TOP + row * CELL + 2))
+    assert window.angle_curve.isChecked() and not window.sideways_curve.isChecked()
     assert heatmap.row == row and "ring pip bend" in curve.quantity
     # the frame number stays readable over the chosen row (drawn in the outline's white, it vanished)
     corner = np.asarray(Image.fromqimage(heatmap.matrix.grab().toImage()).convert("L"))[TOP - 20:TOP, :LEFT]
@@ -193,15 +197,24 @@ def test_a_click_on_a_heatmap_row_puts_that_joints_bend_on_the_curve_beside_the_
     pixels = np.asarray(Image.fromqimage(curve.grab().toImage()).convert("RGB")).astype(int)
     grey = (np.abs(pixels - np.array(REFERENCE_COLOUR.getRgb()[:3])).max(-1) < 8).sum()
     assert grey > curve.width()  # the band shows on both sides of the line along the whole clip
-    assert np.abs(curve.error - curve.reference).max() < 0.05 and curve.apart() == ", the same as the source's"
+    assert np.abs(curve.error - curve.reference).max() < 0.05
+    assert curve.apart() == ", the same as the source's throughout" and "max 89.0," in curve.caption()
     assert len(curve.worst) == 0 and "worst frames (red): none" in curve.toolTip()  # nothing parts: no red marks
+    window.activateWindow()
+    qtbot.waitUntil(window.isActiveWindow, timeout=5000)
+    frame = window.timeline.frame
+    qtbot.keyClick(window, Qt.Key.Key_BracketRight)  # ] with nothing marked: said, not silent
+    assert window.timeline.frame == frame and "No worst frames" in window.statusBar().currentMessage()
     dm = next(key for key in window.compare.shown_keys() if key.method == "dm")
     window.compare.select(dm)
     gap = np.abs(curve.error - curve.reference)
     assert gap.max() > 0.05 and curve.apart() == f", apart by at most {gap.max():.1f} (frame {int(gap.argmax())})"
     np.testing.assert_array_equal(curve.worst, worst_frames(gap))  # the red marks: where they part most
+    tip = topo.FINGER_JOINT_NAMES.index("index_tip")  # a tip has no bend of its own: the joint that moves it
+    qtbot.mouseClick(heatmap.matrix, Qt.MouseButton.LeftButton, pos=QPoint(LEFT + 3 * CELL + 2, TOP + tip * CELL + 2))
+    assert curve.quantity.startswith("index dip bend (it moves the index tip)")
     window.sideways_curve.trigger()  # the choices exclude each other
-    assert not window.angle_curve.isChecked() and curve.reference is None
+    assert not window.angle_curve.isChecked() and curve.reference is None and heatmap.row is None
 
 
 def test_a_last_page_keeps_the_row_height_and_a_new_result_keeps_the_page(qtbot, sample_hands, tmp_path):

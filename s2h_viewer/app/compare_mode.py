@@ -563,13 +563,15 @@ class CompareMode(QWidget):
                                  f"{int(fit.filled.sum())} frames filled (grey). ")
         elif self.curve_shows == ANGLE_CURVE:
             joint = self.curve_joint + 1  # a heatmap row: the finger joints follow the wrist
-            name = spaced(topo.JOINT_NAMES[joint - 1 if joint in topo.TIP_JOINTS else joint])
+            name = f"{spaced(topo.JOINT_NAMES[joint])} bend"
+            if joint in topo.TIP_JOINTS:  # a tip has no bend: the joint that moves it
+                name = f"{spaced(topo.JOINT_NAMES[joint - 1])} bend (it moves the {spaced(topo.JOINT_NAMES[joint])})"
             self.curve.set_curve(bend_angles(result.pose.positions.numpy(), joint), label(result),
-                                 f"{name} bend, deg (grey band: the source's)",
+                                 f"{name}, deg (grey band: the source's)", decimals=1,
                                  reference=bend_angles(self.comparison.source_pose.positions.numpy(), joint))
         elif self.curve_shows == SIDEWAYS_CURVE:
             self.curve.set_curve(sideways_curve(result), label(result),
-                                 "worst sideways bend of a curled PIP/DIP per frame, deg")
+                                 "worst sideways bend of a curled PIP/DIP per frame, deg", decimals=1)
         else:
             self.curve.set_curve(result.frame_error, label(result))
         self.curve.set_keys(result.corrections.frames())
@@ -587,6 +589,7 @@ class CompareMode(QWidget):
         worst sideways bend), `ANGLE_CURVE` (the heatmap's chosen joint's bend, the source's beside it) or
         `RESIDUAL_CURVE` (a tracked source's fit residual, mm per frame)."""
         self.curve_shows = quantity
+        self.heatmap.show_row(self.curve_joint if quantity == ANGLE_CURVE else None)  # framed: the joint it shows
         if self.comparison is not None:
             self._show_selected_curve()
             self.curve.set_frame(self.timeline.frame)

@@ -25,7 +25,7 @@ from s2h_viewer.hand.model import HandModel
 from s2h_viewer.io.annotation import hand_side
 from s2h_viewer.io.files import export_sidecar
 from s2h_viewer.retarget.methods import METHODS
-from s2h_viewer.widgets import annotation_view, compare_view, error_curve, vtk_widget
+from s2h_viewer.widgets import annotation_view, asm_heatmap, compare_view, error_curve, vtk_widget
 
 __all__ = ["CompareSetup", "MainWindow", "default_setup", "run"]
 
@@ -38,7 +38,8 @@ RIG_FILTER = "Rigs (*.glb *.gltf *.vrm *.fbx)"  # hand files with bones to map
 #: Help's mouse sections, (heading, (gesture, what it does)...), each list kept by the widget the mouse acts on
 #: (the keys are read from the menus' own actions, `MainWindow.shortcut_lines`)
 MOUSE_SECTIONS = (("Mouse, in the 3D views of both tabs", vtk_widget.MOUSE),
-                  ("Mouse, in Compare", compare_view.MOUSE + retarget_fixing.MOUSE + error_curve.MOUSE),
+                  ("Mouse, in Compare", compare_view.MOUSE + retarget_fixing.MOUSE + asm_heatmap.MOUSE
+                                        + error_curve.MOUSE),
                   ("Mouse, in Annotate", annotation_view.MOUSE))
 
 
@@ -96,6 +97,8 @@ class MainWindow(QMainWindow):
         frame = error_curve.next_worst(self.compare.curve.worst, self.timeline.frame, direction)
         if frame is not None:
             self.timeline.set_frame(frame)
+        else:  # a copy's bends on the source's: nothing parts, nothing marked
+            self.statusBar().showMessage("No worst frames are marked on the error curve", 5000)
 
     def _show_unsaved(self, clean: bool) -> None:
         """A '*' in the title and on the Annotate tab while the annotation has edits not saved (the tab's is seen
@@ -215,6 +218,7 @@ class MainWindow(QMainWindow):
                                            lambda: self._choose_curve(self.sideways_curve), "Ctrl+G", checkable=True)
         self.angle_curve = self._action(view_menu, "Error curve: the heatmap's joint bend, source and retarget (deg)",
                                         lambda: self._choose_curve(self.angle_curve), "Ctrl+Shift+G", checkable=True)
+        self.compare.heatmap.row_chosen.connect(self._show_joint_curve)
         self.fit_residual = self._action(view_menu, "Error curve: tracking fit residual (recordings)",
                                          lambda: self._choose_curve(self.fit_residual), "Ctrl+F", checkable=True)
         view_menu.addSeparator()
@@ -502,6 +506,13 @@ class MainWindow(QMainWindow):
     def export_size(self) -> tuple[int, int] | None:
         """The size exports are rendered at (File > Export size); None: the view's."""
         return next(size for size, action in self.export_size_actions.items() if action.isChecked())
+
+    def _show_joint_curve(self) -> None:
+        """A heatmap row clicked: its joint's bend on the error curve, whatever the curve showed (the heatmap's legend
+        says so; a click while it showed the ASM error framed the row and changed nothing else)."""
+        if not self.angle_curve.isChecked():
+            self.angle_curve.setChecked(True)
+            self._choose_curve(self.angle_curve)
 
     def _choose_curve(self, chosen: QAction) -> None:
         """The error curve's View items exclude each other: the one ticked is shown, none ticked the ASM error."""

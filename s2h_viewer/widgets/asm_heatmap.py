@@ -17,6 +17,10 @@ from PySide6.QtWidgets import QLabel, QToolTip, QVBoxLayout, QWidget
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.render.compare_scene import ERROR_COLOURMAP, ERROR_RANGE
 
+#: the mouse on the heatmap, for Help's list
+MOUSE = (("hover a heatmap cell", "its joint pair and error"),
+         ("click a heatmap row (a cell or its name)", "that joint's bend on the error curve, the source's beside it"))
+
 CELL = 12  # pixels per matrix cell
 LEFT, TOP = 78, 70  # room for the row and column labels
 ROW_NAMES = topo.FINGER_JOINT_NAMES
@@ -156,9 +160,13 @@ class AsmHeatmap(QWidget):
         return f"{spaced(ROW_NAMES[cell[0]])} to {spaced(COLUMN_NAMES[cell[1]])}: {error}"  # as the axes spell them
 
     def choose_row(self, row: int) -> None:
+        self.show_row(row)
+        self.row_chosen.emit(row)
+
+    def show_row(self, row: int | None) -> None:
+        """Frame row ``row`` (None: no row) without choosing it: the joint the error curve shows."""
         self.row = row
         self.matrix.update(CELLS)
-        self.row_chosen.emit(row)
 
     def show_matrix(self, cell_error: np.ndarray, frame: int) -> None:
         """Show ``cell_error`` (20, 29), the matrix of ``frame``: new cell colours in the same image, a repaint."""

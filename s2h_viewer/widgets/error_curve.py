@@ -68,12 +68,14 @@ class ErrorCurve(QWidget):
         self.reference: np.ndarray | None = None
         self.keys = np.zeros(0, dtype=int)  # frames keyed by the retarget's corrections (`set_keys`)
         self.quantity = "ASM error per frame"
+        self.decimals = 3  # how its figures are written (`set_curve`)
         self._curve: QPixmap | None = None  # the curve and its marks, drawn once per curve and size
 
     def set_curve(self, error: np.ndarray, title: str, quantity: str = "ASM error per frame",
-                  note: str = "", reference: np.ndarray | None = None) -> None:
+                  note: str = "", reference: np.ndarray | None = None, decimals: int = 3) -> None:
         """``error`` (T,); NaN frames (none measured there: a recording's filled frames) are shaded grey, drawn
-        at 0 and never marked worst."""
+        at 0 and never marked worst. ``decimals``: how its figures are written (an ASM error's 0.021, a bend's 89.0)."""
+        self.decimals = decimals
         values = np.asarray(error, dtype=float)
         self.missing = ~np.isfinite(values)
         self.error, self.title, self.quantity = np.nan_to_num(values), title, quantity
@@ -98,8 +100,8 @@ class ErrorCurve(QWidget):
         gap = np.abs(self.error - self.reference)
         frame = int(gap.argmax())
         if gap[frame] < SAME_WITHIN:
-            return ", the same as the source's"
-        return f", apart by at most {gap[frame]:.1f} (frame {frame})"
+            return ", the same as the source's throughout"
+        return f", apart by at most {gap[frame]:.{self.decimals}f} (frame {frame})"
 
     def set_keys(self, frames: np.ndarray) -> None:
         """Mark the frames the shown retarget's corrections key (diamonds on the frame axis)."""
@@ -190,12 +192,15 @@ class ErrorCurve(QWidget):
         for frame in self.keys:  # a correction key: a diamond on the frame axis
             x, y = self._x(frame), self.axis_y()
             painter.drawPolygon(QPolygonF([QPointF(x, y - 5), QPointF(x + 4, y), QPointF(x, y + 5), QPointF(x - 4, y)]))
-        keyed = f", keys at {len(self.keys)} frame{'s' * (len(self.keys) != 1)} (orange)" if len(self.keys) else ""
         painter.setPen(QPen(QColor("black"), 1))
-        painter.drawText(MARGIN + 2, self.height() - 4,
-                         f"{self.quantity} ({self.title})   max {self.error.max():.3f}{self.apart()}{keyed}")
+        painter.drawText(MARGIN + 2, self.height() - 4, self.caption())
         painter.end()
         return pixmap
+
+    def caption(self) -> str:
+        """The line under the curve: what it measures, whose, its maximum, how far it parts from its reference, keys."""
+        keyed = f", keys at {len(self.keys)} frame{'s' * (len(self.keys) != 1)} (orange)" if len(self.keys) else ""
+        return f"{self.quantity} ({self.title})   max {self.error.max():.{self.decimals}f}{self.apart()}{keyed}"
 
     def _draw_axes(self, painter: QPainter) -> None:
         """The value axis (0 and the maximum) on the left, the frame axis with numbered ticks below the curve."""
