@@ -407,7 +407,7 @@ def test_asrn_adds_no_bend_violation_the_source_does_not_make():
     meta = load_hand_file(ROOT / "assets/hands/real/r_hand_skeletal_lowres.fbx")
     network = network_retarget("asrn", motion.q_tbs, source, meta)
     assert violation_rate(motion.q_tbs) == 0.0 and violation_rate(network) > 0.02
-    kept = bends_within_source_limits(motion.q_tbs, network)
+    kept = bends_within_source_limits(motion.q_tbs, network.copy())
     assert violation_rate(kept) == 0.0
     from s2h_viewer.hand.rotations import quat_to_tbs_euler_past_lock
     from s2h_viewer.semantics.anatomy import BEND_HIGH, BEND_LOW
@@ -420,4 +420,4 @@ def test_asrn_adds_no_bend_violation_the_source_does_not_make():
     # a source bent past a limit keeps its own excursion: the network's bend may go as far, not further
     hyper = network.copy()
     hyper[:, 1] = [np.cos(np.radians(-10)), 0.0, np.sin(np.radians(-10)), 0.0]  # the thumb MCP bent back 20 deg
-    np.testing.assert_array_equal(bends_within_source_limits(hyper, hyper)[:, 1], hyper[:, 1])
+    np.testing.assert_array_equal(bends_within_source_limits(hyper, hyper.copy())[:, 1], hyper[:, 1])

@@ -76,9 +76,10 @@ def bends_within_source_limits(source_q: np.ndarray, q: np.ndarray) -> np.ndarra
     """(T, 15, 4) ``q`` with each joint's bend kept within its limits, or no further out than the source's
     (`clamp_bend_change`): a retarget adds no bend violation the source does not make (ASRN's network, on the Meta
     hand, bent the thumb MCP back 9 deg past straight where the WebXR recording's stays within it: 4% of its angles
-    violated). Only the joints whose bend moves change; the others are ``q``'s rotations, bit for bit. A chunk of
-    frames at a time: a long clip's temporaries stay a chunk's."""
-    out = np.array(q, dtype=np.float32)
+    violated). Only the joints whose bend moves change; the others are ``q``'s rotations, bit for bit. A float32
+    ``q`` is changed in place and a chunk of frames done at a time (a long clip's rotations are not copied, its
+    temporaries stay a chunk's), as the contact fit does."""
+    out = np.asarray(q, dtype=np.float32)
     for first, end in frame_chunks(len(out)):
         with torch.no_grad():
             angles = quat_to_tbs_euler_past_lock(torch.as_tensor(out[first:end], dtype=torch.float64))
