@@ -50,6 +50,11 @@ from s2h_viewer.semantics.signature import (CURL_CHAINS, CURL_MARGIN, SIDEWAYS_F
 _THUMB = list(THUMB_PAIRS)
 
 
+def _thumb_at_tips(gaps):
+    """(F, 4) bool from (F, 10) pad gaps (numpy or torch): the thumb at each fingertip, the signature's looser touch."""
+    return gaps[:, _THUMB] < THUMB_TOUCH
+
+
 @dataclass(frozen=True)
 class ContactFitConfig:
     steps: int = 90
@@ -112,7 +117,7 @@ def _thumb_out_allowed(source_out: torch.Tensor, start_out: torch.Tensor, source
     `THUMB_OUT_FREE` where the retarget lost the source's thumb out (a thumbs-up's thumb in front of the Meta hand's
     palm: `semantics.signature.thumb_out_lost`), as far as the retarget had it elsewhere (the fit does not make it
     worse); unbounded where the source's thumb is not out or touches a fingertip (the touch terms place it)."""
-    touches = (source_gaps[:, _THUMB] < THUMB_TOUCH).any(-1)
+    touches = _thumb_at_tips(source_gaps).any(-1)
     source_deg = np.degrees(source_out.numpy())
     lost = torch.as_tensor(thumb_out_lost(source_deg, np.degrees(start_out.numpy()), touches.numpy()))
     allowed = torch.where(lost, torch.full_like(start_out, float(THUMB_OUT_FREE)),
@@ -142,7 +147,7 @@ def disagreement(source_hand: HandModel, source_q: np.ndarray, target_hand: Hand
         source_gaps = pad_gaps(source_hand, source_q[first:end])
         out[first:end] = gaps_disagree(source_gaps, pad_gaps(target_hand, target_q[first:end]))
         out[first:end] |= _shape_lost(source_hand, source_q[first:end], target_hand, target_q[first:end],
-                                      (source_gaps[:, _THUMB] < THUMB_TOUCH).any(-1))
+                                      _thumb_at_tips(source_gaps).any(-1))
     return out
 
 
@@ -163,7 +168,7 @@ def gaps_disagree(source_gaps: np.ndarray, target_gaps: np.ndarray) -> np.ndarra
     """(T,) bool from (T, 10) pad gaps: some pair touches (the metric's tolerance) on one hand and not on the
     other, or the thumb is at a fingertip (the signature's looser `THUMB_TOUCH`) on one and not on the other."""
     pads = (source_gaps < CONTACT_TOLERANCE) != (target_gaps < CONTACT_TOLERANCE)
-    thumb = (source_gaps[:, _THUMB] < THUMB_TOUCH) != (target_gaps[:, _THUMB] < THUMB_TOUCH)
+    thumb = _thumb_at_tips(source_gaps) != _thumb_at_tips(target_gaps)
     return pads.any(-1) | thumb.any(-1)
 
 
@@ -172,7 +177,7 @@ def thumb_touch_loss(gaps: torch.Tensor, source_gaps: torch.Tensor) -> torch.Ten
     signature's `THUMB_TOUCH`: a thumb at a fingertip in the source (an OK sign's 3%, under it but no pad
     contact) is kept under 0.8 times it, one away from it beyond 1.2 times it. Without it, opening a thumb
     the network had pressed onto the index (a pad contact the source does not make) let it fly off."""
-    near = source_gaps[:, _THUMB] < THUMB_TOUCH
+    near = _thumb_at_tips(source_gaps)
     gap = gaps[:, _THUMB]
     miss = torch.where(near, torch.relu(gap - 0.8 * THUMB_TOUCH), torch.relu(1.2 * THUMB_TOUCH - gap))
     return miss.square().sum(-1).mean()

@@ -66,22 +66,19 @@ def hinge_flexion_and_alignment(positions: torch.Tensor) -> tuple[torch.Tensor, 
     return flexion, (axis * across[:, None]).sum(-1).abs() / sin.clamp_min(1e-12)
 
 
-_MIDDLE_MCP, _THUMB_MCP, _THUMB_TIP = (topo.JOINT_NAMES.index(n) for n in ("middle_mcp", "thumb_mcp", "thumb_tip"))
+_THUMB_MCP, _THUMB_TIP = topo.JOINT_NAMES.index("thumb_mcp"), topo.JOINT_NAMES.index("thumb_tip")
 
 
 def thumb_out(positions: torch.Tensor) -> torch.Tensor:
-    """(T,) radians the thumb points out to its side, from (T, 21, 3) positions: the angle of its visible part
+    """(T,) radians the thumb points out to its side, from (T, 21, 3) FK positions: the angle of its visible part
     (MCP -> tip) out of the plane of the palm's finger axis and normal (`palm_axes`), toward the thumb's side.
     A thumbs-up's thumb reads 40-60 deg, one lying along the fingers or in front of the palm near 0, one across
-    the palm below 0. Differentiable, for the contact fit; `semantics.signature` reads it in degrees."""
-    x = positions[:, _MIDDLE_MCP] - positions[:, 0]
-    z = torch.linalg.cross(positions[:, _PINKY_MCP] - positions[:, 0], positions[:, _INDEX_MCP] - positions[:, 0])
-    x = x / x.norm(dim=-1, keepdim=True).clamp_min(1e-12)
-    z = z - x * (z * x).sum(-1, keepdim=True)
-    z = z / z.norm(dim=-1, keepdim=True).clamp_min(1e-12)
+    the palm below 0. Differentiable in the thumb, for the contact fit (the palm's axes carry no gradient: the
+    knuckles sit on the wrist whatever the fingers do); `semantics.signature` reads it in degrees."""
+    palm = palm_axes((positions - positions[:, :1]).detach().numpy())
     thumb = positions[:, _THUMB_TIP] - positions[:, _THUMB_MCP]
-    aside = (thumb * torch.linalg.cross(z, x)).sum(-1)
-    return torch.atan2(aside, ((thumb * x).sum(-1).square() + (thumb * z).sum(-1).square() + 1e-12).sqrt())
+    x, aside, z = torch.einsum("tij,ti->jt", torch.as_tensor(palm, dtype=positions.dtype), thumb)
+    return torch.atan2(aside, (x.square() + z.square() + 1e-12).sqrt())
 
 
 @dataclass(frozen=True)

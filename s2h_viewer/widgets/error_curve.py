@@ -66,6 +66,7 @@ class ErrorCurve(QWidget):
         self.title = ""
         self.marked: range | None = None  # the timeline's in and out points
         self.reference: np.ndarray | None = None
+        self.gap: np.ndarray | None = None
         self.keys = np.zeros(0, dtype=int)  # frames keyed by the retarget's corrections (`set_keys`)
         self.quantity = "ASM error per frame"
         self.decimals = 3  # how its figures are written (`set_curve`)
@@ -81,11 +82,12 @@ class ErrorCurve(QWidget):
         self.error, self.title, self.quantity = np.nan_to_num(values), title, quantity
         #: a curve to read it against (the source's joint angle beside the retarget's), grey, on the same axis
         self.reference = None if reference is None else np.nan_to_num(np.asarray(reference, dtype=float))
-        if self.reference is None:
+        #: how far the curve parts from its reference, frame by frame (None without one)
+        self.gap = None if self.reference is None else np.abs(self.error - self.reference)
+        if self.gap is None:
             self.worst = worst_frames(self.error)
         else:  # where the two part most; nowhere where they do not part (red marks on a copy's exact bends misled)
-            gap = np.abs(self.error - self.reference)
-            self.worst = worst_frames(gap) if gap.max() >= SAME_WITHIN else np.zeros(0, dtype=int)
+            self.worst = worst_frames(self.gap) if self.gap.max() >= SAME_WITHIN else np.zeros(0, dtype=int)
         self._curve = None
         self.setToolTip(f"{title}: {quantity}; worst frames (red): "
                         f"{', '.join(str(f) for f in self.worst) or 'none'}. {note}Click to jump; ] and [ step "
@@ -95,13 +97,12 @@ class ErrorCurve(QWidget):
     def apart(self) -> str:
         """How far the curve and its reference part at most, and where (empty without a reference): TBS Copy's
         bends are the source's, so its curve covers the grey one, and a user saw no grey curve at all."""
-        if self.reference is None:
+        if self.gap is None:
             return ""
-        gap = np.abs(self.error - self.reference)
-        frame = int(gap.argmax())
-        if gap[frame] < SAME_WITHIN:
+        frame = int(self.gap.argmax())
+        if self.gap[frame] < SAME_WITHIN:
             return ", the same as the source's throughout"
-        return f", apart by at most {gap[frame]:.{self.decimals}f} (frame {frame})"
+        return f", apart by at most {self.gap[frame]:.{self.decimals}f} (frame {frame})"
 
     def set_keys(self, frames: np.ndarray) -> None:
         """Mark the frames the shown retarget's corrections key (diamonds on the frame axis)."""
