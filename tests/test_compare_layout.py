@@ -169,6 +169,7 @@ def test_a_click_on_a_heatmap_row_puts_that_joints_bend_on_the_curve_beside_the_
     """Issue 25 item 5: per-joint angle curves, source beside retarget, for the joint chosen."""
     from PySide6.QtCore import QPoint, Qt
 
+    from s2h_viewer.app.compare_mode import ASM_CURVE
     from s2h_viewer.hand import topology as topo
     from s2h_viewer.semantics.flexion import bend_angles
     from s2h_viewer.widgets.asm_heatmap import CELL, LEFT, TOP
@@ -213,8 +214,21 @@ def test_a_click_on_a_heatmap_row_puts_that_joints_bend_on_the_curve_beside_the_
     tip = topo.FINGER_JOINT_NAMES.index("index_tip")  # a tip has no bend of its own: the joint that moves it
     qtbot.mouseClick(heatmap.matrix, Qt.MouseButton.LeftButton, pos=QPoint(LEFT + 3 * CELL + 2, TOP + tip * CELL + 2))
     assert curve.quantity.startswith("index dip bend (it moves the index tip)")
-    window.sideways_curve.trigger()  # the choices exclude each other
+    # the pointer's frame and value, the source's beside it: a 1-3 deg gap hides under the band on a 90 deg axis
+    frame = int(curve.gap.argmax())
+    assert curve.value_at(curve.frame_at(curve._x(frame))) == (f"frame {frame}: {curve.error[frame]:.1f}, the source's "
+                                                               f"{curve.reference[frame]:.1f} (apart by "
+                                                               f"{curve.gap[frame]:.1f})")
+    # the line over the curve names the retarget it describes: in joint-bend mode it read as the curve's
+    note = window.compare.sideways_note
+    assert note.text().startswith("DM -&gt; iris: worst sideways flexion:")
+    assert note.textFormat() == Qt.TextFormat.RichText  # the name's arrow shows as one, not as "-&gt;"
+    window.sideways_curve.trigger()  # the choices exclude each other: radio items in the menu, all may be off
     assert not window.angle_curve.isChecked() and curve.reference is None and heatmap.row is None
+    assert window.sideways_curve.actionGroup().isExclusive()
+    window.sideways_curve.trigger()
+    assert window.compare.curve_shows == ASM_CURVE
+    assert not any(action.isChecked() for action in window.sideways_curve.actionGroup().actions())
 
 
 def test_a_last_page_keeps_the_row_height_and_a_new_result_keeps_the_page(qtbot, sample_hands, tmp_path):

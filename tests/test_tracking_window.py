@@ -88,7 +88,11 @@ def test_open_motion_takes_a_mediapipe_recording_with_lost_frames(window, qtbot,
     assert window.compare.view._hands[0].keypoints.actor.visibility
     assert "filled" in window.statusBar().currentMessage()  # the fit's report, as the CLI prints it
     window.fit_residual.trigger()
-    assert np.array_equal(window.compare.curve.missing, comparison.motion.fit.filled)  # shaded, not "0 mm"
+    curve = window.compare.curve
+    assert np.array_equal(curve.missing, comparison.motion.fit.filled)  # shaded, not "0 mm"
+    filled, measured = int(np.flatnonzero(curve.missing)[0]), int(np.flatnonzero(~curve.missing)[0])
+    assert curve.value_at(filled) == f"frame {filled}: not measured"  # the tooltip under the pointer, not "0.000"
+    assert curve.value_at(measured) == f"frame {measured}: {comparison.motion.fit.residual_mm[measured]:.3f}"
 
 
 def test_the_recording_items_are_offered_only_for_a_recording(window, qtbot):

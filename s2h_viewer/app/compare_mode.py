@@ -73,13 +73,14 @@ def default_setup() -> CompareSetup:
                         [samples.load_sample_hand("iris"), samples.load_sample_hand("laurel")])
 
 
-def sideways_text(scores) -> str:
-    """"ring DIP bends 40 deg sideways at frame 212 (source: 11)", in red past the sideways limit."""
+def sideways_text(name: str, scores) -> str:
+    """"ASRN -> iris: worst sideways flexion: ring DIP bends 40 deg sideways at frame 212 (the source: 11)", in
+    red past the sideways limit. Named: over the curve it read as the curve's, which may show another quantity."""
     if math.isnan(scores.sideways_deg):
-        return "Sideways flexion: no finger curls"
+        return html.escape(f"{name}: no finger curls (no sideways flexion to measure)")
     joint, _, frame = scores.sideways_at.partition("@")
-    text = (f"Worst sideways flexion: {SidewaysPeak(scores.sideways_deg, joint, int(frame)).describe()} "
-            f"(the source: {scores.source_sideways_deg:.0f})")
+    peak = SidewaysPeak(scores.sideways_deg, joint, int(frame)).describe()
+    text = html.escape(f"{name}: worst sideways flexion: {peak} (the source: {scores.source_sideways_deg:.0f})")
     broken = scores.sideways_deg > max(SIDEWAYS_LIMIT, np.nan_to_num(scores.source_sideways_deg) + 5.0)
     return f"<span style='color:#c62828'>{text}</span>" if broken else text
 
@@ -87,7 +88,7 @@ def sideways_text(scores) -> str:
 def selected_notes(result: MethodResult) -> str:
     """The line over the curve: the retarget's worst sideways bend, and its target's unsure frames if any."""
     warning = frame_warning(result.target)
-    text = sideways_text(result.scores)
+    text = sideways_text(label(result), result.scores)
     if warning is None:
         return text
     note = f"! {result.target.name}: {warning.banner}: retargets may bend there; check them in Annotate"
@@ -196,6 +197,7 @@ class CompareMode(QWidget):
         self.scores = ScoresTable()
         self.sideways_note = QLabel()  # the selected retarget's worst sideways bend and unsure frames, in words
         self.sideways_note.setWordWrap(True)
+        self.sideways_note.setTextFormat(Qt.TextFormat.RichText)  # escaped names: a plain line showed "-&gt;"
         self._table_height = 0  # the scores table's height the user dragged its splitter to (0: not dragged)
         layout = QVBoxLayout(self)
         layout.addWidget(self._panels(), 1)

@@ -214,13 +214,18 @@ class MainWindow(QMainWindow):
         self.keypoint_dots = self._action(view_menu, "Tracked keypoints on the source (recordings)", lambda on: (
             self.view.set_options(keypoints=on)), "Ctrl+D", checkable=True)
         self.keypoint_dots.setChecked(True)
+        # the error curve's choices exclude each other, none ticked: the ASM error (radio items that can all be off)
+        curves = QActionGroup(self)
+        curves.setExclusionPolicy(QActionGroup.ExclusionPolicy.ExclusiveOptional)
         self.sideways_curve = self._action(view_menu, "Error curve: sideways flexion per frame (deg)",
-                                           lambda: self._choose_curve(self.sideways_curve), "Ctrl+G", checkable=True)
+                                           self._curve_chosen, "Ctrl+G", checkable=True)
         self.angle_curve = self._action(view_menu, "Error curve: the heatmap's joint bend, source and retarget (deg)",
-                                        lambda: self._choose_curve(self.angle_curve), "Ctrl+Shift+G", checkable=True)
+                                        self._curve_chosen, "Ctrl+Shift+G", checkable=True)
         self.compare.heatmap.row_chosen.connect(self._show_joint_curve)
         self.fit_residual = self._action(view_menu, "Error curve: tracking fit residual (recordings)",
-                                         lambda: self._choose_curve(self.fit_residual), "Ctrl+F", checkable=True)
+                                         self._curve_chosen, "Ctrl+F", checkable=True)
+        for action in (self.sideways_curve, self.angle_curve, self.fit_residual):
+            curves.addAction(action)
         view_menu.addSeparator()
         for preset, text, key in (("palm", "Camera: palm", "Ctrl+1"), ("back", "Camera: back", "Ctrl+2"),
                                   ("side", "Camera: side", "Ctrl+3"), ("default", "Camera: reset", "Ctrl+0")):
@@ -511,15 +516,12 @@ class MainWindow(QMainWindow):
         """A heatmap row clicked: its joint's bend on the error curve, whatever the curve showed (the heatmap's legend
         says so; a click while it showed the ASM error framed the row and changed nothing else)."""
         if not self.angle_curve.isChecked():
-            self.angle_curve.setChecked(True)
-            self._choose_curve(self.angle_curve)
+            self.angle_curve.setChecked(True)  # its group unticks the others
+            self._curve_chosen()
 
-    def _choose_curve(self, chosen: QAction) -> None:
-        """The error curve's View items exclude each other: the one ticked is shown, none ticked the ASM error."""
+    def _curve_chosen(self, _checked: bool = False) -> None:
+        """The error curve shows the View item ticked (they exclude each other), none ticked the ASM error."""
         curves = {self.sideways_curve: SIDEWAYS_CURVE, self.angle_curve: ANGLE_CURVE, self.fit_residual: RESIDUAL_CURVE}
-        for action in curves:
-            if action is not chosen:
-                action.setChecked(False)
         self.compare.show_curve(next((curve for action, curve in curves.items() if action.isChecked()), ASM_CURVE))
 
     def _tracking_actions(self) -> None:
