@@ -236,6 +236,30 @@ def test_undoing_a_removal_brings_the_target_back_selected(window, qtbot):
     np.testing.assert_array_equal(window.compare.curve.error, selected.frame_error)
 
 
+def test_while_another_clip_is_retargeted_the_heatmap_and_curve_stay_on_the_selected_retarget(window, qtbot):
+    """A fresh-eyes run: while a newly opened clip computed, a click on the curve filled the heatmap with yellow
+    (the first retarget's errors, Copy's, under "ASRN -> laurel" in the drop-down) and a click on a heatmap row
+    put "Copy -> iris" over the curve: the retargets on screen were keyed by the clip being computed."""
+    window.scores.selectRow(1)  # ASRN -> iris, not the first
+    selected = window.compare.selected_result()
+    assert selected.method == "asrn"
+    shown = window.comparison.motion
+    window.load_motion(str(ASSETS_DIR / "motions" / "counting.npz"))  # queued; the grid stays on screen meanwhile
+    assert window.compare.queue.pending() and window.comparison.motion is shown
+    window.compare.curve.frame_clicked.emit(57)  # a click on the curve
+    assert window.timeline.frame == 57
+    assert window.compare.selected_result() is selected
+    np.testing.assert_array_equal(window.heatmap.current, selected.cell_error[57])
+    window.compare.choose_joint(topo.FINGER_JOINT_NAMES.index("ring_pip"))  # a click on a heatmap row
+    window.angle_curve.trigger()
+    assert window.compare.curve.title == "ASRN -> iris" and window.heatmap_choice.currentIndex() == 1
+    assert window.compare.sideways_note.text().startswith("ASRN -&gt; iris")
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        pass
+    selected = window.compare.selected_result()  # the new clip keeps the choice of method and target
+    assert window.comparison.motion.name == "counting" and (selected.method, selected.target.name) == ("asrn", "iris")
+
+
 def test_playback_pauses_for_a_new_retarget_and_plays_on_after_it(window, qtbot):
     window.timeline.set_playing(True)
     with qtbot.waitSignal(window.comparison_ready, timeout=120_000):

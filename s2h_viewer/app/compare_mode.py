@@ -369,8 +369,14 @@ class CompareMode(QWidget):
 
     # --- keeping the queue and the screen on the state ---
     def shown_keys(self) -> list[ResultKey]:
-        """The keys of the retargets on screen, in the comparison's order."""
-        return [self.state.key(r.target, r.method) for r in self.comparison.results] if self.comparison else []
+        """The keys of the retargets on screen, in the comparison's order: of the clip on screen, which is not the
+        state's while another clip is computed (keyed by the state's, none matched the selection, and the heatmap
+        and the curve showed the first retarget's errors under the selected one's name)."""
+        comparison = self.comparison
+        if comparison is None:
+            return []
+        return [ResultKey(id(comparison.motion), id(comparison.source), id(r.target), r.method)
+                for r in comparison.results]
 
     def _sync(self) -> None:
         """Prune what nothing needs, queue what is missing (cancelling what is not wanted), show when complete."""
@@ -477,9 +483,9 @@ class CompareMode(QWidget):
         if new_clip:
             self.timeline.set_clip(comparison.n_frames, comparison.motion.fps)
         self.select(self._same_retarget(self.state.selected), turn_page=False)  # the user's page stays
-        keys = self.shown_keys()
-        if alone in keys:
-            self.view.set_solo(self.view.hand_of_result(keys.index(alone)))
+        same = [(k.target, k.method) for k in self.shown_keys()]
+        if alone is not None and (alone.target, alone.method) in same:  # a new clip's too
+            self.view.set_solo(self.view.hand_of_result(same.index((alone.target, alone.method))))
         self.status(f"{comparison.motion.name}: {comparison.n_frames} frames, {len(comparison.results)} retargets")
         self.comparison_ready.emit()
 
