@@ -228,7 +228,8 @@ def test_bracket_keys_jump_between_the_worst_frames_of_the_error_curve(window, q
     assert visited[:len(after_zero)] == after_zero and visited[len(after_zero)] == worst[0]  # then round again
     window.timeline.set_frame(worst[0])
     QTest.keyClick(window, Qt.Key.Key_BracketLeft)
-    assert window.timeline.frame == worst[-1]  # wrapped to the last marked frame
+    assert window.timeline.frame == worst[-1]  # wrapped to the last marked frame, and said so
+    assert window.statusBar().currentMessage() == f"Wrapped round to the last worst frame: frame {worst[-1]}"
     QTest.keyClick(window, Qt.Key.Key_BracketLeft)
     assert window.timeline.frame == worst[-2]
     window.timeline.spin.setFocus()  # with the frame box focused the keys still jump (not typed into it)
@@ -237,6 +238,18 @@ def test_bracket_keys_jump_between_the_worst_frames_of_the_error_curve(window, q
     assert window.timeline.frame == worst[-1]
     from s2h_viewer.widgets.error_curve import next_worst
     assert next_worst(np.zeros(0, dtype=int), 5, 1) is None  # nothing marked: the keys leave the frame alone
+    # with a range marked (Playback > Mark in / out) the keys stay in it, as playback does: a fresh-eyes run
+    # marked 100-300, pressed ] at 300 and landed on 29, outside it
+    inside = range(worst[1], worst[-1] + 1)
+    window.timeline.set_frame(inside.start)
+    QTest.keyClick(window, Qt.Key.Key_I)  # Playback > Mark in
+    window.timeline.set_frame(inside[-1])
+    QTest.keyClick(window, Qt.Key.Key_O)  # Mark out
+    assert window.timeline.marked == inside
+    QTest.keyClick(window, Qt.Key.Key_BracketRight)
+    assert window.timeline.frame == worst[1] and "between the marks" in window.statusBar().currentMessage()
+    assert next_worst(np.array(worst), worst[1], -1, inside) == (worst[-1], True)
+    assert next_worst(np.array(worst), 0, 1, range(worst[0] + 1, worst[1])) is None  # none between the marks
     lines = window.shortcut_lines()
     assert "]: Playback > Next worst frame (error curve)" in lines
     assert "[: Playback > Previous worst frame (error curve)" in lines

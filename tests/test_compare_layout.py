@@ -223,12 +223,15 @@ def test_a_click_on_a_heatmap_row_puts_that_joints_bend_on_the_curve_beside_the_
     note = window.compare.sideways_note
     assert note.text().startswith("DM -&gt; iris: worst sideways flexion:")
     assert note.textFormat() == Qt.TextFormat.RichText  # the name's arrow shows as one, not as "-&gt;"
-    window.sideways_curve.trigger()  # the choices exclude each other: radio items in the menu, all may be off
+    window.sideways_curve.trigger()  # the choices exclude each other: radio items in the menu
     assert not window.angle_curve.isChecked() and curve.reference is None and heatmap.row is None
     assert window.sideways_curve.actionGroup().isExclusive()
+    window.sideways_curve.trigger()  # its key again: the ASM error, with an item of its own (there was none)
+    assert window.compare.curve_shows == ASM_CURVE and window.asm_curve.isChecked()
+    assert [a.isChecked() for a in window.asm_curve.actionGroup().actions()] == [True, False, False, False]
     window.sideways_curve.trigger()
-    assert window.compare.curve_shows == ASM_CURVE
-    assert not any(action.isChecked() for action in window.sideways_curve.actionGroup().actions())
+    window.asm_curve.trigger()
+    assert window.compare.curve_shows == ASM_CURVE and not window.sideways_curve.isChecked()
 
 
 def test_a_last_page_keeps_the_row_height_and_a_new_result_keeps_the_page(qtbot, sample_hands, tmp_path):

@@ -125,10 +125,16 @@ def test_cancel_a_retarget_goes_back_to_the_grid_and_the_menu_follows(long_windo
 
 def test_every_progress_text_names_the_retarget_it_belongs_to(window, qtbot):
     """A stage of ASRN said only "contact fit (4 of 5)": which method, which target?"""
-    texts = []
-    window.compare.queue.progress.connect(lambda _, what: texts.append(what))
+    texts, strip = [], []
+
+    def read_strip() -> None:
+        if window.compare._progress is not None:  # the strip: the retarget on a line, its stage under it, whole
+            strip.append(window.compare._progress.labelText())
+    window.compare.queue.progress.connect(lambda _, what: (texts.append(what), read_strip()))
     with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
         window.add_target_file(str(ASSETS_DIR / "hands" / "laurel.npz"))
+    assert any(line.splitlines()[0] == "ASRN -> laurel" and line.splitlines()[1].startswith("contact fit (")
+               for line in strip), sorted(set(strip))
     assert all(t.startswith(("TBS Copy -> laurel", "ASRN -> laurel")) for t in texts), sorted(set(texts))
     assert "ASRN -> laurel: contact fit" in texts  # a stage inside the retarget, named with it
 

@@ -539,7 +539,8 @@ class CompareMode(QWidget):
         text = f"{what} ({self._done_in_batch + 1} of {total})"
         if self._progress is not None:
             self._progress.setValue(int(overall * PROGRESS_STEPS))
-            self._progress.setLabelText(text)
+            # the retarget over its stage: on one line both were cut in the middle ("ASRN -> iris: c...t fit")
+            self._progress.setLabelText(text.replace(": ", "\n", 1))
         self.status(f"retargeting: {text}, {overall:.0%}")
 
     # --- showing a frame and the selection ---

@@ -94,11 +94,17 @@ class MainWindow(QMainWindow):
 
     def _to_worst(self, direction: int) -> None:
         """Jump to the next (1) or previous (-1) of the worst frames marked red on the error curve."""
-        frame = error_curve.next_worst(self.compare.curve.worst, self.timeline.frame, direction)
-        if frame is not None:
-            self.timeline.set_frame(frame)
-        else:  # a copy's bends on the source's: nothing parts, nothing marked
-            self.statusBar().showMessage("No worst frames are marked on the error curve", 5000)
+        marked = self.timeline.marked
+        step = error_curve.next_worst(self.compare.curve.worst, self.timeline.frame, direction, marked)
+        where = "" if marked is None else f" between the marks ({marked.start} to {marked[-1]})"
+        if step is None:  # a copy's bends on the source's: nothing parts, nothing marked
+            self.statusBar().showMessage(f"No worst frames are marked on the error curve{where}", 5000)
+            return
+        frame, wrapped = step
+        self.timeline.set_frame(frame)
+        if wrapped:  # round the end: said, as a search that wraps says it
+            first = "first" if direction > 0 else "last"
+            self.statusBar().showMessage(f"Wrapped round to the {first} worst frame{where}: frame {frame}", 5000)
 
     def _show_unsaved(self, clean: bool) -> None:
         """A '*' in the title and on the Annotate tab while the annotation has edits not saved (the tab's is seen
@@ -214,9 +220,10 @@ class MainWindow(QMainWindow):
         self.keypoint_dots = self._action(view_menu, "Tracked keypoints on the source (recordings)", lambda on: (
             self.view.set_options(keypoints=on)), "Ctrl+D", checkable=True)
         self.keypoint_dots.setChecked(True)
-        # the error curve's choices exclude each other, none ticked: the ASM error (radio items that can all be off)
+        # what the error curve shows: radio items, one ticked; a choice's key again goes back to the ASM error
         curves = QActionGroup(self)
-        curves.setExclusionPolicy(QActionGroup.ExclusionPolicy.ExclusiveOptional)
+        self.asm_curve = self._action(view_menu, "Error curve: ASM error per frame", self._curve_chosen,
+                                      checkable=True)
         self.sideways_curve = self._action(view_menu, "Error curve: sideways flexion per frame (deg)",
                                            self._curve_chosen, "Ctrl+G", checkable=True)
         self.angle_curve = self._action(view_menu, "Error curve: the heatmap's joint bend, source and retarget (deg)",
@@ -224,8 +231,11 @@ class MainWindow(QMainWindow):
         self.compare.heatmap.row_chosen.connect(self._show_joint_curve)
         self.fit_residual = self._action(view_menu, "Error curve: tracking fit residual (recordings)",
                                          self._curve_chosen, "Ctrl+F", checkable=True)
-        for action in (self.sideways_curve, self.angle_curve, self.fit_residual):
+        self._curves = {self.asm_curve: ASM_CURVE, self.sideways_curve: SIDEWAYS_CURVE, self.angle_curve: ANGLE_CURVE,
+                        self.fit_residual: RESIDUAL_CURVE}
+        for action in self._curves:
             curves.addAction(action)
+        self.asm_curve.setChecked(True)
         view_menu.addSeparator()
         for preset, text, key in (("palm", "Camera: palm", "Ctrl+1"), ("back", "Camera: back", "Ctrl+2"),
                                   ("side", "Camera: side", "Ctrl+3"), ("default", "Camera: reset", "Ctrl+0")):
@@ -517,12 +527,16 @@ class MainWindow(QMainWindow):
         says so; a click while it showed the ASM error framed the row and changed nothing else)."""
         if not self.angle_curve.isChecked():
             self.angle_curve.setChecked(True)  # its group unticks the others
-            self._curve_chosen()
+            self.compare.show_curve(ANGLE_CURVE)
 
     def _curve_chosen(self, _checked: bool = False) -> None:
-        """The error curve shows the View item ticked (they exclude each other), none ticked the ASM error."""
-        curves = {self.sideways_curve: SIDEWAYS_CURVE, self.angle_curve: ANGLE_CURVE, self.fit_residual: RESIDUAL_CURVE}
-        self.compare.show_curve(next((curve for action, curve in curves.items() if action.isChecked()), ASM_CURVE))
+        """The error curve shows the View item ticked; the one shown chosen again (its key pressed twice) gives the
+        ASM error back, as the items did when they were checkboxes."""
+        chosen = self._curves[next(action for action in self._curves if action.isChecked())]
+        if chosen == self.compare.curve_shows and chosen != ASM_CURVE:
+            self.asm_curve.setChecked(True)
+            chosen = ASM_CURVE
+        self.compare.show_curve(chosen)
 
     def _tracking_actions(self) -> None:
         """The recording-only View items are offered while the source is a tracked recording, whose fit's
@@ -530,6 +544,9 @@ class MainWindow(QMainWindow):
         tracked = self.comparison is not None and self.comparison.motion.fit is not None
         self.keypoint_dots.setEnabled(tracked)
         self.fit_residual.setEnabled(tracked)
+        if not tracked and self.fit_residual.isChecked():  # no residual to show: the ASM error, ticked
+            self.asm_curve.setChecked(True)
+            self.compare.show_curve(ASM_CURVE)
         if tracked:
             self.statusBar().showMessage(f"{self.comparison.motion.name}: {self.comparison.motion.fit.describe()}",
                                          60000)

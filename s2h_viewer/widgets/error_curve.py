@@ -43,13 +43,19 @@ def frame_ticks(n_frames: int, width: float, spacing: float = 60.0) -> list[int]
     return list(range(0, last + 1, step))
 
 
-def next_worst(worst: np.ndarray, frame: int, direction: int) -> int | None:
-    """The marked worst frame after ``frame`` (``direction`` +1) or before it (-1), wrapping round the clip;
-    None where none is marked (the Playback menu's worst-frame keys)."""
+def next_worst(worst: np.ndarray, frame: int, direction: int, within: range | None = None
+               ) -> tuple[int, bool] | None:
+    """The marked worst frame after ``frame`` (``direction`` +1) or before it (-1), and whether it wrapped round
+    the clip (or round ``within``, the timeline's marked range, which playback keeps to); None where none is
+    marked there (the Playback menu's worst-frame keys)."""
+    if within is not None:
+        worst = worst[(worst >= within.start) & (worst < within.stop)]
     if len(worst) == 0:
         return None
     later = worst[worst > frame] if direction > 0 else worst[worst < frame][::-1]
-    return int(later[0]) if len(later) else int(worst[0] if direction > 0 else worst[-1])
+    if len(later):
+        return int(later[0]), False
+    return int(worst[0] if direction > 0 else worst[-1]), True
 
 
 class ErrorCurve(QWidget):
@@ -156,7 +162,7 @@ class ErrorCurve(QWidget):
 
     def _left(self) -> float:
         """Where frame 0 is drawn: right of the value axis' widest number."""
-        return MARGIN + self.fontMetrics().horizontalAdvance(f"{self.top:.3g}") + 4
+        return MARGIN + self.fontMetrics().horizontalAdvance(self._figure(self.top)) + 4
 
     def axis_y(self) -> float:
         """The frame axis' line: the curve's 0, above a row of frame numbers and the caption's row."""
@@ -226,10 +232,14 @@ class ErrorCurve(QWidget):
         painter.end()
         return pixmap
 
+    def _figure(self, value: float) -> str:
+        """A value as the caption and the tooltip write it (the axis' "0.0215" beside "max 0.021" read as two)."""
+        return f"{value:.{self.decimals}f}"
+
     def caption(self) -> str:
         """The line under the curve: what it measures, whose, its maximum, how far it parts from its reference, keys."""
         keyed = f", keys at {len(self.keys)} frame{'s' * (len(self.keys) != 1)} (orange)" if len(self.keys) else ""
-        return f"{self.quantity} ({self.title})   max {self.error.max():.{self.decimals}f}{self.apart()}{keyed}"
+        return f"{self.quantity} ({self.title})   max {self._figure(self.error.max())}{self.apart()}{keyed}"
 
     def _draw_axes(self, painter: QPainter) -> None:
         """The value axis (0 and the maximum) on the left, the frame axis with numbered ticks below the curve."""
@@ -239,7 +249,7 @@ class ErrorCurve(QWidget):
         painter.drawLine(QPointF(left, MARGIN), QPointF(left, axis))
         painter.drawLine(QPointF(left, axis), QPointF(right, axis))
         for value, y in ((0.0, axis), (self.top, float(MARGIN))):
-            text = f"{value:.3g}"
+            text = self._figure(value)
             painter.drawText(QPointF(left - 3 - metrics.horizontalAdvance(text), y + metrics.ascent() / 2), text)
         painter.setPen(QPen(QColor("black"), 1))
         for frame in self.ticks():
