@@ -266,6 +266,32 @@ def test_while_another_clip_is_retargeted_the_heatmap_and_curve_stay_on_the_sele
     assert window.comparison.motion.name == "counting" and (selected.method, selected.target.name) == ("asrn", "iris")
 
 
+def test_a_clip_opened_again_shows_its_retargets_without_computing_them(window, qtbot, sample_hands, tmp_path):
+    """A fresh-eyes run reopened a clip it had seen minutes before and waited for all 15 retargets again. The same
+    file, unchanged, gives back the same clip: its results come from the cache; a changed file is read again."""
+    from s2h_viewer.io.npz import save_motion
+    from s2h_viewer.motions.synthesis import synthesize
+    paths = [tmp_path / "first.npz", tmp_path / "second.npz"]
+    for path, gestures in zip(paths, (["point", "fist"], ["ok", "thumbs_up"])):
+        save_motion(synthesize(gestures, sample_hands["birch"], seed=2, name=path.stem), path)
+    shown = {}
+    for path in paths:
+        with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+            window.load_motion(str(path))
+        shown[path.stem] = list(window.comparison.results)
+    computed = len(window.compare.queue.computed)
+    with qtbot.waitSignal(window.comparison_ready, timeout=10_000):
+        window.load_motion(str(paths[0]))  # back to the first clip
+    assert window.comparison.motion.name == "first" and len(window.compare.queue.computed) == computed
+    assert all(a is b for a, b in zip(window.comparison.results, shown["first"]))  # the very results shown before
+    assert not window.compare.queue.pending()
+    save_motion(synthesize(["fist", "point"], sample_hands["birch"], seed=3, name="second"), paths[1])  # changed
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.load_motion(str(paths[1]))
+    assert len(window.compare.queue.computed) == computed + 2  # read again, retargeted again
+    assert not any(a is b for a, b in zip(window.comparison.results, shown["second"]))
+
+
 def test_playback_pauses_for_a_new_retarget_and_plays_on_after_it(window, qtbot):
     window.timeline.set_playing(True)
     with qtbot.waitSignal(window.comparison_ready, timeout=120_000):

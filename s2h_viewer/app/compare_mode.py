@@ -177,6 +177,8 @@ class CompareMode(QWidget):
         self._shown_index = 0  # the undo stack's index when the grid showed ``_shown``
         self._reverting = False  # Cancel is undoing its dropped changes: they only set the state back
         self._spare: dict[ResultKey, MethodResult] = {}  # results no one asks for now, oldest first
+        #: the clips (motion, source) results are kept for, by id: held, so that no new clip takes a kept one's id
+        self._clips: dict[tuple[int, int], tuple[Motion, HandModel]] = {}
         self.undo_stack = QUndoStack(self)
         self.comparison: Comparison | None = None
         self.queue = RetargetQueue(self)
@@ -383,13 +385,11 @@ class CompareMode(QWidget):
         if self._reverting:
             return
         keep = set(self.state.wanted())
-        clips = {(id(self.state.motion), id(self.state.source))}
+        self._clips[(id(self.state.motion), id(self.state.source))] = (self.state.motion, self.state.source)
         if self._shown is not None:
             motion, source, targets, methods = self._shown
             keep |= {ResultKey(id(motion), id(source), id(t), m) for t in targets for m in methods}
-            clips.add((id(motion), id(source)))
         self._keep_results(keep)
-        self.state.semantics = {k: s for k, s in self.state.semantics.items() if k in clips}
         missing = self.state.missing()
         was_busy = bool(self.queue.pending())
         self.queue.submit([(k, self.state.motion, self.state.source, self.state.target_of(k)) for k in missing])
@@ -406,15 +406,16 @@ class CompareMode(QWidget):
             self._show_state()
 
     def _keep_results(self, keep: set[ResultKey]) -> None:
-        """Results outside ``keep`` go to the spare cache; the spares of this clip and these targets that
-        ``keep`` asks for come back (at most SPARE_FRAMES frames are kept, the oldest dropped first)."""
+        """Results outside ``keep`` go to the spare cache; the spares of these targets that ``keep`` asks for come
+        back, of this clip or of one opened again (at most SPARE_FRAMES frames are kept, the oldest dropped
+        first); the source's semantics are kept for every clip with results kept."""
         leaving = {k: r for k, r in self.state.results.items() if k not in keep}
         self._spare.update(leaving)
         fixed = [label(r) for r in leaving.values() if r.corrections]
         if fixed:  # a corrected retarget unticked or its target removed: its corrections are kept, say where
             self.status(f"{', '.join(fixed)}: its corrections are kept (Edit > Undo, or tick the method again)")
-        clip, targets = (id(self.state.motion), id(self.state.source)), {id(t) for t in self.state.targets}
-        self._spare = {k: r for k, r in self._spare.items() if (k.motion, k.source) == clip and k.target in targets}
+        targets = {id(t) for t in self.state.targets}
+        self._spare = {k: r for k, r in self._spare.items() if k.target in targets}
         self.state.results = {k: r for k, r in self.state.results.items() if k in keep}
         self.state.results.update({k: self._spare.pop(k) for k in keep if k in self._spare})
         frames = sum(len(r.cell_error) for r in self._spare.values())
@@ -422,6 +423,10 @@ class CompareMode(QWidget):
             if frames <= SPARE_FRAMES:
                 break
             frames -= len(self._spare.pop(key).cell_error)
+        clips = {(id(self.state.motion), id(self.state.source))} | {
+            (k.motion, k.source) for k in [*self.state.results, *self._spare]}
+        self._clips = {k: c for k, c in self._clips.items() if k in clips}
+        self.state.semantics = {k: s for k, s in self.state.semantics.items() if k in self._clips}
 
     def _same_retarget(self, key: ResultKey | None) -> ResultKey:
         """The shown retarget with ``key``'s target and method (a new clip keeps the selection), else the first."""

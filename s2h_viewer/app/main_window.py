@@ -19,6 +19,7 @@ from s2h_viewer.app.compare_mode import (ANGLE_CURVE, ASM_CURVE, RESIDUAL_CURVE,
                                          CompareSetup, default_setup)
 from s2h_viewer.app.focus import FocusKeeper
 from s2h_viewer.app.job_progress import strip_height
+from s2h_viewer.app.opened_clips import OpenedClips
 from s2h_viewer.app.tasks import TaskRunner
 from s2h_viewer.errors import S2HError, TooFewBonesError, UnrecognisedRigError, reading
 from s2h_viewer.hand.model import HandModel
@@ -50,6 +51,7 @@ class MainWindow(QMainWindow):
     def __init__(self, setup: CompareSetup, settings: QSettings | None = None, open_options=None):
         super().__init__()
         from s2h_viewer.io.files import RigOptions
+        self.opened_clips = OpenedClips()  # a file opened again unchanged: the same clip, its results cached
         self.open_options = open_options or RigOptions()  # `s2h view`'s --side, --fps ...: for every file opened
         self.setWindowTitle("s2h-viewer[*]")
         self.settings = settings or QSettings("s2h-viewer", "s2h-viewer")
@@ -571,6 +573,12 @@ class MainWindow(QMainWindow):
         from s2h_viewer.samples import load_sample_hand
         if not self._confirm_corrections(f"opening {Path(path).name}"):
             return
+        opened = self.opened_clips.get(path, self.open_options)
+        if opened is not None:  # the same file again, unchanged: its retargets are shown, not computed again
+            self._remember(path)
+            self._loading.append(("motion", path, opened[0]))
+            self.compare.load(*opened)
+            return
         try:
             motion, rig = load_motion_file(path, options=self.open_options)
             unit = self._chosen_unit(path, rig) if rig is not None else ""
@@ -585,6 +593,7 @@ class MainWindow(QMainWindow):
         self._remember(path)
         self.settings.setValue("files/motion_dir", str(Path(path).resolve().parent))
         self._loading.append(("motion", path, motion))
+        self.opened_clips.remember(path, self.open_options, motion, source)
         self.compare.load(motion, source)
 
     def ask_batch(self) -> None:

@@ -1,0 +1,51 @@
+"""The clips opened in this session, by file: a file opened again unchanged, with the same options, gives back
+the same motion and source objects, so compare mode's results cached for them are shown, not computed again."""
+
+from __future__ import annotations
+
+import hashlib
+from collections import OrderedDict
+from pathlib import Path
+
+from s2h_viewer.hand.model import HandModel
+from s2h_viewer.hand.motion import Motion
+
+#: clips remembered at most (their motions are small; their results live in compare mode's bounded cache)
+REMEMBERED = 8
+
+
+class OpenedClips:
+    """(motion, source) per (file, its bytes, the options it was read with), newest last."""
+
+    def __init__(self) -> None:
+        self._clips: OrderedDict[tuple, tuple[Motion, HandModel]] = OrderedDict()
+
+    @staticmethod
+    def _key(path: str | Path, options: object) -> tuple | None:
+        """The file's path and a digest of its bytes (a modification time may not change within a save's second
+        on every file system), and the options."""
+        digest = hashlib.blake2b(digest_size=16)
+        try:
+            with open(path, "rb") as fh:
+                for chunk in iter(lambda: fh.read(1 << 20), b""):
+                    digest.update(chunk)
+        except OSError:
+            return None
+        return str(Path(path).resolve()), digest.hexdigest(), repr(options)
+
+    def get(self, path: str | Path, options: object) -> tuple[Motion, HandModel] | None:
+        """The clip read from ``path`` with ``options`` before, if the file has not changed since."""
+        key = self._key(path, options)
+        if key not in self._clips:
+            return None
+        self._clips.move_to_end(key)
+        return self._clips[key]
+
+    def remember(self, path: str | Path, options: object, motion: Motion, source: HandModel) -> None:
+        key = self._key(path, options)
+        if key is None:
+            return
+        self._clips[key] = (motion, source)
+        self._clips.move_to_end(key)
+        while len(self._clips) > REMEMBERED:
+            self._clips.popitem(last=False)
