@@ -7,6 +7,7 @@ camera below), so every hand, whatever its rig's wrist orientation, is shown the
 from __future__ import annotations
 
 import dataclasses
+import weakref
 
 import numpy as np
 import pyvista as pv
@@ -68,6 +69,11 @@ def frame_arrows(hand: HandModel, pose: HandPose, frame: int = 0, scale: float |
     return out
 
 
+#: each mesh's lighter versions, by face count: the grid is built again for every change (a method ticked, a clip
+#: opened), and decimating its skins again was half of the second it froze for when 12 retargets came in
+_LIGHTER: weakref.WeakKeyDictionary[SkinnedMesh, dict[int, SkinnedMesh]] = weakref.WeakKeyDictionary()
+
+
 def display_hand(hand: HandModel, max_faces: int = 8000) -> HandModel:
     """``hand`` with a lighter mesh for interactive views (software OpenGL draws triangles slowly).
 
@@ -76,9 +82,11 @@ def display_hand(hand: HandModel, max_faces: int = 8000) -> HandModel:
     """
     if hand.mesh is None or len(hand.mesh.faces) <= max_faces:
         return hand
-    light = surface(hand, hand.mesh.vertices).decimate_pro(1.0 - max_faces / len(hand.mesh.faces), preserve_topology=True, splitting=False)
-    light = light.clean()
-    _, nearest = cKDTree(hand.mesh.vertices).query(np.asarray(light.points))
-    mesh = SkinnedMesh(np.asarray(light.points, dtype=np.float32),
-                       light.regular_faces.astype(np.int32), hand.mesh.weights[nearest])
-    return dataclasses.replace(hand, mesh=mesh)
+    lighter = _LIGHTER.setdefault(hand.mesh, {})
+    if max_faces not in lighter:
+        light = surface(hand, hand.mesh.vertices).decimate_pro(1.0 - max_faces / len(hand.mesh.faces),
+                                                                preserve_topology=True, splitting=False).clean()
+        _, nearest = cKDTree(hand.mesh.vertices).query(np.asarray(light.points))
+        lighter[max_faces] = SkinnedMesh(np.asarray(light.points, dtype=np.float32),
+                                         light.regular_faces.astype(np.int32), hand.mesh.weights[nearest])
+    return dataclasses.replace(hand, mesh=lighter[max_faces])
