@@ -11,8 +11,9 @@ holds out to its side held in: `semantics.signature.thumb_out_lost`), and on
 zero): elsewhere the retarget is returned bit for bit. Loss: the contact term
 (`semantics.contacts.contact_loss`), L_ana on what the correction adds to the angles' excess (a twist the
 network or the source's frames put there is not undone: "untwisting" a Godot fist's pinky knuckle opened it
-22 deg), smoothness, a pull to the network's pose (harder on the thumb's CMC, most on its lift, so a finger comes to the thumb
-before the thumb leaves the path the source's takes), a curl term (no finger's curl moved further from the
+22 deg), smoothness, a pull to the network's pose (harder on the thumb's CMC, most on its lift, and the CMC
+stepped at a share of the others' rate, so a finger comes to the thumb before the thumb leaves the path the
+source's takes), a curl term (no finger's curl moved further from the
 source's than the signature's margin allows: a bent ring finger curled to meet the thumb is a pose lost), a
 thumb-out term (a thumb the source holds out to its side, a thumbs-up's, brought out as far: on the Meta hand,
 whose rest thumb lies along the fingers, the network held it in front of the palm), and a sideways term: no
@@ -66,6 +67,10 @@ class ContactFitConfig:
     sideways_weight: float = 1e3  # no flexed PIP/DIP bent sideways past `SIDEWAYS_FREE`
     thumb_prior_weight: float = 5.0  # the thumb CMC pulled this much harder: fingers move to the thumb first
     thumb_lift_weight: float = 10.0  # and its splay (the metacarpal's lift out of the palm plane) this much more
+    #: the thumb CMC's angles move at this share of the other joints' rate (Adam's steps), so the fingers and the
+    #: thumb's own hinges reach a touch before its metacarpal swings away from the source's path: ASRN's thumb
+    #: followed the authored poses' at 0.59-0.91 (its CMC across the palm), 0.69-0.93 so; 0.1 lost pad touches
+    thumb_cmc_rate: float = 0.2
     curl_weight: float = 1e3  # no finger's curl moved further from the source's than `CURL_FREE` (`_curl_excess`)
     thumb_out_weight: float = 1e3  # the thumb out to its side as the source's (`_thumb_out_allowed`)
     reach: int = 4  # frames either side of a disagreement over which the correction fades in and out
@@ -112,18 +117,20 @@ def _curl_excess(curls: torch.Tensor, source_curls: torch.Tensor, start_curls: t
 THUMB_OUT_FREE = np.radians(5.0)
 
 
-def _thumb_out_allowed(source_out: torch.Tensor, start_out: torch.Tensor, source_gaps: torch.Tensor) -> torch.Tensor:
+def _thumb_out_allowed(source_out: torch.Tensor, start_out: torch.Tensor, source_gaps: torch.Tensor
+                       ) -> tuple[torch.Tensor, torch.Tensor]:
     """(F,) radians the thumb may point less out to its side (`semantics.flexion.thumb_out`) than the source's:
     `THUMB_OUT_FREE` where the retarget lost the source's thumb out (a thumbs-up's thumb in front of the Meta hand's
     palm: `semantics.signature.thumb_out_lost`), as far as the retarget had it elsewhere (the fit does not make it
-    worse); unbounded where the source's thumb is not out or touches a fingertip (the touch terms place it)."""
+    worse); unbounded where the source's thumb is not out or touches a fingertip (the touch terms place it). And
+    (F,) bool: where it was lost."""
     touches = _thumb_at_tips(source_gaps).any(-1)
     source_deg = np.degrees(source_out.numpy())
     lost = torch.as_tensor(thumb_out_lost(source_deg, np.degrees(start_out.numpy()), touches.numpy()))
     allowed = torch.where(lost, torch.full_like(start_out, float(THUMB_OUT_FREE)),
                           torch.clamp(source_out - start_out, min=float(THUMB_OUT_FREE)))
     free = touches | torch.as_tensor(source_deg <= THUMB_OUT_ABOVE)
-    return torch.where(free, torch.full_like(allowed, float("inf")), allowed)
+    return torch.where(free, torch.full_like(allowed, float("inf")), allowed), lost
 
 
 def _pose_pad_gaps(hand: HandModel, positions: torch.Tensor) -> torch.Tensor:
@@ -238,15 +245,16 @@ class SourceFrames:
 def _fit_frames(out: np.ndarray, disagree: np.ndarray, source_at, hand: HandModel, config: ContactFitConfig
                 ) -> np.ndarray:
     """The fit of `fit_contacts` on the runs around the ``disagree`` frames; ``source_at(frames)``: the source's
-    `SourceFrames` there. Frames whose
-    touches still disagree after it, where the fingers could not reach a thumb held near its path, are fitted
-    again with the thumb pulled like any joint (the VRM robot's pad recall: 0.28 with the first pass alone)."""
+    `SourceFrames` there. Frames whose touches still disagree after it, where the fingers could not reach a thumb
+    held near its path, are fitted again with the thumb pulled and stepped like any joint (the VRM robot's pad
+    recall: 0.28 with the first pass alone)."""
     with stage(0.0, 0.8):
         left = _fit_pass(out, disagree, source_at, hand, config)
     if (config.thumb_prior_weight, config.thumb_lift_weight) != (1.0, 1.0) and left.any():
         with stage(0.8, 1.0):
             # half the steps: a handful of frames, from where the first pass left them
-            again = dataclasses.replace(config, thumb_prior_weight=1.0, thumb_lift_weight=1.0, steps=config.steps // 2)
+            again = dataclasses.replace(config, thumb_prior_weight=1.0, thumb_lift_weight=1.0, thumb_cmc_rate=1.0,
+                                        steps=config.steps // 2)
             _fit_pass(out, left, source_at, hand, again)
     report(1.0)
     return out
@@ -291,8 +299,11 @@ def _fit_runs(q: np.ndarray, source_frames: SourceFrames, lengths: list[int], ha
         start_excess = angle_excess(start)  # what the retarget already has is not the fit's to undo
         start_positions = joint_positions(hand, torch.as_tensor(q, dtype=torch.float32))
         start_curls = pose_curls(start_positions)
+        rate = torch.ones(len(q), *start.shape[1:])
+        rate[:, 0] = config.thumb_cmc_rate
         if source_frames.thumb_out is not None:
-            out_allowed = _thumb_out_allowed(source_frames.thumb_out, thumb_out(start_positions), source)
+            out_allowed, out_lost = _thumb_out_allowed(source_frames.thumb_out, thumb_out(start_positions), source)
+            rate[out_lost, 0] = 1.0  # a thumb to bring out to its side turns at its metacarpal: not slowed
     # each run's correction sits between two zero frames: second differences across them tie its ends
     # to zero, and no difference spans two runs
     offsets = np.cumsum([0] + [n + 2 for n in lengths[:-1]])
@@ -305,17 +316,20 @@ def _fit_runs(q: np.ndarray, source_frames: SourceFrames, lengths: list[int], ha
     # as not following (the gestures onto the mitten avatar: lift 0.71; 0.82 with it, the touches the same)
     prior_scale[0, 2] *= config.thumb_lift_weight
     optimiser = torch.optim.Adam([correction], lr=config.learning_rate)
+    # Adam steps every angle alike whatever the gradient's scale, so the prior's weights alone set only where the
+    # fit ends, not which joints it moves first: the CMC's angles are stepped at a share of the others' rate (`rate`)
     for step in range(config.steps):
         report(step / config.steps)  # and where a cancel stops the fit
-        angles = start + correction
+        delta = correction * rate
+        angles = start + delta
         positions = joint_positions(hand, tbs_euler_to_quat(angles))
         gaps = _pose_pad_gaps(hand, positions)
-        padded = correction.new_zeros(padded_len, *correction.shape[1:]).index_copy(0, slots, correction)
+        padded = delta.new_zeros(padded_len, *delta.shape[1:]).index_copy(0, slots, delta)
         smooth = (padded[2:] - 2 * padded[1:-1] + padded[:-2]).square().sum((-1, -2)).mean()
         loss = (config.contact_weight * (contact_loss(gaps, source) + thumb_touch_loss(gaps, source))
                 + config.anatomy_weight * torch.relu(angle_excess(angles) - start_excess).square().sum((-1, -2)).mean()
                 + config.smoothness_weight * smooth
-                + config.prior_weight * (correction.square() * prior_scale).sum((-1, -2)).mean()
+                + config.prior_weight * (delta.square() * prior_scale).sum((-1, -2)).mean()
                 + config.sideways_weight * _sideways_excess(positions).square().sum(-1).mean())
         if source_frames.curls is not None:
             loss = loss + config.curl_weight * _curl_excess(pose_curls(positions), source_frames.curls,
@@ -327,4 +341,4 @@ def _fit_runs(q: np.ndarray, source_frames: SourceFrames, lengths: list[int], ha
         loss.backward()
         optimiser.step()
     with torch.no_grad():
-        return tbs_euler_to_quat(clamp_bend_change(start, start + correction)).numpy()
+        return tbs_euler_to_quat(clamp_bend_change(start, start + correction * rate)).numpy()
