@@ -359,7 +359,8 @@ def _cmd_view(args: argparse.Namespace) -> int:
     setup = default_setup()
     if args.motion:
         motion, rig = load_motion_file(args.motion, options=_rig_options(args))
-        setup = CompareSetup(motion, rig or sample_performer(motion, args.motion), setup.targets)
+        setup = CompareSetup(motion, rig or sample_performer(motion, args.motion), setup.targets,
+                             path=Path(args.motion), options=_rig_options(args))
     if args.target:
         setup.targets = [load_hand_file(t, _rig_options(args)) for t in args.target]
     if args.methods:

@@ -248,6 +248,8 @@ def test_bracket_keys_jump_between_the_worst_frames_of_the_error_curve(window, q
     assert window.timeline.marked == inside
     QTest.keyClick(window, Qt.Key.Key_BracketRight)
     assert window.timeline.frame == worst[1] and "between the marks" in window.statusBar().currentMessage()
+    QTest.keyClick(window, Qt.Key.Key_BracketRight)  # no wrap: the wrap's message goes (it stayed up, misleading)
+    assert window.timeline.frame == worst[2] and window.statusBar().currentMessage() == ""
     assert next_worst(np.array(worst), worst[1], -1, inside) == (worst[-1], True)
     assert next_worst(np.array(worst), 0, 1, range(worst[0] + 1, worst[1])) is None  # none between the marks
     lines = window.shortcut_lines()

@@ -292,6 +292,24 @@ def test_a_clip_opened_again_shows_its_retargets_without_computing_them(window, 
     assert not any(a is b for a, b in zip(window.comparison.results, shown["second"]))
 
 
+def test_the_clip_shown_at_launch_opened_again_is_not_computed_again(qtbot, sample_hands, tmp_path):
+    """The same for the clip the window starts on (`s2h view`'s sample or its MOTION argument): a second fresh-eyes
+    run opened the sample gestures again and watched its retargets computed again."""
+    from compare_window import open_window
+    from s2h_viewer.app.main_window import CompareSetup
+    from s2h_viewer.io.files import load_motion_file
+    from s2h_viewer.io.npz import save_motion
+    from s2h_viewer.motions.synthesis import synthesize
+    path = save_motion(synthesize(["point", "ok"], sample_hands["birch"], seed=5, name="launch"), tmp_path / "l.npz")
+    setup = CompareSetup(load_motion_file(path)[0], sample_hands["birch"], [sample_hands["iris"]], ["tbs_copy"],
+                         path=path)
+    window = open_window(qtbot, setup, tmp_path)
+    shown, computed = list(window.comparison.results), len(window.compare.queue.computed)
+    with qtbot.waitSignal(window.comparison_ready, timeout=10_000):
+        window.load_motion(str(path))
+    assert len(window.compare.queue.computed) == computed and window.comparison.results == shown
+
+
 def test_playback_pauses_for_a_new_retarget_and_plays_on_after_it(window, qtbot):
     window.timeline.set_playing(True)
     with qtbot.waitSignal(window.comparison_ready, timeout=120_000):

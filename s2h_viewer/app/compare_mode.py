@@ -20,6 +20,7 @@ import html
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -34,6 +35,7 @@ from s2h_viewer.app.retarget_queue import RetargetQueue
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.motion import Motion
+from s2h_viewer.io.files import RigOptions, load_motion_file
 from s2h_viewer.render.compare_scene import BANNER_COLOUR
 from s2h_viewer.retarget.compare_state import CompareState, ResultKey
 from s2h_viewer.retarget.comparison import Comparison, MethodResult, corrected_result
@@ -63,14 +65,19 @@ class CompareSetup:
     source: HandModel
     targets: list[HandModel]
     methods: list[str] = field(default_factory=lambda: ["tbs_copy", "asrn"])
+    #: the file the motion was read from and the options it was read with (None: made, not read): opened again
+    #: unchanged, it is this clip (`app.opened_clips`); the clip shown at launch was computed again before
+    path: Path | None = None
+    options: RigOptions = field(default_factory=RigOptions)
 
 
 def default_setup() -> CompareSetup:
     """The shipped samples: the gestures clip on birch, onto a realistic and a stylised held-out hand."""
     from s2h_viewer import samples
-    motion = next(m for m in samples.load_sample_motions() if m.name == "gestures")
+    path = samples.ASSETS_DIR / "motions" / "gestures.npz"
+    motion = load_motion_file(path)[0]
     return CompareSetup(motion, samples.load_sample_hand(motion.hand_name),
-                        [samples.load_sample_hand("iris"), samples.load_sample_hand("laurel")])
+                        [samples.load_sample_hand("iris"), samples.load_sample_hand("laurel")], path=path)
 
 
 def sideways_text(name: str, scores) -> str:
@@ -546,7 +553,7 @@ class CompareMode(QWidget):
             self._progress.setValue(int(overall * PROGRESS_STEPS))
             # the retarget over its stage: on one line both were cut in the middle ("ASRN -> iris: c...t fit")
             self._progress.setLabelText(text.replace(": ", "\n", 1))
-        self.status(f"retargeting: {text}, {overall:.0%}")
+        self.status(f"retargeting: {text}, {int(overall * 100)}%")  # as the strip's bar: 33%, not 34%
 
     # --- showing a frame and the selection ---
     def selected_result(self) -> MethodResult:

@@ -44,6 +44,9 @@ MOUSE_SECTIONS = (("Mouse, in the 3D views of both tabs", vtk_widget.MOUSE),
                   ("Mouse, in Annotate", annotation_view.MOUSE))
 
 
+WRAPPED = "Wrapped round"  # the status bar's word when ] or [ wraps round the clip or the marked range
+
+
 class MainWindow(QMainWindow):
     comparison_ready = Signal()
     annotation_ready = Signal()
@@ -52,6 +55,8 @@ class MainWindow(QMainWindow):
         super().__init__()
         from s2h_viewer.io.files import RigOptions
         self.opened_clips = OpenedClips()  # a file opened again unchanged: the same clip, its results cached
+        if setup.path is not None:  # the clip shown at launch too
+            self.opened_clips.remember(setup.path, setup.options, setup.motion, setup.source)
         self.open_options = open_options or RigOptions()  # `s2h view`'s --side, --fps ...: for every file opened
         self.setWindowTitle("s2h-viewer[*]")
         self.settings = settings or QSettings("s2h-viewer", "s2h-viewer")
@@ -106,7 +111,9 @@ class MainWindow(QMainWindow):
         self.timeline.set_frame(frame)
         if wrapped:  # round the end: said, as a search that wraps says it
             first = "first" if direction > 0 else "last"
-            self.statusBar().showMessage(f"Wrapped round to the {first} worst frame{where}: frame {frame}", 5000)
+            self.statusBar().showMessage(f"{WRAPPED} to the {first} worst frame{where}: frame {frame}", 5000)
+        elif self.statusBar().currentMessage().startswith(WRAPPED):  # it stayed up over the next jumps
+            self.statusBar().clearMessage()
 
     def _show_unsaved(self, clean: bool) -> None:
         """A '*' in the title and on the Annotate tab while the annotation has edits not saved (the tab's is seen

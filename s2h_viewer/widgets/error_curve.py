@@ -98,6 +98,7 @@ class ErrorCurve(QWidget):
         else:  # where the two part most; nowhere where they do not part (red marks on a copy's exact bends misled)
             self.worst = worst_frames(self.gap) if self.gap.max() >= SAME_WITHIN else np.zeros(0, dtype=int)
         self._curve = None
+        QToolTip.hideText()  # one shown over the old curve read its values (another clip's) until the pointer moved
         self.setToolTip(f"{title}: {quantity}; worst frames (red): "
                         f"{', '.join(str(f) for f in self.worst) or 'none'}. {note}Click to jump; ] and [ step "
                         f"between the worst frames.")
