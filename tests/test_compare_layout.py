@@ -219,12 +219,15 @@ def test_a_click_on_a_heatmap_row_puts_that_joints_bend_on_the_curve_beside_the_
     assert curve.value_at(curve.frame_at(curve._x(frame))) == (f"frame {frame}: {curve.error[frame]:.1f}, the source's "
                                                                f"{curve.reference[frame]:.1f} (apart by "
                                                                f"{curve.gap[frame]:.1f})")
-    # the line over the curve names the retarget it describes: in joint-bend mode it read as the curve's
+    # the worst sideways bend over a joint's bend read as the curve's: it is left out there
     note = window.compare.sideways_note
-    assert note.text().startswith("DM -&gt; iris: worst sideways flexion:")
-    assert note.textFormat() == Qt.TextFormat.RichText  # the name's arrow shows as one, not as "-&gt;"
+    height = note.height()
+    assert note.text() == "" and height >= note.fontMetrics().lineSpacing()
     window.sideways_curve.trigger()  # the choices exclude each other: radio items in the menu
     assert not window.angle_curve.isChecked() and curve.reference is None and heatmap.row is None
+    # over the sideways curve, the line names the retarget and gives its worst bend; nothing above it moved
+    assert note.text().startswith("DM -&gt; iris: worst sideways flexion:") and note.height() == height
+    assert note.textFormat() == Qt.TextFormat.RichText  # the name's arrow shows as one, not as "-&gt;"
     assert window.sideways_curve.actionGroup().isExclusive()
     window.sideways_curve.trigger()  # its key again: the ASM error, with an item of its own (there was none)
     assert window.compare.curve_shows == ASM_CURVE and window.asm_curve.isChecked()

@@ -259,6 +259,8 @@ def test_while_another_clip_is_retargeted_the_heatmap_and_curve_stay_on_the_sele
     window.compare.choose_joint(topo.FINGER_JOINT_NAMES.index("ring_pip"))  # a click on a heatmap row
     window.angle_curve.trigger()
     assert window.compare.curve.title == "ASRN -> iris" and window.heatmap_choice.currentIndex() == 1
+    window.sideways_curve.trigger()
+    assert window.compare.curve.title == "ASRN -> iris"
     assert window.compare.sideways_note.text().startswith("ASRN -&gt; iris")
     with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
         pass

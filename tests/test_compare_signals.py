@@ -170,8 +170,10 @@ def test_a_visibly_wrong_pinky_drops_the_kept_score_where_s_finger_hardly_moves(
 
 def test_the_error_curve_can_show_the_sideways_flexion(window):
     result = window.compare.selected_result()
+    assert "sideways" not in window.compare.sideways_note.text()  # over the ASM error: not its line
     window.sideways_curve.trigger()
     assert window.compare.curve_shows == SIDEWAYS_CURVE and "sideways" in window.compare.curve.quantity
+    assert "worst sideways flexion" in window.compare.sideways_note.text()
     np.testing.assert_allclose(window.compare.curve.error, sideways_curve(result))
     assert window.compare.curve.error.max() > 0
     window.sideways_curve.trigger()

@@ -92,14 +92,16 @@ def sideways_text(name: str, scores) -> str:
     return f"<span style='color:#c62828'>{text}</span>" if broken else text
 
 
-def selected_notes(result: MethodResult) -> str:
-    """The line over the curve: the retarget's worst sideways bend, and its target's unsure frames if any."""
+def selected_notes(result: MethodResult, sideways: bool) -> str:
+    """The line over the curve: with the sideways curve (``sideways``), the retarget's worst sideways bend; its
+    target's unsure frames if any. The sideways line over the ASM error or a joint's bend read as the curve's (two
+    fresh-eyes runs): the scores table's "Sideways" column gives it there."""
     warning = frame_warning(result.target)
-    text = sideways_text(label(result), result.scores)
-    if warning is None:
-        return text
-    note = f"! {result.target.name}: {warning.banner}: retargets may bend there; check them in Annotate"
-    return f"{text}<br><span style='color:{BANNER_COLOUR}'>{html.escape(note)}</span>"
+    lines = [sideways_text(label(result), result.scores)] if sideways else []
+    if warning is not None:
+        note = f"! {result.target.name}: {warning.banner}: retargets may bend there; check them in Annotate"
+        lines.append(f"<span style='color:{BANNER_COLOUR}'>{html.escape(note)}</span>")
+    return "<br>".join(lines)
 
 
 def sideways_curve(result: MethodResult) -> np.ndarray:
@@ -207,6 +209,8 @@ class CompareMode(QWidget):
         self.sideways_note = QLabel()  # the selected retarget's worst sideways bend and unsure frames, in words
         self.sideways_note.setWordWrap(True)
         self.sideways_note.setTextFormat(Qt.TextFormat.RichText)  # escaped names: a plain line showed "-&gt;"
+        # a line high even when empty: choosing another curve does not move the panels above (nor an export's size)
+        self.sideways_note.setMinimumHeight(self.sideways_note.fontMetrics().lineSpacing())
         self._table_height = 0  # the scores table's height the user dragged its splitter to (0: not dragged)
         layout = QVBoxLayout(self)
         layout.addWidget(self._panels(), 1)
@@ -596,7 +600,7 @@ class CompareMode(QWidget):
         else:
             self.curve.set_curve(result.frame_error, label(result))
         self.curve.set_keys(result.corrections.frames())
-        self.sideways_note.setText(selected_notes(result))
+        self.sideways_note.setText(selected_notes(result, self.curve_shows == SIDEWAYS_CURVE))
 
     def choose_joint(self, row: int) -> None:
         """A heatmap row clicked (or a joint picked for fixing): the joint whose angle the curve shows (at once if
