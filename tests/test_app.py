@@ -172,7 +172,7 @@ def test_shortcut_help_lists_every_shortcut_the_menus_define(window, qtbot):
     assert any(line.startswith("Ctrl+H: View > Semi-transparent skin") for line in lines)
     mouse = lines[lines.index("Mouse, in the 3D views of both tabs"):]  # the mouse after the keys
     for entry in ("left drag: rotate the camera", "Shift+left drag or middle drag: pan", "right drag or wheel: zoom",
-                  "double-click a hand: show it alone", "click the error curve: jump to that frame",
+                  "double-click a hand: show it alone", "click the error curve (or drag along it): jump to that frame (scrub)",
                   "click a heatmap row (a cell or its name): that joint's bend on the error curve",
                   "click a joint (in 3D or the list): select it", "drag the ring"):
         assert any(line.startswith(entry) for line in mouse), entry

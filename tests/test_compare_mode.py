@@ -623,6 +623,17 @@ def test_error_curve_marks_the_worst_frames_and_a_click_jumps(window, qtbot):
     target = curve.worst[0]
     qtbot.mouseClick(curve, Qt.MouseButton.LeftButton, pos=QPoint(int(round(curve._x(target))), curve.height() // 2))
     assert window.timeline.frame == target and curve.frame == target
+    # a drag along it scrubs (a fresh-eyes run dragged and got only the frame it pressed on)
+    from PySide6.QtCore import QEvent, QPointF
+    from PySide6.QtGui import QMouseEvent
+    from PySide6.QtWidgets import QApplication
+    last = len(curve.error) - 1
+    for frame, buttons in ((last // 4, Qt.MouseButton.LeftButton), (last // 2, Qt.MouseButton.LeftButton),
+                           (3 * last // 4, Qt.MouseButton.NoButton)):
+        point = QPointF(curve._x(frame), curve.height() / 2)
+        QApplication.sendEvent(curve, QMouseEvent(QEvent.Type.MouseMove, point, curve.mapToGlobal(point),
+                                                  Qt.MouseButton.NoButton, buttons, Qt.KeyboardModifier.NoModifier))
+    assert window.timeline.frame == last // 2  # followed while the button was held, not after
 
 
 def test_the_error_curve_keeps_clear_of_its_caption_and_its_edges(window):

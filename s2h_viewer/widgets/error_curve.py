@@ -1,17 +1,17 @@
 """A per-frame curve under the timeline (the selected retarget's ASM error, or a tracked source's fit
-residual): a click jumps to that frame, the worst frames are marked, the current frame is a vertical line,
+residual): a click jumps to that frame (a drag scrubs), the worst frames are marked, the current frame is a vertical line,
 the pointer's frame and value are in its tooltip."""
 
 from __future__ import annotations
 
 import numpy as np
-from PySide6.QtCore import QEvent, QPointF, QRectF, Signal
+from PySide6.QtCore import QEvent, QPointF, QRectF, Qt, Signal
 from PySide6.QtGui import QColor, QPainter, QPen, QPixmap, QPolygonF
 from PySide6.QtWidgets import QToolTip, QWidget
 
 WORST = 5  # frames marked
 #: for Help's list
-MOUSE = (("click the error curve", "jump to that frame"),
+MOUSE = (("click the error curve (or drag along it)", "jump to that frame (scrub)"),
          ("hover over the error curve", "the frame under the pointer and its value (the source's beside it)"))
 MISSING_COLOUR = QColor("#d9d9d9")
 OUTSIDE_RANGE_COLOUR, RANGE_COLOUR = QColor("#eeeeee"), QColor("#2e7d32")
@@ -122,7 +122,9 @@ class ErrorCurve(QWidget):
         return super().event(event)
 
     def mouseMoveEvent(self, event) -> None:
-        if QToolTip.isVisible():  # shown: it follows the pointer from frame to frame
+        if event.buttons() & Qt.MouseButton.LeftButton:  # dragged: it scrubs, as the timeline's slider does
+            self.frame_clicked.emit(self.frame_at(event.position().x()))
+        elif QToolTip.isVisible():  # shown: it follows the pointer from frame to frame
             QToolTip.showText(event.globalPosition().toPoint(), self._tooltip_at(event.position().x()), self)
         super().mouseMoveEvent(event)
 
