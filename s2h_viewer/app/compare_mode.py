@@ -74,7 +74,7 @@ class CompareSetup:
 def default_setup() -> CompareSetup:
     """The shipped samples: the gestures clip on birch, onto a realistic and a stylised held-out hand."""
     from s2h_viewer import samples
-    path = samples.ASSETS_DIR / "motions" / "gestures.npz"
+    path = samples.ASSETS_DIR / next(m["file"] for m in samples.read_index()["motions"] if m["name"] == "gestures")
     motion = load_motion_file(path)[0]
     return CompareSetup(motion, samples.load_sample_hand(motion.hand_name),
                         [samples.load_sample_hand("iris"), samples.load_sample_hand("laurel")], path=path)

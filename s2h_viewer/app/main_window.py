@@ -56,7 +56,7 @@ class MainWindow(QMainWindow):
         from s2h_viewer.io.files import RigOptions
         self.opened_clips = OpenedClips()  # a file opened again unchanged: the same clip, its results cached
         if setup.path is not None:  # the clip shown at launch too
-            self.opened_clips.remember(setup.path, setup.options, setup.motion, setup.source)
+            self.opened_clips.remember(OpenedClips.key(setup.path, setup.options), setup.motion, setup.source)
         self.open_options = open_options or RigOptions()  # `s2h view`'s --side, --fps ...: for every file opened
         self.setWindowTitle("s2h-viewer[*]")
         self.settings = settings or QSettings("s2h-viewer", "s2h-viewer")
@@ -580,7 +580,8 @@ class MainWindow(QMainWindow):
         from s2h_viewer.samples import load_sample_hand
         if not self._confirm_corrections(f"opening {Path(path).name}"):
             return
-        opened = self.opened_clips.get(path, self.open_options)
+        clip_key = OpenedClips.key(path, self.open_options)  # the file hashed once, whether read again or not
+        opened = self.opened_clips.get(clip_key)
         if opened is not None:  # the same file again, unchanged: its retargets are shown, not computed again
             self._remember(path)
             self._loading.append(("motion", path, opened[0]))
@@ -600,7 +601,7 @@ class MainWindow(QMainWindow):
         self._remember(path)
         self.settings.setValue("files/motion_dir", str(Path(path).resolve().parent))
         self._loading.append(("motion", path, motion))
-        self.opened_clips.remember(path, self.open_options, motion, source)
+        self.opened_clips.remember(clip_key, motion, source)
         self.compare.load(motion, source)
 
     def ask_batch(self) -> None:

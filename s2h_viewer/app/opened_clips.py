@@ -21,9 +21,10 @@ class OpenedClips:
         self._clips: OrderedDict[tuple, tuple[Motion, HandModel]] = OrderedDict()
 
     @staticmethod
-    def _key(path: str | Path, options: object) -> tuple | None:
+    def key(path: str | Path, options: object) -> tuple | None:
         """The file's path and a digest of its bytes (a modification time may not change within a save's second
-        on every file system), and the options."""
+        on every file system), and the options; None for a file that cannot be read. Taken once per open: `get`
+        and `remember` both take it."""
         digest = hashlib.blake2b(digest_size=16)
         try:
             with open(path, "rb") as fh:
@@ -33,16 +34,14 @@ class OpenedClips:
             return None
         return str(Path(path).resolve()), digest.hexdigest(), repr(options)
 
-    def get(self, path: str | Path, options: object) -> tuple[Motion, HandModel] | None:
-        """The clip read from ``path`` with ``options`` before, if the file has not changed since."""
-        key = self._key(path, options)
+    def get(self, key: tuple | None) -> tuple[Motion, HandModel] | None:
+        """The clip read before under ``key`` (`key`: the same file, unchanged, with the same options)."""
         if key not in self._clips:
             return None
         self._clips.move_to_end(key)
         return self._clips[key]
 
-    def remember(self, path: str | Path, options: object, motion: Motion, source: HandModel) -> None:
-        key = self._key(path, options)
+    def remember(self, key: tuple | None, motion: Motion, source: HandModel) -> None:
         if key is None:
             return
         self._clips[key] = (motion, source)

@@ -36,9 +36,9 @@ class RetargetQueue(QObject):
         self._current: ResultKey | None = None
         self._cancel = threading.Event()
         self._thread: threading.Thread | None = None
-        #: the last clip's source semantics: (motion id, source id) -> (motion, source, (pose, ASM)); the objects
-        #: held, so that a later clip given a freed one's id is never served its semantics
-        self._semantics: dict[tuple[int, int], tuple] = {}
+        #: the last clip's source semantics, (motion, source, (pose, ASM)): matched by the objects themselves, so that
+        #: a later clip given a freed one's id is never served its semantics
+        self._semantics: tuple | None = None
         self.computed: list[ResultKey] = []  # every job that ran to the end, in order (what tests check)
 
     @property
@@ -93,12 +93,10 @@ class RetargetQueue(QObject):
             try:
                 with reporting(hook), stage(0.0, 1.0, what):
                     report(0.0)
-                    semantics_key = (key.motion, key.source)
-                    held = self._semantics.get(semantics_key)
+                    held = self._semantics
                     if held is None or held[0] is not motion or held[1] is not source:
-                        held = (motion, source, source_semantics(motion, source))
-                        self._semantics = {semantics_key: held}
-                        self.semantics_ready.emit(semantics_key, held[2])
+                        held = self._semantics = (motion, source, source_semantics(motion, source))
+                        self.semantics_ready.emit((key.motion, key.source), held[2])
                     result = compute_result(motion, source, held[2][1], target, key.method)
                     report(1.0)
                 self.computed.append(key)

@@ -1,6 +1,6 @@
 """A per-frame curve under the timeline (the selected retarget's ASM error, or a tracked source's fit
-residual): a click jumps to that frame (a drag scrubs), the worst frames are marked, the current frame is a vertical line,
-the pointer's frame and value are in its tooltip."""
+residual): a click jumps to that frame (a drag scrubs), the worst frames are marked, the current frame is a
+vertical line, the pointer's frame and value are in its tooltip."""
 
 from __future__ import annotations
 
@@ -109,10 +109,9 @@ class ErrorCurve(QWidget):
         is drawn under the grey band where the two are close, and a 1-3 deg gap on a 90 deg axis hid there."""
         if self.missing[frame]:
             return f"frame {frame}: not measured"
-        text = f"frame {frame}: {self.error[frame]:.{self.decimals}f}"
+        text = f"frame {frame}: {self._figure(self.error[frame])}"
         if self.reference is not None:
-            text += (f", the source's {self.reference[frame]:.{self.decimals}f} "
-                     f"(apart by {self.gap[frame]:.{self.decimals}f})")
+            text += f", the source's {self._figure(self.reference[frame])} (apart by {self._figure(self.gap[frame])})"
         return text
 
     def event(self, event) -> bool:
@@ -139,7 +138,7 @@ class ErrorCurve(QWidget):
         frame = int(self.gap.argmax())
         if self.gap[frame] < SAME_WITHIN:
             return ", the same as the source's throughout"
-        return f", apart by at most {self.gap[frame]:.{self.decimals}f} (frame {frame})"
+        return f", apart by at most {self._figure(self.gap[frame])} (frame {frame})"
 
     def set_keys(self, frames: np.ndarray) -> None:
         """Mark the frames the shown retarget's corrections key (diamonds on the frame axis)."""
