@@ -181,7 +181,7 @@ def gaps_disagree(source_gaps: np.ndarray, target_gaps: np.ndarray) -> np.ndarra
 
 def thumb_touch_loss(gaps: torch.Tensor, source_gaps: torch.Tensor) -> torch.Tensor:
     """Mean over frames of the squared misses of the thumb-to-fingertip gaps (F, 10 pad gaps) against the
-    signature's `THUMB_TOUCH`: a thumb at a fingertip in the source (an OK sign's 3%, under it but no pad
+    signature's `THUMB_TOUCH`: a thumb at a fingertip in the source (a pinch's 2%, under it but no pad
     contact) is kept under 0.8 times it, one away from it beyond 1.2 times it. Without it, opening a thumb
     the network had pressed onto the index (a pad contact the source does not make) let it fly off."""
     near = _thumb_at_tips(source_gaps)

@@ -4,7 +4,9 @@ Sites: the five fingertip pads (a point 60% along the last phalanx, with the int
 radius) and the palm (the rectangle spanned by the wrist and the four finger knuckles in the
 canonical palm frame, thickened by the palm half-thickness). A finger meets the palm with the
 nearer of its pad and its tip: in a fist the last phalanx stands on the palm tip first, with every
-bend inside the anatomical 90 deg. A pair is in contact when the gap
+bend inside the anatomical 90 deg. The thumb meets a finger with the nearest points of their
+fingertips, pad to tip (`thumb_pair_gaps`): in a tip pinch the pads 60% along stay 6-9% of the hand
+apart while the tips touch. A pair is in contact when the gap
 between the surfaces is below ``CONTACT_TOLERANCE`` x hand length (1.5%, DESIGN.md section 5).
 Everything is torch and differentiable, so gesture fitting can pull pads together.
 """
@@ -61,14 +63,51 @@ def _pad_radii(hand: HandModel, dtype: torch.dtype) -> tuple[torch.Tensor, torch
 
 
 _PAD_A, _PAD_B = (list(side) for side in zip(*combinations(range(5), 2)))
+_N_THUMB_PAIRS = topo.N_FINGERS - 1  # combinations list the thumb's pairs first
 
 
 def pad_pair_gaps(hand: HandModel, positions: torch.Tensor) -> torch.Tensor:
     """(T, 10) surface gaps in metres of the fingertip pad pairs (``CONTACT_PAIRS[PAD_PAIRS]``) of (T, 21, 3)
-    joint positions: what the contact fit, run at every step, needs of `contact_gaps`."""
+    joint positions: what the contact fit, run at every step, needs of `contact_gaps`. The thumb's four pairs
+    (the first) are `thumb_pair_gaps`."""
     pads = pad_centres(positions)
     _, pad_r = _pad_radii(hand, pads.dtype)
-    return (pads[:, _PAD_A] - pads[:, _PAD_B]).norm(dim=-1) - pad_r[_PAD_A] - pad_r[_PAD_B]
+    fingers = (pads[:, _PAD_A[_N_THUMB_PAIRS:]] - pads[:, _PAD_B[_N_THUMB_PAIRS:]]).norm(dim=-1)
+    return torch.cat([thumb_pair_gaps(hand, positions),
+                      fingers - pad_r[_PAD_A[_N_THUMB_PAIRS:]] - pad_r[_PAD_B[_N_THUMB_PAIRS:]]], -1)
+
+
+def thumb_pair_gaps(hand: HandModel, positions: torch.Tensor) -> torch.Tensor:
+    """(T, 4) surface gaps in metres of the thumb's fingertip with each finger's (index .. pinky): the nearest
+    approach of the capsules from each pad centre to where its tip joint's cap ends (radii interpolated between
+    the pad's and the tip's). A tip pinch (Oculus's pinch clip, the authored Pinch Tight) touches at the tips,
+    with the pads still apart; fingertip pads side by side (two fingers) are measured pad to pad as before."""
+    radii, pad_r = _pad_radii(hand, positions.dtype)
+    tip_r = radii[topo.TIP_JOINTS]
+    pads = pad_centres(positions)
+    reach = positions[:, topo.TIP_JOINTS] - pads
+    length = reach.norm(dim=-1, keepdim=True)
+    ends = pads + reach * (1.0 - torch.minimum(tip_r[:, None], 0.5 * length) / length)  # the cap ends at the tip
+    distance, along_thumb, along_finger = _nearest_approach(pads[:, :1], ends[:, :1], pads[:, 1:], ends[:, 1:])
+    thumb_r = pad_r[0] + along_thumb * (tip_r[0] - pad_r[0])
+    finger_r = pad_r[1:] + along_finger * (tip_r[1:] - pad_r[1:])
+    return distance - thumb_r - finger_r
+
+
+def _nearest_approach(p0: torch.Tensor, p1: torch.Tensor, q0: torch.Tensor, q1: torch.Tensor
+                      ) -> tuple[torch.Tensor, torch.Tensor, torch.Tensor]:
+    """Distance between segments p0-p1 and q0-q1 (..., 3; neither of length 0) at their nearest points, and
+    where those lie along each (0 .. 1): the clamped closed form (Ericson, Real-Time Collision Detection 5.1.9)."""
+    d1, d2, r = p1 - p0, q1 - q0, p0 - q0
+    a, e = (d1 * d1).sum(-1), (d2 * d2).sum(-1)
+    b, c, f = (d1 * d2).sum(-1), (d1 * r).sum(-1), (d2 * r).sum(-1)
+    across = a * e - b * b  # 0 for parallel segments: start from p0
+    s = torch.where(across > 1e-12 * a * e, (b * f - c * e) / across.clamp_min(1e-30), torch.zeros_like(a)).clamp(0, 1)
+    t = (b * s + f) / e
+    s = torch.where(t < 0, (-c / a).clamp(0, 1), torch.where(t > 1, ((b - c) / a).clamp(0, 1), s))
+    t = t.clamp(0, 1)
+    nearest = (p0 + s[..., None] * d1) - (q0 + t[..., None] * d2)
+    return nearest.norm(dim=-1), s, t
 
 
 def contact_gaps(hand: HandModel, pose: HandPose) -> torch.Tensor:

@@ -22,10 +22,10 @@ EXTENDED_BELOW, CURLED_ABOVE, CURL_MARGIN = 70.0, 150.0, 45.0
 #: a PIP/DIP flexing at least `SIDEWAYS_FLEXION` and bending more than `SIDEWAYS_LIMIT` sideways reads as
 #: a broken finger, unless the source bends as far (+5); a joint flexed less reads its splay, not its hinge
 SIDEWAYS_LIMIT, SIDEWAYS_FLEXION = 25.0, 45.0
-#: the thumb's pad touches a fingertip's within this gap (hand lengths): looser than the contact metric's
-#: 1.5%, as authored touches on real rigs leave 2-4% (an OK sign on the Godot hand: 3.3%), and pinches
-#: around an object 7% and more
-THUMB_TOUCH = 0.05
+#: the thumb's fingertip touches a finger's within this gap (hand lengths, `contacts.thumb_pair_gaps`): looser
+#: than the contact metric's 1.5%, as authored touches on real rigs leave up to 2.4% (the Godot hand's OK sign 1.3%,
+#: Pinch Tight 2.3%), and the nearest pose that does not touch is a pinch around a flat object at 5.0%
+THUMB_TOUCH = 0.035
 THUMB_PAIRS = tuple(i for i, pair in enumerate(CONTACT_PAIRS) if "thumb" in pair and "palm" not in pair)
 #: a thumb pointing further out to its side than this (degrees, `semantics.flexion.thumb_out`) reads as out (a
 #: thumbs-up, a shaka: the authored ones 40-52), one pointing less than `THUMB_IN_BELOW` as in (the Meta hand's
