@@ -24,6 +24,9 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     performer = load_hand_file(args.rig, _rig_options(args)) if args.rig else None
     for path in args.motion or []:  # a motion file on its own rig (a recording: on the hand fitted to it)
         motion, rig = load_motion_file(path, performer, options=_rig_options(args))
+        if rig is not None and rig.meta.get("rest_note"):
+            print(f"{path}: {rig.meta['rest_note']}; give the hand file of the rig it was made for: --rig FILE",
+                  file=sys.stderr)
         if rig is not None:
             hands[motion.hand_name] = rig
         elif motion.hand_name not in hands:
@@ -72,13 +75,12 @@ def _render_comparison(args: argparse.Namespace) -> int:
     ``--start`` to ``--end`` of it (MP4, GIF); the frames are checked against the clip before any retarget."""
     from tqdm import tqdm
 
-    from s2h_viewer import samples
-    from s2h_viewer.io.files import load_hand_file, load_motion_file
+    from s2h_viewer.io.files import load_hand_file
     from s2h_viewer.render.compare_scene import render_comparison
     from s2h_viewer.render.video import VIDEO_SUFFIXES, frame_range
     from s2h_viewer.retarget.comparison import build_comparison
 
-    motion, rig = load_motion_file(args.motion, options=_rig_options(args))
+    motion, source = _performed(args.motion, args.source, _rig_options(args))
     if Path(args.out).suffix.lower() in VIDEO_SUFFIXES:
         frames = frame_range(motion.n_frames, args.start, args.end, clip=args.motion)
     elif args.start is not None or args.end is not None:
@@ -86,7 +88,6 @@ def _render_comparison(args: argparse.Namespace) -> int:
                        f"one --frame")
     else:
         frames = frame_range(motion.n_frames, args.frame or 0, args.frame or 0, clip=args.motion)  # the one frame
-    source = rig or samples.sample_performer(motion, args.motion)
     targets = [load_hand_file(t, _rig_options(args)) for t in (args.target or ["iris", "laurel"])]
     methods = (args.methods or "tbs_copy,asrn").split(",")
     with _progress_bar("retarget", len(targets) * len(methods), "retarget", disable=args.quiet):
@@ -150,6 +151,22 @@ def _rig_options(args: argparse.Namespace):
     return RigOptions(side=args.side, scheme=args.scheme, joint_map=args.joint_map,
                       animation=getattr(args, "animation", None), fps=getattr(args, "fps", None),
                       unit=getattr(args, "unit", None), hinges_from=getattr(args, "hinges_from", None))
+
+
+def _performed(motion_file: str, source_file: str | None, options):
+    """A motion file and the hand it is performed on: ``source_file`` where given (the rig it was made for, its
+    animation read onto that rig's bones), else its own rig or its sample hand. A rig whose rest is a pose (a
+    skeleton-only clip, `semantics.rest_pose`) is said on stderr."""
+    from s2h_viewer.io.files import load_hand_file, load_motion_file
+    from s2h_viewer.samples import sample_performer
+
+    given = load_hand_file(source_file, options) if source_file else None
+    motion, rig = load_motion_file(motion_file, given, options)
+    source = rig or given or sample_performer(motion, motion_file)
+    if source.meta.get("rest_note"):
+        print(f"{motion_file}: {source.meta['rest_note']}; give the hand file of the rig it was made for: --source FILE",
+              file=sys.stderr)
+    return motion, source
 
 
 def _cmd_rig(args: argparse.Namespace) -> int:
@@ -229,15 +246,11 @@ def _cmd_annotate(args: argparse.Namespace) -> int:
 
 def _cmd_retarget(args: argparse.Namespace) -> int:
     from s2h_viewer.annotate.trust import frame_warning
-    from s2h_viewer.io.files import export_sidecar, load_hand_file, load_motion_file, save_motion_file
+    from s2h_viewer.io.files import export_sidecar, load_hand_file, save_motion_file
     from s2h_viewer.retarget import retarget
 
     options = _rig_options(args)
-    motion, rig = load_motion_file(args.motion, options=options)
-    source = load_hand_file(args.source, options) if args.source else rig
-    if source is None:
-        from s2h_viewer.samples import sample_performer
-        source = sample_performer(motion, args.motion)
+    motion, source = _performed(args.motion, args.source, options)
     target = load_hand_file(args.target, options)
     for hand, path in ((source, args.source or args.motion), (target, args.target)):
         if hand.meta.get("unit_note"):
@@ -353,14 +366,15 @@ def _cmd_batch(args: argparse.Namespace) -> int:
 
 def _cmd_view(args: argparse.Namespace) -> int:
     from s2h_viewer.app.main_window import CompareSetup, default_setup, run
-    from s2h_viewer.io.files import load_hand_file, load_motion_file
-    from s2h_viewer.samples import sample_performer
+    from s2h_viewer.io.files import load_hand_file
 
     setup = default_setup()
+    if args.source and not args.motion:
+        raise S2HError("--source names the hand a --motion file is performed on: give the --motion too")
     if args.motion:
-        motion, rig = load_motion_file(args.motion, options=_rig_options(args))
-        setup = CompareSetup(motion, rig or sample_performer(motion, args.motion), setup.targets,
-                             path=Path(args.motion), options=_rig_options(args))
+        motion, source = _performed(args.motion, args.source, _rig_options(args))
+        setup = CompareSetup(motion, source, setup.targets, path=Path(args.motion), options=_rig_options(args),
+                             rig_file=args.source)
     if args.target:
         setup.targets = [load_hand_file(t, _rig_options(args)) for t in args.target]
     if args.methods:
@@ -368,6 +382,11 @@ def _cmd_view(args: argparse.Namespace) -> int:
     if setup.motion.fit is not None:
         print(f"{args.motion}: {setup.motion.fit.describe()}")
     return run(setup, _rig_options(args))
+
+
+SOURCE_HELP = ("hand file (or sample name) of the rig the motion was made for, where its file lacks it (a skeleton "
+               "with no mesh resting in a pose: s2h says so); a glTF/FBX animation is read onto that rig's bones "
+               "(default: the file's own rig, or its sample hand)")
 
 
 def _add_rig_options(parser: argparse.ArgumentParser) -> None:
@@ -440,6 +459,7 @@ def build_parser() -> argparse.ArgumentParser:
     rd.add_argument("--out", default="hands.png", help=".png, or with --motion also .mp4 / .gif (the whole timeline, "
                                                         "or --start to --end)")
     rd.add_argument("--motion", help="compare mode: retarget this motion file and render the grid of methods")
+    rd.add_argument("--source", help="with --motion: " + SOURCE_HELP)
     rd.add_argument("--target", action="append", help="with --motion: target hand file or sample name (repeatable)")
     rd.add_argument("--methods", help="with --motion: comma-separated methods (default tbs_copy,asrn)")
     rd.add_argument("--frame", type=int, help="with --motion and a .png: the frame to draw (default 0)")
@@ -452,6 +472,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     vw = sub.add_parser("view", help="the desktop viewer: compare retargeting methods on a timeline")
     vw.add_argument("--motion", help="motion file or tracking recording (default: the shipped gestures clip)")
+    vw.add_argument("--source", help="with --motion: " + SOURCE_HELP)
     vw.add_argument("--target", action="append", help="target hand file or sample name (default: iris, laurel)")
     vw.add_argument("--methods", help="comma-separated methods (default: the last used, or tbs_copy,asrn)")
     _add_rig_options(vw)
@@ -468,7 +489,7 @@ def build_parser() -> argparse.ArgumentParser:
     rt = sub.add_parser("retarget", help="retarget a motion file onto a target hand and export it")
     rt.add_argument("--motion", required=True, help="motion file (.npz .bvh .glb .gltf .fbx), or a tracking "
                     "recording: WebXR/OpenXR joint poses or MediaPipe landmarks (.json), keypoints (.npy .npz)")
-    rt.add_argument("--source", help="hand the motion is performed on (default: its own rig, or its sample hand)")
+    rt.add_argument("--source", help=SOURCE_HELP)
     rt.add_argument("--target", required=True, help="target hand file or sample name")
     rt.add_argument("--method", default="asrn", help="copy, tbs_copy, dm, asrn or asm_opt")
     rt.add_argument("--out", required=True, help="output file: .glb (on the target rig), .bvh, .npz, or .fbx (through "

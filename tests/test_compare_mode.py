@@ -312,6 +312,40 @@ def test_the_clip_shown_at_launch_opened_again_is_not_computed_again(qtbot, samp
     assert len(window.compare.queue.computed) == computed and window.comparison.results == shown
 
 
+def test_a_clip_resting_in_its_pose_asks_for_its_rig_and_opens_on_it(window, qtbot):
+    """Oculus's pinch clip has no mesh and rests in the pinch: opening it says so and offers its rig's hand file,
+    on which the source touches thumb to index; Cancel keeps the clip on screen, "as it is" opens it on its own
+    skeleton."""
+    from test_annotate_window import answer, choose_file, click
+    from s2h_viewer.hand.kinematics import joint_positions
+    from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, thumb_pair_gaps
+    import torch
+    pinch = str(ASSETS_DIR / "motions" / "real" / "r_hand_pinch_anim.fbx")
+    rig = ASSETS_DIR / "hands" / "real" / "r_hand_skeletal_lowres.fbx"
+    before = window.comparison.motion
+    shown = answer(click("Cancel"))
+    window.load_motion(pinch)
+    assert "r_hand_pinch_anim.fbx: its skeleton has no mesh and rests in a pose" in shown[0]
+    assert window.comparison.motion is before and not window.compare.queue.pending()
+    answer(click("Choose its rig's hand file..."), choose_file(rig))
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.load_motion(pinch)
+    source = window.comparison.source
+    assert source.name == "r_hand_skeletal_lowres" and source.mesh is not None
+    positions = joint_positions(source, torch.as_tensor(window.comparison.motion.q_tbs, dtype=torch.float64))
+    assert (thumb_pair_gaps(source, positions)[:, 0] < CONTACT_TOLERANCE * source.hand_length).all()
+    answer(click("Open it as it is"))
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
+        window.load_motion(pinch)
+    assert window.comparison.source.mesh is None and window.comparison.source.meta["rest_note"]
+    # `s2h view --motion` shows the clip first, then makes the same offer; keeping it changes nothing
+    from s2h_viewer.app.main_window import CompareSetup
+    shown = answer(click("Keep it as it is"))
+    window.offer_launch_rig(CompareSetup(window.comparison.motion, window.comparison.source, [], path=Path(pinch)))
+    assert "rests in a pose" in shown[0] and window.comparison.source.mesh is None
+    assert not window.compare.queue.pending()
+
+
 def test_playback_pauses_for_a_new_retarget_and_plays_on_after_it(window, qtbot):
     window.timeline.set_playing(True)
     with qtbot.waitSignal(window.comparison_ready, timeout=120_000):

@@ -69,6 +69,8 @@ class CompareSetup:
     #: unchanged, it is this clip (`app.opened_clips`); the clip shown at launch was computed again before
     path: Path | None = None
     options: RigOptions = field(default_factory=RigOptions)
+    #: the hand file it was read onto (`s2h view --source`), where its own skeleton was not used
+    rig_file: str | None = None
 
 
 def default_setup() -> CompareSetup:

@@ -56,7 +56,8 @@ class MainWindow(QMainWindow):
         from s2h_viewer.io.files import RigOptions
         self.opened_clips = OpenedClips()  # a file opened again unchanged: the same clip, its results cached
         if setup.path is not None:  # the clip shown at launch too
-            self.opened_clips.remember(OpenedClips.key(setup.path, setup.options), setup.motion, setup.source)
+            self.opened_clips.remember(OpenedClips.key(setup.path, (setup.options, setup.rig_file)), setup.motion,
+                                        setup.source)
         self.open_options = open_options or RigOptions()  # `s2h view`'s --side, --fps ...: for every file opened
         self.setWindowTitle("s2h-viewer[*]")
         self.settings = settings or QSettings("s2h-viewer", "s2h-viewer")
@@ -575,21 +576,28 @@ class MainWindow(QMainWindow):
                           "*.npy)", self.load_motion,
                           self._start_dir("files/motion_dir", "motions"))
 
-    def load_motion(self, path: str) -> None:
+    def load_motion(self, path: str, rig_file: str | None = None) -> None:
+        """Open the motion file ``path``, performed on the hand file ``rig_file`` where given (the rig it was made
+        for: a skeleton-only clip resting in a pose asks for it)."""
         from s2h_viewer.io.files import load_motion_file
         from s2h_viewer.samples import load_sample_hand
-        if not self._confirm_corrections(f"opening {Path(path).name}"):
+        if rig_file is None and not self._confirm_corrections(f"opening {Path(path).name}"):
             return
-        clip_key = OpenedClips.key(path, self.open_options)  # the file hashed once, whether read again or not
+        clip_key = OpenedClips.key(path, (self.open_options, rig_file))  # hashed once, whether read again or not
         opened = self.opened_clips.get(clip_key)
         if opened is not None:  # the same file again, unchanged: its retargets are shown, not computed again
             self._remember(path)
             self._loading.append(("motion", path, opened[0]))
             self.compare.load(*opened)
             return
+        performer = None
+        if rig_file is not None:
+            performer = self._load_hand(rig_file)
+            if performer is None:
+                return
         try:
-            motion, rig = load_motion_file(path, options=self.open_options)
-            unit = self._chosen_unit(path, rig) if rig is not None else ""
+            motion, rig = load_motion_file(path, performer, options=self.open_options)
+            unit = self._chosen_unit(path, rig) if rig is not None and performer is None else ""
             if unit is None:
                 return
             if unit:
@@ -598,11 +606,36 @@ class MainWindow(QMainWindow):
         except (S2HError, KeyError) as exc:
             self.error(str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc))
             return
+        if source.meta.get("rest_note") and not self._open_as_it_is(path, source.meta["rest_note"]):
+            return
         self._remember(path)
         self.settings.setValue("files/motion_dir", str(Path(path).resolve().parent))
         self._loading.append(("motion", path, motion))
         self.opened_clips.remember(clip_key, motion, source)
         self.compare.load(motion, source)
+
+    def _open_as_it_is(self, path: str, note: str, shown: bool = False) -> bool:
+        """For a clip whose skeleton rests in a pose: whether to open it on that skeleton after all; choosing its
+        rig's hand file opens it on that instead (False then, as for Cancel). ``shown``: the clip is on screen
+        already (`s2h view --motion`), to keep as it is or open on its rig."""
+        name = Path(path).name
+        choice = ask(self, "s2h-viewer: the clip's rig", f"{name}: {note}.",
+                     [("Choose its rig's hand file...", QMessageBox.ButtonRole.AcceptRole),
+                      ("Keep it as it is" if shown else "Open it as it is", QMessageBox.ButtonRole.DestructiveRole)]
+                     + ([] if shown else [("Cancel", QMessageBox.ButtonRole.RejectRole)]),
+                     "The hand file of the rig it was made for (the skinned hand with the same bones) gives its "
+                     "rotations their true rest; the clip is then read onto that rig's bones.")
+        if choice == 0:
+            self._ask_to_open(f"The hand file {name} was made for", TARGET_HAND_FILTER,
+                              lambda rig_file: self.load_motion(path, rig_file), self._hand_dir())
+        elif choice == 2:
+            self.statusBar().showMessage(f"{name}: not opened", 5000)
+        return choice == 1
+
+    def offer_launch_rig(self, setup: CompareSetup) -> None:
+        """The clip shown at launch resting in a pose (`s2h view --motion` without --source): the same offer."""
+        if setup.path is not None and setup.source.meta.get("rest_note"):
+            self._open_as_it_is(str(setup.path), setup.source.meta["rest_note"], shown=True)
 
     def ask_batch(self) -> None:
         last = Path(str(self.settings.value("files/batch_dir", "")))
@@ -891,8 +924,10 @@ def run(setup: CompareSetup | None = None, open_options=None) -> int:
     from PySide6.QtWidgets import QApplication
     app = QApplication.instance() or QApplication(sys.argv)
     app.setApplicationName("s2h-viewer")
-    window = MainWindow(setup or default_setup(), open_options=open_options)
+    setup = setup or default_setup()
+    window = MainWindow(setup, open_options=open_options)
     window.show()
     window.activateWindow()  # without a window manager nobody else gives it the keyboard
     window.start_comparison()
+    QTimer.singleShot(0, lambda: window.offer_launch_rig(setup))
     return app.exec()

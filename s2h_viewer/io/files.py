@@ -144,12 +144,18 @@ def _load_hand(path: Path, suffix: str, options: RigOptions) -> HandModel:
 
 def load_motion_file(path: str | Path, hand: HandModel | None = None, options: RigOptions = RigOptions()
                      ) -> tuple[Motion, HandModel | None]:
-    """A motion and the hand it is performed on: the file's own rig for BVH/glTF/FBX (``hand`` may be
-    given to skip re-reading it), the hand fitted to a tracking recording (the motion's ``fit`` holds the
-    keypoints and residual), None for an npz (its ``hand_name`` names a sample hand)."""
+    """A motion and the hand it is performed on: the file's own rig for BVH/glTF/FBX, the hand fitted to a
+    tracking recording (the motion's ``fit`` holds the keypoints and residual), None for an npz (its
+    ``hand_name`` names a sample hand). ``hand``: the rig it was made for, where the file's skeleton lacks one
+    (no mesh, a rest that is a pose): a glTF/FBX animation is read onto its bones, an npz is performed on it; a
+    BVH or a recording has its own skeleton, and giving one is an `InputFileError`."""
     path = Path(path)
     suffix = _suffix(require_readable_file(path), MOTION_SUFFIXES, "motion")
     from s2h_viewer.io.recordings import is_recording
+    if hand is not None and (suffix == ".bvh" or is_recording(path)):
+        what = "a BVH clip carries its own skeleton" if suffix == ".bvh" else "a recording is fitted a hand of its own"
+        raise InputFileError(path, f"{what}: a hand to perform it on (--source / --rig {Path(hand.source).name}) "
+                                   f"applies only to npz clips and glTF/FBX animations")
     if is_recording(path):
         from s2h_viewer.io.recordings import read_recording
         from s2h_viewer.tracking.fitter import fit_recording

@@ -199,6 +199,7 @@ def annotate(hand: HandModel, source: Path, hinge_evidence: Path | None = None,
     from s2h_viewer.annotate import trust
     from s2h_viewer.annotate.hinges import LABEL as HINGE_LABEL
     from s2h_viewer.annotate.solver import estimate_radii, solve_tbs_frames
+    from s2h_viewer.semantics.rest_pose import posed_rest_note
 
     side = hand_side(hand)
     annotation = load_annotation(source, side) if source.exists() else None
@@ -236,6 +237,7 @@ def annotate(hand: HandModel, source: Path, hinge_evidence: Path | None = None,
     if solution is not None or diagnostics or refused:
         hand.meta["solver_diagnostics"] = ([refused] if refused else []) + diagnostics
     hand.validate()
+    hand.meta["rest_note"] = posed_rest_note(hand)
     return hand
 
 
