@@ -106,3 +106,15 @@ def test_shipped_hand_matches_its_generator(sample_hands, seed):
     np.testing.assert_array_equal(shipped.mesh.faces, fresh.mesh.faces)
     np.testing.assert_allclose(shipped.mesh.vertices, fresh.mesh.vertices, atol=1e-5)
     np.testing.assert_allclose(shipped.mesh.weights, fresh.mesh.weights, atol=1e-4)
+
+
+@pytest.mark.parametrize("name", ["gestures", "fingerspelling"])
+def test_shipped_motion_matches_its_script(sample_hands, name):
+    """The sample motions are their script re-synthesised on birch, touches fitted pad to pad as the gesture library
+    labels them (`contact_gaps(thumb_tips=False)`): a thumb measured to its tip there moves these two clips' keys by
+    0.05-0.13 (quaternion components), and the networks' training data with them."""
+    from s2h_viewer.io.npz import load_motion
+    from s2h_viewer.motions.synthesis import synthesize
+    shipped = load_motion(samples.ASSETS_DIR / "motions" / f"{name}.npz")
+    fresh = synthesize(shipped.meta["script"], sample_hands["birch"], seed=shipped.meta["seed"], name=name)
+    np.testing.assert_allclose(fresh.q_tbs, shipped.q_tbs, atol=1e-3)

@@ -56,7 +56,8 @@ def fit_gesture_angles(hand: HandModel, gestures: list[Gesture], steps: int = 30
 
     def losses(d: torch.Tensor) -> torch.Tensor:
         angles = base + d * free
-        gaps = contact_gaps(hand, forward_kinematics(hand, tbs_euler_to_quat(angles))) / hand.hand_length
+        gaps = contact_gaps(hand, forward_kinematics(hand, tbs_euler_to_quat(angles)),  # the labels' pads
+                            thumb_tips=False) / hand.hand_length
         touch = torch.relu(gaps + 0.1 * tol).square() + torch.relu(-gaps - 0.6 * tol).square()
         apart = torch.relu(1.5 * tol - gaps).square() * apart_weight
         limits = (angles - clamp_to_limits(angles)).square().sum((-1, -2))

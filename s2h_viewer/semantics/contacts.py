@@ -66,15 +66,18 @@ _PAD_A, _PAD_B = (list(side) for side in zip(*combinations(range(5), 2)))
 _N_THUMB_PAIRS = topo.N_FINGERS - 1  # combinations list the thumb's pairs first
 
 
-def pad_pair_gaps(hand: HandModel, positions: torch.Tensor) -> torch.Tensor:
+def pad_pair_gaps(hand: HandModel, positions: torch.Tensor, thumb_tips: bool = True) -> torch.Tensor:
     """(T, 10) surface gaps in metres of the fingertip pad pairs (``CONTACT_PAIRS[PAD_PAIRS]``) of (T, 21, 3)
     joint positions: what the contact fit, run at every step, needs of `contact_gaps`. The thumb's four pairs
-    (the first) are `thumb_pair_gaps`."""
+    (the first) are `thumb_pair_gaps`; ``thumb_tips=False``: pad centre to pad centre as for the others, the
+    gesture library's labelled touches ("which pads touch", DESIGN.md section 7) that the sample motions and the
+    networks' training data were made with."""
     pads = pad_centres(positions)
     _, pad_r = _pad_radii(hand, pads.dtype)
-    fingers = (pads[:, _PAD_A[_N_THUMB_PAIRS:]] - pads[:, _PAD_B[_N_THUMB_PAIRS:]]).norm(dim=-1)
-    return torch.cat([thumb_pair_gaps(hand, positions),
-                      fingers - pad_r[_PAD_A[_N_THUMB_PAIRS:]] - pad_r[_PAD_B[_N_THUMB_PAIRS:]]], -1)
+    gaps = (pads[:, _PAD_A] - pads[:, _PAD_B]).norm(dim=-1) - pad_r[_PAD_A] - pad_r[_PAD_B]
+    if not thumb_tips:
+        return gaps
+    return torch.cat([thumb_pair_gaps(hand, positions), gaps[:, _N_THUMB_PAIRS:]], -1)
 
 
 def thumb_pair_gaps(hand: HandModel, positions: torch.Tensor) -> torch.Tensor:
@@ -110,8 +113,9 @@ def _nearest_approach(p0: torch.Tensor, p1: torch.Tensor, q0: torch.Tensor, q1: 
     return nearest.norm(dim=-1), s, t
 
 
-def contact_gaps(hand: HandModel, pose: HandPose) -> torch.Tensor:
-    """(T, 15) surface gaps in metres for ``CONTACT_PAIRS`` (negative = interpenetrating)."""
+def contact_gaps(hand: HandModel, pose: HandPose, thumb_tips: bool = True) -> torch.Tensor:
+    """(T, 15) surface gaps in metres for ``CONTACT_PAIRS`` (negative = interpenetrating); ``thumb_tips`` as in
+    `pad_pair_gaps`."""
     dtype = pose.positions.dtype
     pads = pad_centres(pose.positions)
     radii, pad_r = _pad_radii(hand, dtype)
@@ -124,7 +128,7 @@ def contact_gaps(hand: HandModel, pose: HandPose) -> torch.Tensor:
 
     tips = pose.positions[:, topo.TIP_JOINTS]
     palm = torch.minimum(palm_gap(pads, pad_r), palm_gap(tips, radii[topo.TIP_JOINTS]))
-    return torch.cat([pad_pair_gaps(hand, pose.positions), palm], -1)
+    return torch.cat([pad_pair_gaps(hand, pose.positions, thumb_tips), palm], -1)
 
 
 def contact_loss(gaps: torch.Tensor, source_gaps: torch.Tensor, tolerance: float = CONTACT_TOLERANCE) -> torch.Tensor:

@@ -78,7 +78,7 @@ def build_training_set(kind: str, hands: list[HandModel], scripts_per_hand: int 
     def add(h: int, hand: HandModel, motion) -> None:
         q = torch.as_tensor(motion.q_tbs)
         with torch.no_grad():
-            gaps = contact_gaps(hand, forward_kinematics(hand, q)) / hand.hand_length
+            gaps = contact_gaps(hand, forward_kinematics(hand, q), thumb_tips=False) / hand.hand_length  # pads
         clips.append(Clip(h, q, source_features(kind, hand, motion.q_tbs), gaps.float()))
 
     for h, hand in enumerate(hands):

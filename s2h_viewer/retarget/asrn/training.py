@@ -107,7 +107,7 @@ def batch_loss(model: RetargetNet, data: TrainingSet, batch: Batch, config: Trai
     loss = mse + config.semantic_weight * semantic + config.anatomy_weight * anatomy
     parts = {"loss": loss, "mse": mse, "semantic": semantic, "anatomy": anatomy}
     if config.contact_weight:
-        gaps = pad_pair_gaps(hand, pose.positions) / hand.hand_length
+        gaps = pad_pair_gaps(hand, pose.positions, thumb_tips=False) / hand.hand_length  # as its data's
         parts["contact"] = contact_loss(gaps, batch.source_gaps.reshape(len(gaps), -1)[:, PAD_PAIRS])
         loss = parts["loss"] = loss + config.contact_weight * parts["contact"]
     return loss, {k: v.item() for k, v in parts.items()}
