@@ -338,11 +338,20 @@ def test_a_clip_resting_in_its_pose_asks_for_its_rig_and_opens_on_it(window, qtb
     with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
         window.load_motion(pinch)
     assert window.comparison.source.mesh is None and window.comparison.source.meta["rest_note"]
+    # opened again it asks again (a fresh-eyes run got the cached rig-less clip with no word), offering the rig
+    # chosen for it before, whose results are still cached
+    computed = len(window.compare.queue.computed)
+    shown = answer(click("Open it on r_hand_skeletal_lowres.fbx"))
+    with qtbot.waitSignal(window.comparison_ready, timeout=10_000):
+        window.load_motion(pinch)
+    assert "was chosen for it before" in shown[0]
+    assert window.comparison.source.mesh is not None and len(window.compare.queue.computed) == computed
     # `s2h view --motion` shows the clip first, then makes the same offer; keeping it changes nothing
     from s2h_viewer.app.main_window import CompareSetup
+    from s2h_viewer.io.files import load_motion_file
     shown = answer(click("Keep it as it is"))
-    window.offer_launch_rig(CompareSetup(window.comparison.motion, window.comparison.source, [], path=Path(pinch)))
-    assert "rests in a pose" in shown[0] and window.comparison.source.mesh is None
+    window.offer_launch_rig(CompareSetup(*load_motion_file(pinch), [], path=Path(pinch)))
+    assert "rests in a pose" in shown[0] and window.comparison.source.mesh is not None
     assert not window.compare.queue.pending()
 
 

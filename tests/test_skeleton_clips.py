@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 import torch
 
+from wild_rigs import rested_in_pose_gltf
 from s2h_viewer.cli import main
 from s2h_viewer.hand.kinematics import joint_positions
 from s2h_viewer.io.files import RigOptions, load_hand_file, load_motion_file
@@ -24,6 +25,7 @@ META = ROOT / "assets/hands/real/r_hand_skeletal_lowres.fbx"
 HUMAN = ROOT / "assets/hands/real/human-female.glb"
 GODOT_R = ROOT / "assets/hands/real/godot_hand_r.gltf"
 GODOT_POSES = ROOT / "assets/motions/real/godot_hand_poses_r.gltf"
+GODOT_POSED_RIG = ROOT / "assets/motions/real/godot_hand_r_posed_rig.gltf"
 INDEX = 0  # thumb_pair_gaps' columns: index .. pinky
 
 
@@ -54,6 +56,25 @@ def test_a_clip_resting_in_its_pose_is_said_and_its_own_rig_gives_back_the_pinch
     missed = thumb_index_gap(meta, retarget(motion, own, meta, "tbs_copy").q_tbs)
     kept = thumb_index_gap(meta, retarget(pinch[0], pinch[1], meta, "tbs_copy").q_tbs)
     assert (missed > 0.15).all() and (kept < CONTACT_TOLERANCE).all()
+
+
+def test_a_pose_file_re_rested_in_its_horns_is_said_and_reads_as_the_original_on_its_rig(tmp_path):
+    """The Godot pose file with its nodes resting in "Metal" (the horns: middle and ring curled), as an exporter
+    baking a key leaves it: said ("fingers curled"), and its curled middle fingertip comes out a quarter of a hand
+    off on its own skeleton; read onto the rig the poses were made for, it is the original file's pose."""
+    rested = rested_in_pose_gltf(GODOT_POSES, tmp_path / "metal_rest.gltf", "Metal")
+    options = RigOptions(animation="Metal")
+    motion, own = load_motion_file(rested, options=options)
+    assert "fingers curled: middle" in own.meta["rest_note"] and "ring" in own.meta["rest_note"]
+    original, plain = load_motion_file(GODOT_POSES, options=options)
+    target = load_hand_file(HUMAN, RigOptions(side="right"))
+    tips = [joint_positions(target, torch.as_tensor(retarget(m, h, target, "tbs_copy").q_tbs))[0, 12].numpy()
+            for m, h in ((motion, own), (original, plain))]
+    assert np.linalg.norm(tips[0] - tips[1]) > 0.15 * target.hand_length
+    rig = load_hand_file(GODOT_POSED_RIG)
+    on_rig = load_motion_file(rested, rig, options)[0].q_tbs
+    np.testing.assert_allclose(np.abs((on_rig * load_motion_file(GODOT_POSES, rig, options)[0].q_tbs).sum(-1)), 1.0,
+                               atol=1e-5)
 
 
 def test_a_tip_pinch_is_a_touch_though_its_pads_stay_apart(pinch):

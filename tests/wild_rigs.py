@@ -294,3 +294,22 @@ def mirrored_glb(source: Path, out: Path) -> Path:
     gltf.set_binary_blob(bytes(blob))
     gltf.save_binary(str(out))
     return out
+
+
+def rested_in_pose_gltf(source: Path, out: Path, animation: str) -> Path:
+    """A skeleton-only glTF pose file (buffers in data URIs) whose nodes rest in its ``animation``'s first key, as an
+    exporter that bakes a key into the nodes leaves a clip: the animations are the same, only the rest moves."""
+    import base64
+
+    gltf = pygltflib.GLTF2().load(str(source))
+    uri = gltf.buffers[0].uri
+    blob = bytearray(base64.b64decode(uri.split(",", 1)[1]))
+    chosen = next(a for a in gltf.animations if a.name == animation)
+    for channel in chosen.channels:
+        if channel.target.path not in ("rotation", "translation"):
+            continue
+        width = 4 if channel.target.path == "rotation" else 3
+        _, keys = _accessor_floats(gltf, blob, chosen.samplers[channel.sampler].output, width)
+        setattr(gltf.nodes[channel.target.node], channel.target.path, keys[0].astype(float).tolist())
+    gltf.save(str(out))
+    return out

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import json
 import os
 from collections.abc import Callable
 from dataclasses import replace
@@ -586,6 +587,8 @@ class MainWindow(QMainWindow):
         clip_key = OpenedClips.key(path, (self.open_options, rig_file))  # hashed once, whether read again or not
         opened = self.opened_clips.get(clip_key)
         if opened is not None:  # the same file again, unchanged: its retargets are shown, not computed again
+            if opened[1].meta.get("rest_note") and not self._open_as_it_is(path, opened[1].meta["rest_note"]):
+                return
             self._remember(path)
             self._loading.append(("motion", path, opened[0]))
             self.compare.load(*opened)
@@ -608,6 +611,8 @@ class MainWindow(QMainWindow):
             return
         if source.meta.get("rest_note") and not self._open_as_it_is(path, source.meta["rest_note"]):
             return
+        if rig_file is not None:
+            self._clip_rigs(path, rig_file)
         self._remember(path)
         self.settings.setValue("files/motion_dir", str(Path(path).resolve().parent))
         self._loading.append(("motion", path, motion))
@@ -615,22 +620,42 @@ class MainWindow(QMainWindow):
         self.compare.load(motion, source)
 
     def _open_as_it_is(self, path: str, note: str, shown: bool = False) -> bool:
-        """For a clip whose skeleton rests in a pose: whether to open it on that skeleton after all; choosing its
-        rig's hand file opens it on that instead (False then, as for Cancel). ``shown``: the clip is on screen
-        already (`s2h view --motion`), to keep as it is or open on its rig."""
+        """For a clip whose skeleton rests in a pose: whether to open it on that skeleton after all; opening it on
+        the rig chosen for it before, or on a hand file chosen now, goes on in `load_motion` (False then, as for
+        Cancel). ``shown``: the clip is on screen already (`s2h view --motion`), to keep as it is or open on a rig."""
         name = Path(path).name
+        before = self._clip_rigs(path)
+        buttons = ([(f"Open it on {Path(before).name}", QMessageBox.ButtonRole.AcceptRole)] if before else []) + [
+            ("Choose its rig's hand file...", QMessageBox.ButtonRole.AcceptRole),
+            ("Keep it as it is" if shown else "Open it as it is", QMessageBox.ButtonRole.DestructiveRole)]
         choice = ask(self, "s2h-viewer: the clip's rig", f"{name}: {note}.",
-                     [("Choose its rig's hand file...", QMessageBox.ButtonRole.AcceptRole),
-                      ("Keep it as it is" if shown else "Open it as it is", QMessageBox.ButtonRole.DestructiveRole)]
-                     + ([] if shown else [("Cancel", QMessageBox.ButtonRole.RejectRole)]),
+                     buttons + ([] if shown else [("Cancel", QMessageBox.ButtonRole.RejectRole)]),
                      "The hand file of the rig it was made for (the skinned hand with the same bones) gives its "
-                     "rotations their true rest; the clip is then read onto that rig's bones.")
-        if choice == 0:
+                     "rotations their true rest; the clip is then read onto that rig's bones."
+                     + (f" {Path(before).name} was chosen for it before." if before else ""))
+        label = (buttons + [("Cancel", None)])[choice][0]
+        if label.startswith("Open it on"):
+            self.load_motion(path, before)
+        elif label.startswith("Choose"):
             self._ask_to_open(f"The hand file {name} was made for", TARGET_HAND_FILTER,
                               lambda rig_file: self.load_motion(path, rig_file), self._hand_dir())
-        elif choice == 2:
+        elif label == "Cancel":
             self.statusBar().showMessage(f"{name}: not opened", 5000)
-        return choice == 1
+        return label.endswith("as it is")
+
+    def _clip_rigs(self, clip: str, rig_file: str | None = None) -> str | None:
+        """The hand file last chosen as ``clip``'s rig (None: none, or it is gone); with ``rig_file``, remember it."""
+        try:
+            rigs = json.loads(str(self.settings.value("files/clip_rigs", "{}")))
+        except ValueError:  # a settings file edited by hand: start again
+            rigs = {}
+        rigs = rigs if isinstance(rigs, dict) else {}
+        key = str(Path(clip).resolve())
+        if rig_file is not None:
+            rigs[key] = str(Path(rig_file).resolve())
+            self.settings.setValue("files/clip_rigs", json.dumps(rigs))
+        chosen = rigs.get(key)
+        return chosen if chosen and Path(chosen).is_file() else None
 
     def offer_launch_rig(self, setup: CompareSetup) -> None:
         """The clip shown at launch resting in a pose (`s2h view --motion` without --source): the same offer."""

@@ -78,8 +78,10 @@ def bone_indices(names: list[str], hand: HandModel, source: str | Path) -> list[
     bones = [hand.meta["rig_joints"][topo.JOINT_NAMES[j]] for j in topo.ROTATING_JOINTS]
     absent = [b for b in bones if b not in lookup]
     if absent:
+        shown = names[:4] + (["..."] if len(names) > 4 else [])
         raise InputFileError(source, f"has no bones {', '.join(absent)} of the hand {hand.name!r} "
-                                     f"(loaded from {hand.source})")
+                                     f"(loaded from {hand.source}): its own are {', '.join(shown)}; the rig it "
+                                     f"was made for has bones of those names")
     return [lookup[b] for b in bones]
 
 

@@ -403,6 +403,10 @@ def result_label(result: MethodResult) -> str:
             f"kept {result.scores.signature_kept:.3f}{fixed}")
 
 
+#: the source cell's banner where the source's skeleton rests in a pose (`semantics.rest_pose`)
+SOURCE_IN_POSE = "! rests in a pose: give the rig it was made for"
+
+
 def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
              display_faces: int | None = DISPLAY_FACES,
              playing_faces: int | None = None) -> tuple[list[PosedHand], list[CellLabel]]:
@@ -449,6 +453,8 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
             labels.append(add_banner(plotter, f"! {warning.banner}"))
             posed.warned = True
             posed.set_framed(False)
+        elif expected is None and hand.meta.get("rest_note"):  # a skeleton-only source resting in a pose
+            labels.append(add_banner(plotter, SOURCE_IN_POSE))
     below = source_cell_below(comparison)
     if below is not None:
         plotter.subplot(*below)
