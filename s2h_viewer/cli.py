@@ -344,8 +344,11 @@ def _cmd_batch(args: argparse.Namespace) -> int:
     if args.workers is not None and args.workers < 1:
         raise BatchUsageError(f"--workers {args.workers}: at least one worker is needed")
 
+    source = args.source  # a file by its whole path: workers may run elsewhere
+    source = str(Path(source).resolve()) if source and Path(source).is_file() else source
     config = BatchConfig(args.motions, args.targets, [m for m in args.methods.split(",") if m], args.out,
-                         TaskOptions(format=args.format, side=args.side, render=args.pictures, unit=args.unit),
+                         TaskOptions(format=args.format, side=args.side, render=args.pictures, unit=args.unit,
+                                     source=source),
                          scheduler=args.scheduler, workers=args.workers)
     result = run_batch(config, show_progress=False if args.quiet else None)
     ok = sum(r["status"] == "ok" for r in result.rows)
@@ -520,6 +523,8 @@ def build_parser() -> argparse.ArgumentParser:
     bt.add_argument("--no-pictures", dest="pictures", action="store_false",
                     help="skip the worst frame's picture of each task (faster; the report has none)")
     bt.add_argument("--side", choices=["right", "left"], help="which hand of full-body characters (default: detect)")
+    bt.add_argument("--source", help="hand file of the rig every motion was made for, where their files lack it (a "
+                                     "skeleton-only clip resting in a pose: its row's warning says so)")
     bt.add_argument("--unit", choices=list(UNITS), help="length unit of every rig and motion file (default: the "
                                                         "format's, else guessed from the hand's size)")
     bt.add_argument("--quiet", action="store_true", help="no progress bar")

@@ -116,3 +116,19 @@ def test_the_commands_say_a_posed_rest_and_take_the_rig_it_was_made_for(tmp_path
                  str(tmp_path / "y.npz"), "--quiet"]) == 2
     assert "a BVH clip carries its own skeleton" in capsys.readouterr().err
     assert not (tmp_path / "x.npz").exists() and not (tmp_path / "y.npz").exists()
+
+
+def test_a_batch_row_says_a_posed_rest_and_its_source_rig_fixes_it(tmp_path):
+    from s2h_viewer.batch.plan import Input, Task, TaskOptions
+    from s2h_viewer.batch.task import run_task
+
+    def row(source):
+        out = tmp_path / (Path(source).stem if source else "own")
+        return run_task(Task(Input(str(PINCH), "pinch"), Input(str(META), "meta"), "tbs_copy", str(out),
+                             TaskOptions(format="npz", render=False, source=source)))
+    own, on_rig = row(None), row(str(META))
+    assert own["status"] == on_rig["status"] == "ok"
+    assert "source its skeleton has no mesh and rests in a pose" in own["warning"] and on_rig["warning"] == ""
+    assert on_rig["contact_r"] == 1.0 and own["s_finger"] < on_rig["s_finger"]
+    wrong = row(str(GODOT_R))
+    assert wrong["status"] == "failed" and "has no bones Wrist_R" in wrong["error"]

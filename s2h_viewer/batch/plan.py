@@ -50,6 +50,7 @@ class TaskOptions:
     side: str | None = None
     render: bool = True  # the worst frame's picture
     unit: str | None = None  # every rig's length unit (None: the format's, else guessed)
+    source: str | None = None  # the hand file of the rig the motions were made for, where their files lack it
 
 
 @dataclass(frozen=True)

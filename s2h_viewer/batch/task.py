@@ -36,16 +36,22 @@ def _cached(key: tuple, load):
 
 
 def _load_motion(task: Task):
-    """The motion and the hand it is performed on (its own rig, else its sample hand)."""
-    from s2h_viewer.io.files import load_motion_file
+    """The motion and the hand it is performed on (the batch's --source rig, else its own rig, else its sample
+    hand)."""
+    from s2h_viewer.io.files import load_hand_file, load_motion_file
     from s2h_viewer.samples import sample_performer
 
+    source = task.options.source
+
     def load():
-        motion, rig = load_motion_file(task.motion.path, options=_rig_options(task))
+        performer = None if source is None else _cached(
+            ("hand", source, task.options.side, task.options.unit),
+            lambda: load_hand_file(source, _rig_options(task)))
+        motion, rig = load_motion_file(task.motion.path, performer, _rig_options(task))
         return motion, rig or sample_performer(motion, task.motion.path)
 
     return _cached(("motion", task.motion.path, repr(task.motion.fingerprint()), task.options.side,
-                    task.options.unit), load)
+                    task.options.unit, source), load)
 
 
 def _load_target(task: Task):
@@ -115,7 +121,10 @@ LOW_RIG_CONFIDENCE = 0.5
 
 
 def rig_warning(hand, role: str) -> str:
-    """A line for the row when ``hand``'s bones were recognised with low confidence, else ""."""
+    """A line for the row when ``hand``'s bones were recognised with low confidence, or its skeleton rests in a
+    pose (`semantics.rest_pose`), else ""."""
+    if hand.meta.get("rest_note"):
+        return f"{role} {hand.meta['rest_note']}; give the hand file of the rig it was made for: s2h batch --source"
     confidence = hand.meta.get("rig_confidence")
     if confidence is None or confidence >= LOW_RIG_CONFIDENCE:
         return ""
