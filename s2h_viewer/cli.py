@@ -102,6 +102,8 @@ def _render_comparison(args: argparse.Namespace) -> int:
 def _cmd_render(args: argparse.Namespace) -> int:
     if args.motion:
         return _render_comparison(args)
+    if args.source:
+        raise S2HError(NO_MOTION_FOR_SOURCE)
     import numpy as np
     import torch
 
@@ -371,9 +373,9 @@ def _cmd_view(args: argparse.Namespace) -> int:
     from s2h_viewer.app.main_window import CompareSetup, default_setup, run
     from s2h_viewer.io.files import load_hand_file
 
-    setup = default_setup()
     if args.source and not args.motion:
-        raise S2HError("--source names the hand a --motion file is performed on: give the --motion too")
+        raise S2HError(NO_MOTION_FOR_SOURCE)
+    setup = default_setup()
     if args.motion:
         motion, source = _performed(args.motion, args.source, _rig_options(args))
         setup = CompareSetup(motion, source, setup.targets, path=Path(args.motion), options=_rig_options(args),
@@ -387,6 +389,7 @@ def _cmd_view(args: argparse.Namespace) -> int:
     return run(setup, _rig_options(args))
 
 
+NO_MOTION_FOR_SOURCE = "--source names the rig a --motion file was made for: give the --motion too"
 SOURCE_HELP = ("hand file (or sample name) of the rig the motion was made for, where its file lacks it (a skeleton "
                "with no mesh resting in a pose: s2h says so); a glTF/FBX animation is read onto that rig's bones "
                "(default: the file's own rig, or its sample hand)")

@@ -587,7 +587,7 @@ class MainWindow(QMainWindow):
         clip_key = OpenedClips.key(path, (self.open_options, rig_file))  # hashed once, whether read again or not
         opened = self.opened_clips.get(clip_key)
         if opened is not None:  # the same file again, unchanged: its retargets are shown, not computed again
-            if opened[1].meta.get("rest_note") and not self._open_as_it_is(path, opened[1].meta["rest_note"]):
+            if opened[1].meta.get("rest_note") and not self._choose_clip_rig(path, opened[1].meta["rest_note"]):
                 return
             self._remember(path)
             self._loading.append(("motion", path, opened[0]))
@@ -609,7 +609,7 @@ class MainWindow(QMainWindow):
         except (S2HError, KeyError) as exc:
             self.error(str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc))
             return
-        if source.meta.get("rest_note") and not self._open_as_it_is(path, source.meta["rest_note"]):
+        if source.meta.get("rest_note") and not self._choose_clip_rig(path, source.meta["rest_note"]):
             return
         if rig_file is not None:
             self._clip_rigs(path, rig_file)
@@ -619,10 +619,10 @@ class MainWindow(QMainWindow):
         self.opened_clips.remember(clip_key, motion, source)
         self.compare.load(motion, source)
 
-    def _open_as_it_is(self, path: str, note: str, shown: bool = False) -> bool:
-        """For a clip whose skeleton rests in a pose: whether to open it on that skeleton after all; opening it on
-        the rig chosen for it before, or on a hand file chosen now, goes on in `load_motion` (False then, as for
-        Cancel). ``shown``: the clip is on screen already (`s2h view --motion`), to keep as it is or open on a rig."""
+    def _choose_clip_rig(self, path: str, note: str, shown: bool = False) -> bool:
+        """For a clip whose skeleton rests in a pose, the user's choice: True to open it on that skeleton after all;
+        False where it opens on the rig chosen for it before or on a hand file chosen now (`load_motion` again), or
+        is cancelled. ``shown``: the clip is on screen already (`s2h view --motion`), to keep or open on a rig."""
         name = Path(path).name
         before = self._clip_rigs(path)
         buttons = ([(f"Open it on {Path(before).name}", QMessageBox.ButtonRole.AcceptRole)] if before else []) + [
@@ -660,7 +660,7 @@ class MainWindow(QMainWindow):
     def offer_launch_rig(self, setup: CompareSetup) -> None:
         """The clip shown at launch resting in a pose (`s2h view --motion` without --source): the same offer."""
         if setup.path is not None and setup.source.meta.get("rest_note"):
-            self._open_as_it_is(str(setup.path), setup.source.meta["rest_note"], shown=True)
+            self._choose_clip_rig(str(setup.path), setup.source.meta["rest_note"], shown=True)
 
     def ask_batch(self) -> None:
         last = Path(str(self.settings.value("files/batch_dir", "")))
