@@ -16,6 +16,7 @@ from s2h_viewer.hand.kinematics import joint_positions
 from s2h_viewer.io.files import RigOptions, load_hand_file, load_motion_file
 from s2h_viewer.io.npz import load_motion
 from s2h_viewer.retarget.methods import retarget
+from s2h_viewer.samples import load_sample_hand
 from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, pad_centres, thumb_pair_gaps
 from s2h_viewer.semantics.signature import THUMB_TOUCH, signatures
 
@@ -25,7 +26,6 @@ META = ROOT / "assets/hands/real/r_hand_skeletal_lowres.fbx"
 HUMAN = ROOT / "assets/hands/real/human-female.glb"
 GODOT_R = ROOT / "assets/hands/real/godot_hand_r.gltf"
 GODOT_POSES = ROOT / "assets/motions/real/godot_hand_poses_r.gltf"
-GODOT_POSED_RIG = ROOT / "assets/motions/real/godot_hand_r_posed_rig.gltf"
 INDEX = 0  # thumb_pair_gaps' columns: index .. pinky
 
 
@@ -66,15 +66,13 @@ def test_a_pose_file_re_rested_in_its_horns_is_said_and_reads_as_the_original_on
     options = RigOptions(animation="Metal")
     motion, own = load_motion_file(rested, options=options)
     assert "fingers curled: middle" in own.meta["rest_note"] and "ring" in own.meta["rest_note"]
-    original, plain = load_motion_file(GODOT_POSES, options=options)
-    target = load_hand_file(HUMAN, RigOptions(side="right"))
+    original, plain = load_motion_file(GODOT_POSES, options=options)  # its skeleton rests open: the rig it was made on
+    target = load_sample_hand("iris")
     tips = [joint_positions(target, torch.as_tensor(retarget(m, h, target, "tbs_copy").q_tbs))[0, 12].numpy()
             for m, h in ((motion, own), (original, plain))]
     assert np.linalg.norm(tips[0] - tips[1]) > 0.15 * target.hand_length
-    rig = load_hand_file(GODOT_POSED_RIG)
-    on_rig = load_motion_file(rested, rig, options)[0].q_tbs
-    np.testing.assert_allclose(np.abs((on_rig * load_motion_file(GODOT_POSES, rig, options)[0].q_tbs).sum(-1)), 1.0,
-                               atol=1e-5)
+    on_rig = load_motion_file(rested, plain, options)[0].q_tbs
+    np.testing.assert_allclose(np.abs((on_rig * original.q_tbs).sum(-1)), 1.0, atol=1e-5)
 
 
 def test_a_tip_pinch_is_a_touch_though_its_pads_stay_apart(pinch):
@@ -110,9 +108,9 @@ def test_the_commands_say_a_posed_rest_and_take_the_rig_it_was_made_for(tmp_path
                  str(tmp_path / "x.npz"), "--quiet"]) == 2
     assert "has no bones hands:b_r_hand" in capsys.readouterr().err
     bvh = tmp_path / "clip.bvh"
-    assert main(["retarget", "--motion", str(PINCH), "--source", str(META), "--target", str(META), "--method",
-                 "tbs_copy", "--out", str(bvh), "--quiet"]) == 0
-    assert main(["retarget", "--motion", str(bvh), "--source", str(META), "--target", "iris", "--out",
+    assert main(["retarget", "--motion", str(out), "--source", str(META), "--target", "iris", "--method", "tbs_copy",
+                 "--out", str(bvh), "--quiet"]) == 0
+    assert main(["retarget", "--motion", str(bvh), "--source", "iris", "--target", "iris", "--out",
                  str(tmp_path / "y.npz"), "--quiet"]) == 2
     assert "a BVH clip carries its own skeleton" in capsys.readouterr().err
     assert not (tmp_path / "x.npz").exists() and not (tmp_path / "y.npz").exists()
