@@ -28,7 +28,7 @@ from s2h_viewer.render.scene import BONE_COLOUR, SKIN_COLOUR, display_hand, skel
 from s2h_viewer.render.text_lock import TEXT_LOCK
 from s2h_viewer.retarget.comparison import Comparison, MethodResult
 from s2h_viewer.retarget.methods import METHODS
-from s2h_viewer.semantics.contacts import CONTACT_PAIRS, SITES, detect_contacts, pad_centres
+from s2h_viewer.semantics.contacts import CONTACT_PAIRS, SITES, detect_contacts, near_contacts, pad_centres
 
 ERROR_RANGE = (0.0, 0.1)  # 1 - cosine; 0.1 is already a clearly different pose
 ERROR_COLOURMAP = "plasma"
@@ -425,7 +425,8 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
             lighter[id(hand), faces] = display_hand(hand, faces)
         return lighter[id(hand), faces]
 
-    source_contacts = detect_contacts(comparison.source, comparison.source_pose)
+    source_contacts = (detect_contacts(comparison.source, comparison.source_pose),
+                       near_contacts(comparison.source, comparison.source_pose))
     fit = comparison.motion.fit
     panels = [((0, 0), comparison.source, comparison.source_pose, None, None,
                f"source: {comparison.source.name}" + ("" if fit is None else
@@ -541,9 +542,11 @@ def set_camera(plotter: pv.Plotter, preset: str, hands: list[HandModel]) -> None
 class Overlays:
     """A hand's skeleton and its contacts, drawn over the skin when switched on: each contact a link between
     its two pads (round dots), in `CONTACT_STATES`' colours: on a retarget, kept, lost (the source's, missed)
-    and invented (made where the source makes none); on the source, its own (kept)."""
+    and invented (made where the source does not come near, `contacts.near_contacts`); on the source, its own (kept).
+    ``expected``: the source's contacts and its near ones, (T, 15) bool each; None on the source."""
 
-    def __init__(self, plotter: pv.Plotter, hand: HandModel, pose: HandPose, expected: np.ndarray | None):
+    def __init__(self, plotter: pv.Plotter, hand: HandModel, pose: HandPose,
+                 expected: tuple[np.ndarray, np.ndarray] | None):
         self.hand, self.expected = hand, expected
         self.set_pose(pose)
         self.legend: ContactLegend | None = None  # on the source's overlays: the one legend of the grid
@@ -566,11 +569,15 @@ class Overlays:
 
     def set_pose(self, pose: HandPose) -> None:
         """The contacts in their states and the pads of ``pose`` (every frame)."""
-        self.pose, expected = pose, self.expected
+        self.pose = pose
         self.contacts = detect_contacts(self.hand, pose)
-        self.lost = None if expected is None else expected & ~self.contacts
-        self.invented = None if expected is None else self.contacts & ~expected
-        self.states = [self.contacts if expected is None else self.contacts & expected, self.lost, self.invented]
+        if self.expected is None:
+            self.lost = self.invented = None
+            self.states = [self.contacts, None, None]
+        else:
+            touching, near = self.expected
+            self.lost, self.invented = touching & ~self.contacts, self.contacts & ~near
+            self.states = [self.contacts & touching, self.lost, self.invented]
         self.sites = to_view(self.hand, contact_sites(self.hand, pose))  # (T, 6, 3)
 
     def fit(self, short_side: int) -> None:

@@ -14,7 +14,7 @@ from s2h_viewer.hand.model import HandModel
 from s2h_viewer.semantics.anatomy import violation_rate
 from s2h_viewer.semantics.asm import semantic_matrix
 from s2h_viewer.semantics.contacts import (CONTACT_PAIRS, PAD_PAIRS, PALM_PAIRS, contact_precision_recall,
-                                           detect_contacts)
+                                           detect_contacts, near_contacts)
 from s2h_viewer.semantics.flexion import sideways_peak, thumb_follow
 from s2h_viewer.semantics.signature import pose_loss_masks
 from s2h_viewer.semantics.similarity import masked_cosine
@@ -79,8 +79,9 @@ class RetargetScores:
     #: pad contact) is the source's: it drops where
     #: one finger is visibly wrong, which the clip-wide S_finger averages away
     signature_kept: float = float("nan")
-    #: frames where the retarget makes a contact (any of the 15 pairs) the source does not, and the pair
-    #: invented on most frames with its first frame ("thumb-middle@120"; empty if none)
+    #: frames where the retarget makes a contact (any of the 15 pairs) the source does not come near
+    #: (`contacts.near_contacts`), and the pair invented on most frames with its first frame ("thumb-middle@120"; empty
+    #: if none)
     invented_contacts: int = 0
     invented_at: str = ""
     #: the least correlation, over the thumb's angles that move in the source (the CMC's two, the MCP's and IP's
@@ -119,7 +120,7 @@ def score_retarget_frames(source_hand: HandModel, source_q: np.ndarray | torch.T
             mse = joint_position_mse(tgt_pose, ref, target_hand.hand_length)
         peak = sideways_peak(tgt_pose.positions.numpy())
         kept = pose_loss_masks(source_hand, src_pose, target_hand, tgt_pose) == 0
-        invented = tgt_contacts & ~src_contacts
+        invented = tgt_contacts & ~near_contacts(source_hand, src_pose)  # the source's apart, not nearly touching
         follow = {name: c for name, c in thumb_follow(src_pose.positions.numpy(), tgt_pose.positions.numpy()).items()
                   if not np.isnan(c)}
         worst_thumb = min(follow, key=follow.get, default="")

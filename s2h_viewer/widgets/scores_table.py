@@ -34,7 +34,8 @@ COLUMNS = (("Method", None, "retargeting method"), ("Target", None, "target hand
                                       "its side where the source's is (a thumbs-up), no finger bending "
                                       "sideways, no invented pad contact (1: every frame)"),
            ("Inv-\nented", "invented_contacts", "frames where the retarget makes a contact the source does not "
-                                               "(drawn blue by the contact overlay)"))
+                                               "come near (within 3% of the hand; drawn blue by the contact "
+                                               "overlay)"))
 TARGET_COLUMN = 1
 SHOWN_ROWS, MIN_ROWS = 6, 2  # rows the table asks room for, and keeps in view at least
 NAME_WIDTH = 140  # pixels: widest a name column starts (drag the header edge for more)
