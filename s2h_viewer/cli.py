@@ -76,6 +76,7 @@ def _render_comparison(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from s2h_viewer.io.files import load_hand_file
+    from s2h_viewer.render.caption import page_caption
     from s2h_viewer.render.compare_scene import render_comparison
     from s2h_viewer.render.video import VIDEO_SUFFIXES, frame_range
     from s2h_viewer.retarget.comparison import build_comparison
@@ -94,7 +95,9 @@ def _render_comparison(args: argparse.Namespace) -> int:
         comparison = build_comparison(motion, source, targets, methods)
     with tqdm(total=len(frames), desc="render", unit="frame", file=sys.stderr, disable=args.quiet) as bar:
         path = render_comparison(comparison, args.out, frame=frames.start, frames=frames,
-                                 progress=lambda done, total: bar.update(done - bar.n))
+                                 progress=lambda done, total: bar.update(done - bar.n),
+                                 caption=lambda f: page_caption(motion.name, f, motion.n_frames, motion.fps,
+                                                                [t.name for t in targets]))
     print(f"wrote {path}")
     return 0
 
