@@ -12,6 +12,7 @@ from grid_text import cell_pixels, inside, intruders, text_actors, text_box
 from s2h_viewer.cli import main
 from s2h_viewer.io.npz import save_motion
 from s2h_viewer.motions.synthesis import synthesize
+from s2h_viewer.render.caption import BAND
 
 
 def test_render_compare_writes_a_frame_and_a_whole_clip(sample_hands, tmp_path):
@@ -22,6 +23,12 @@ def test_render_compare_writes_a_frame_and_a_whole_clip(sample_hands, tmp_path):
     assert main([*common, "--frame", "20", "--out", str(png)]) == 0
     image = imageio.imread(png)[..., :3]
     assert len(np.unique(image.reshape(-1, 3), axis=0)) > 50  # hands and a colour scale, not a blank frame
+    # under the picture a caption band says the frame (a PNG passed around names what it shows)
+    band = image[-BAND:]
+    assert image.shape[0] == 900 + BAND and (band < 100).any() and (band[:, -200:] == 255).all()
+    other = tmp_path / "other.png"
+    assert main([*common, "--frame", "21", "--out", str(other)]) == 0
+    assert not np.array_equal(imageio.imread(other)[-BAND:, :, :3], band)  # frame 21's caption is not frame 20's
     assert main([*common, "--out", str(gif)]) == 0
     frames = imageio.mimread(gif, memtest=False)
     assert len(frames) == motion.n_frames
