@@ -24,10 +24,8 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     performer = load_hand_file(args.rig, _rig_options(args)) if args.rig else None
     for path in args.motion or []:  # a motion file on its own rig (a recording: on the hand fitted to it)
         motion, rig = load_motion_file(path, performer, options=_rig_options(args))
-        if rig is not None and rig.meta.get("rest_note"):
-            print(f"{path}: {rig.meta['rest_note']}; give the hand file of the rig it was made for: --rig FILE",
-                  file=sys.stderr)
         if rig is not None:
+            _say_posed_rest(path, rig, "--rig")
             hands[motion.hand_name] = rig
         elif motion.hand_name not in hands:
             hands[motion.hand_name] = samples.sample_performer(motion, path)  # names the file where it is none
@@ -168,10 +166,15 @@ def _performed(motion_file: str, source_file: str | None, options):
     given = load_hand_file(source_file, options) if source_file else None
     motion, rig = load_motion_file(motion_file, given, options)
     source = rig or given or sample_performer(motion, motion_file)
-    if source.meta.get("rest_note"):
-        print(f"{motion_file}: {source.meta['rest_note']}; give the hand file of the rig it was made for: --source FILE",
-              file=sys.stderr)
+    _say_posed_rest(motion_file, source, "--source")
     return motion, source
+
+
+def _say_posed_rest(motion_file: str, hand, option: str) -> None:
+    """On stderr, where ``hand``'s skeleton rests in a pose (`semantics.rest_pose`): that, and ``option`` to mend it."""
+    if hand.meta.get("rest_note"):
+        print(f"{motion_file}: {hand.meta['rest_note']}; give the hand file of the rig it was made for: {option} FILE",
+              file=sys.stderr)
 
 
 def _cmd_rig(args: argparse.Namespace) -> int:

@@ -28,7 +28,7 @@ from s2h_viewer.render.scene import BONE_COLOUR, SKIN_COLOUR, display_hand, skel
 from s2h_viewer.render.text_lock import TEXT_LOCK
 from s2h_viewer.retarget.comparison import Comparison, MethodResult
 from s2h_viewer.retarget.methods import METHODS
-from s2h_viewer.semantics.contacts import CONTACT_PAIRS, SITES, detect_contacts, near_contacts, pad_centres
+from s2h_viewer.semantics.contacts import CONTACT_PAIRS, SITES, detect_contacts, pad_centres, touching_and_near
 
 ERROR_RANGE = (0.0, 0.1)  # 1 - cosine; 0.1 is already a clearly different pose
 ERROR_COLOURMAP = "plasma"
@@ -425,8 +425,7 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
             lighter[id(hand), faces] = display_hand(hand, faces)
         return lighter[id(hand), faces]
 
-    source_contacts = (detect_contacts(comparison.source, comparison.source_pose),
-                       near_contacts(comparison.source, comparison.source_pose))
+    source_contacts = touching_and_near(comparison.source, comparison.source_pose)
     fit = comparison.motion.fit
     panels = [((0, 0), comparison.source, comparison.source_pose, None, None,
                f"source: {comparison.source.name}" + ("" if fit is None else
@@ -542,7 +541,8 @@ def set_camera(plotter: pv.Plotter, preset: str, hands: list[HandModel]) -> None
 class Overlays:
     """A hand's skeleton and its contacts, drawn over the skin when switched on: each contact a link between
     its two pads (round dots), in `CONTACT_STATES`' colours: on a retarget, kept, lost (the source's, missed)
-    and invented (made where the source does not come near, `contacts.near_contacts`); on the source, its own (kept).
+    and invented (made where the source does not come near, `contacts.touching_and_near`); on the source, its own
+    (kept).
     ``expected``: the source's contacts and its near ones, (T, 15) bool each; None on the source."""
 
     def __init__(self, plotter: pv.Plotter, hand: HandModel, pose: HandPose,

@@ -73,11 +73,12 @@ def pad_pair_gaps(hand: HandModel, positions: torch.Tensor, thumb_tips: bool = T
     gesture library's labelled touches ("which pads touch", DESIGN.md section 7) that the sample motions and the
     networks' training data were made with."""
     pads = pad_centres(positions)
-    _, pad_r = _pad_radii(hand, pads.dtype)
-    gaps = (pads[:, _PAD_A] - pads[:, _PAD_B]).norm(dim=-1) - pad_r[_PAD_A] - pad_r[_PAD_B]
+    radii, pad_r = _pad_radii(hand, pads.dtype)
     if not thumb_tips:
-        return gaps
-    return torch.cat([thumb_pair_gaps(hand, positions), gaps[:, _N_THUMB_PAIRS:]], -1)
+        return (pads[:, _PAD_A] - pads[:, _PAD_B]).norm(dim=-1) - pad_r[_PAD_A] - pad_r[_PAD_B]
+    a, b = _PAD_A[_N_THUMB_PAIRS:], _PAD_B[_N_THUMB_PAIRS:]
+    fingers = (pads[:, a] - pads[:, b]).norm(dim=-1) - pad_r[a] - pad_r[b]
+    return torch.cat([_thumb_tip_gaps(positions, pads, radii, pad_r), fingers], -1)
 
 
 def thumb_pair_gaps(hand: HandModel, positions: torch.Tensor) -> torch.Tensor:
@@ -85,9 +86,14 @@ def thumb_pair_gaps(hand: HandModel, positions: torch.Tensor) -> torch.Tensor:
     approach of the capsules from each pad centre to where its tip joint's cap ends (radii interpolated between
     the pad's and the tip's). A tip pinch (Oculus's pinch clip, the authored Pinch Tight) touches at the tips,
     with the pads still apart; fingertip pads side by side (two fingers) are measured pad to pad as before."""
-    radii, pad_r = _pad_radii(hand, positions.dtype)
-    tip_r = radii[topo.TIP_JOINTS]
     pads = pad_centres(positions)
+    return _thumb_tip_gaps(positions, pads, *_pad_radii(hand, positions.dtype))
+
+
+def _thumb_tip_gaps(positions: torch.Tensor, pads: torch.Tensor, radii: torch.Tensor, pad_r: torch.Tensor
+                    ) -> torch.Tensor:
+    """`thumb_pair_gaps` from the pads and radii `pad_pair_gaps` has already worked out."""
+    tip_r = radii[topo.TIP_JOINTS]
     reach = positions[:, topo.TIP_JOINTS] - pads
     length = reach.norm(dim=-1, keepdim=True)
     ends = pads + reach * (1.0 - torch.minimum(tip_r[:, None], 0.5 * length) / length)  # the cap ends at the tip
@@ -152,9 +158,11 @@ def detect_contacts(hand: HandModel, pose: HandPose, tolerance: float = CONTACT_
 NEAR_FACTOR = 2.0
 
 
-def near_contacts(hand: HandModel, pose: HandPose) -> np.ndarray:
-    """(T, 15) bool: pairs within `NEAR_FACTOR` x the contact tolerance (touching or nearly)."""
-    return detect_contacts(hand, pose, NEAR_FACTOR * CONTACT_TOLERANCE)
+def touching_and_near(hand: HandModel, pose: HandPose) -> tuple[np.ndarray, np.ndarray]:
+    """(T, 15) bool each, from one reading of the gaps: pairs in contact (`detect_contacts`), and pairs within
+    `NEAR_FACTOR` x the tolerance (touching or nearly: a retarget closing them invents nothing)."""
+    gaps = contact_gaps(hand, pose).detach().cpu().numpy()  # metres, compared as `detect_contacts` does
+    return gaps < CONTACT_TOLERANCE * hand.hand_length, gaps < NEAR_FACTOR * CONTACT_TOLERANCE * hand.hand_length
 
 
 def contact_precision_recall(source: np.ndarray, target: np.ndarray) -> tuple[float, float]:

@@ -14,7 +14,7 @@ from s2h_viewer.hand.model import HandModel
 from s2h_viewer.semantics.anatomy import violation_rate
 from s2h_viewer.semantics.asm import semantic_matrix
 from s2h_viewer.semantics.contacts import (CONTACT_PAIRS, PAD_PAIRS, PALM_PAIRS, contact_precision_recall,
-                                           detect_contacts, near_contacts)
+                                           detect_contacts, touching_and_near)
 from s2h_viewer.semantics.flexion import sideways_peak, thumb_follow
 from s2h_viewer.semantics.signature import pose_loss_masks
 from s2h_viewer.semantics.similarity import masked_cosine
@@ -80,8 +80,8 @@ class RetargetScores:
     #: one finger is visibly wrong, which the clip-wide S_finger averages away
     signature_kept: float = float("nan")
     #: frames where the retarget makes a contact (any of the 15 pairs) the source does not come near
-    #: (`contacts.near_contacts`), and the pair invented on most frames with its first frame ("thumb-middle@120"; empty
-    #: if none)
+    #: (`contacts.touching_and_near`), and the pair invented on most frames with its first frame
+    #: ("thumb-middle@120"; empty if none)
     invented_contacts: int = 0
     invented_at: str = ""
     #: the least correlation, over the thumb's angles that move in the source (the CMC's two, the MCP's and IP's
@@ -111,7 +111,8 @@ def score_retarget_frames(source_hand: HandModel, source_q: np.ndarray | torch.T
         tgt_q = torch.as_tensor(np.asarray(target_q), dtype=torch.float64)
         tgt_pose = forward_kinematics(target_hand, tgt_q)
         (s_palm, s_finger, s_finger_paper), frame_error = _asm_agreement(src_pose, tgt_pose)
-        src_contacts, tgt_contacts = detect_contacts(source_hand, src_pose), detect_contacts(target_hand, tgt_pose)
+        src_contacts, src_near = touching_and_near(source_hand, src_pose)
+        tgt_contacts = detect_contacts(target_hand, tgt_pose)
         precision, recall = contact_precision_recall(src_contacts[:, PAD_PAIRS], tgt_contacts[:, PAD_PAIRS])
         palm_recall = contact_precision_recall(src_contacts[:, PALM_PAIRS], tgt_contacts[:, PALM_PAIRS])[1]
         mse = None
@@ -120,7 +121,7 @@ def score_retarget_frames(source_hand: HandModel, source_q: np.ndarray | torch.T
             mse = joint_position_mse(tgt_pose, ref, target_hand.hand_length)
         peak = sideways_peak(tgt_pose.positions.numpy())
         kept = pose_loss_masks(source_hand, src_pose, target_hand, tgt_pose) == 0
-        invented = tgt_contacts & ~near_contacts(source_hand, src_pose)  # the source's apart, not nearly touching
+        invented = tgt_contacts & ~src_near  # where the source's pair is apart, not nearly touching
         follow = {name: c for name, c in thumb_follow(src_pose.positions.numpy(), tgt_pose.positions.numpy()).items()
                   if not np.isnan(c)}
         worst_thumb = min(follow, key=follow.get, default="")
