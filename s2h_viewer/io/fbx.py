@@ -79,10 +79,10 @@ def load_fbx_motion(path: str | Path, hand: HandModel, take: str | int | None = 
 
 
 def _take_motion(path: Path, hand: HandModel, take: str | int | None, fps: float) -> Motion:
-    from s2h_viewer.io.gltf import pick_animation  # the one rule for picking an animation by name or index
+    from s2h_viewer.io.gltf import clip_name, pick_animation  # the one rule for picking and naming an animation
 
     skeleton, _, takes = _read(path, fps)
     index = pick_animation([name for name, _ in takes], take, path, "take")
     rotating = bone_indices(skeleton.names, hand, path)
     name, world = takes[index]
-    return motion_from_world_rotations(hand, world[:, rotating], fps, path, name or path.stem)
+    return motion_from_world_rotations(hand, world[:, rotating], fps, path, clip_name(name, path, index))

@@ -11,6 +11,7 @@
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -382,6 +383,23 @@ def pick_animation(names: list[str], wanted: str | int | None, path: Path, what:
     if wanted in names:
         return names.index(wanted)
     raise InputFileError(path, f"has no {what} named {wanted!r}; it has {', '.join(repr(n) for n in names)}")
+
+
+#: animation names exporters write when a person named nothing ("Take 001", "mixamo.com", "Armature|Action.001",
+#: "Animation_0"): a clip so named is called by its file's name (captions, export names, the batch report)
+_UNNAMED = re.compile(r"((armature|root|scene)\|)?(take|animation|anim|action|clip|default take|mixamo\.com)"
+                      r"([ ._|-]*(\d+|layer\d*))*", re.IGNORECASE)
+
+
+def clip_name(name: str | None, path: Path, index: int = 0) -> str:
+    """What a clip read from animation ``name`` (number ``index``) of ``path`` is called: its own name, or the file's
+    (with the animation's number where the file has others) where the exporter's default stands in for one."""
+    name = (name or "").strip()
+    if name and not _UNNAMED.fullmatch(name):
+        return name
+    return path.stem if index == 0 else f"{path.stem}_{index}"
+
+
 def _rotation_track(doc: _Document, anim, channel, label: str) -> tuple[np.ndarray, np.ndarray]:
     """(times, xyzw) of a rotation channel: times finite and strictly increasing, quaternions non-zero."""
     path = doc.path
@@ -447,9 +465,8 @@ def _load_motion(doc: _Document, hand: HandModel, animation: str | int | None, f
                      else np.broadcast_to(local_rest[i], (n_frames, 3, 3)))
             parent = doc.parents[i]
             world_rot[i] = local if parent < 0 else world_rot[parent] @ local
-    name = anim.name or f"{doc.path.stem}_{animation}"
     return motion_from_world_rotations(hand, np.stack([world_rot[r] for r in rotating], axis=1), fps, doc.path,
-                                       str(name))
+                                       clip_name(anim.name, doc.path, animation))
 
 
 def _ancestors(doc: _Document, node: int) -> list[int]:
