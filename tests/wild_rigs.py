@@ -162,14 +162,22 @@ def per_dof_bvh(source: Path, out: Path) -> Path:
     return out
 
 
-def _accessor_floats(gltf: pygltflib.GLTF2, blob: bytearray, index: int, width: int) -> tuple[int, np.ndarray]:
-    """Where accessor ``index`` starts in ``blob`` and its float32 values, ``width`` per element (tightly packed)."""
+def _accessor_floats(gltf: pygltflib.GLTF2, blob: bytearray, index: int, width: int) -> np.ndarray:
+    """Accessor ``index``'s float32 values, ``width`` per element, as a writable view into ``blob``: tightly packed
+    or interleaved with other attributes (the bufferView's stride, as the Ready Player Me avatar stores its vertices).
+    A sparse accessor gives its stored values; one with neither (all zeros: the avatar's morph targets) gives none."""
     accessor = gltf.accessors[index]
-    view = gltf.bufferViews[accessor.bufferView]
-    start = (view.byteOffset or 0) + (accessor.byteOffset or 0)
-    assert view.byteStride in (None, 0, 4 * width), "interleaved attributes are not handled here"
-    data = bytes(blob[start:start + 4 * width * accessor.count])
-    return start, np.frombuffer(data, dtype="<f4").reshape(-1, width)
+    count, view_index, offset = accessor.count, accessor.bufferView, accessor.byteOffset
+    if accessor.sparse is not None:
+        assert accessor.bufferView is None, "a sparse accessor over stored values is not handled here"
+        values = accessor.sparse.values
+        count, view_index, offset = accessor.sparse.count, values.bufferView, values.byteOffset
+    if view_index is None:
+        return np.zeros((0, width), dtype="<f4")
+    view = gltf.bufferViews[view_index]
+    start = (view.byteOffset or 0) + (offset or 0)
+    stride = view.byteStride or 4 * width
+    return np.ndarray((count, width), dtype="<f4", buffer=blob, offset=start, strides=(stride, 4))
 
 
 def rerolled_glb(source: Path, out: Path, degrees: float, pattern: str = r"(?i)thumb|index|middle|ring|pinky|little"
@@ -183,8 +191,8 @@ def rerolled_glb(source: Path, out: Path, degrees: float, pattern: str = r"(?i)t
     gltf = pygltflib.GLTF2().load(str(source))
     blob = bytearray(gltf.binary_blob())
     skin = gltf.skins[0]
-    start, ibm = _accessor_floats(gltf, blob, skin.inverseBindMatrices, 16)
-    ibm = ibm.reshape(-1, 4, 4).transpose(0, 2, 1).astype(np.float64)
+    stored = _accessor_floats(gltf, blob, skin.inverseBindMatrices, 16)
+    ibm = stored.reshape(-1, 4, 4).transpose(0, 2, 1).astype(np.float64)
     for slot, n in enumerate(skin.joints):
         node = gltf.nodes[n]
         if not re.search(pattern, node.name or "") or not node.children:
@@ -202,8 +210,7 @@ def rerolled_glb(source: Path, out: Path, degrees: float, pattern: str = r"(?i)t
         turn = np.eye(4)
         turn[:3, :3] = roll.inv().as_matrix()
         ibm[slot] = turn @ ibm[slot]
-    data = ibm.transpose(0, 2, 1).astype("<f4").tobytes()
-    blob[start:start + len(data)] = data
+    stored[:] = ibm.transpose(0, 2, 1).reshape(-1, 16)
     gltf.animations = []
     gltf.set_binary_blob(bytes(blob))
     gltf.save_binary(str(out))
@@ -227,16 +234,12 @@ def centimetre_glb(source: Path, out: Path) -> Path:
     positions |= {t.get("POSITION") if isinstance(t, dict) else getattr(t, "POSITION", None)
                   for mesh in gltf.meshes for p in mesh.primitives for t in (p.targets or [])}  # morph offsets too
     for index in sorted(i for i in positions if i is not None):
-        start, values = _accessor_floats(gltf, blob, index, 3)
-        blob[start:start + values.nbytes] = (values * 100.0).astype("<f4").tobytes()
+        _accessor_floats(gltf, blob, index, 3)[:] *= 100.0
         accessor = gltf.accessors[index]
         if accessor.min and accessor.max:
             accessor.min, accessor.max = [100.0 * v for v in accessor.min], [100.0 * v for v in accessor.max]
     for skin in gltf.skins:
-        start, ibm = _accessor_floats(gltf, blob, skin.inverseBindMatrices, 16)
-        ibm = ibm.copy()
-        ibm[:, 12:15] *= 100.0  # column-major: the translation is the last column
-        blob[start:start + ibm.nbytes] = ibm.astype("<f4").tobytes()
+        _accessor_floats(gltf, blob, skin.inverseBindMatrices, 16)[:, 12:15] *= 100.0  # column-major: translation last
     scene = gltf.scenes[gltf.scene or 0]
     gltf.nodes.append(pygltflib.Node(name="Centimetres", scale=[0.01] * 3, children=list(scene.nodes)))
     scene.nodes = [len(gltf.nodes) - 1]
@@ -272,8 +275,7 @@ def mirrored_glb(source: Path, out: Path) -> Path:
     vectors = {i for mesh in gltf.meshes for p in mesh.primitives
                for i in (p.attributes.POSITION, p.attributes.NORMAL) if i is not None}
     for index in sorted(vectors):
-        start, values = _accessor_floats(gltf, blob, index, 3)
-        blob[start:start + values.nbytes] = (values * np.array([-1.0, 1.0, 1.0])).astype("<f4").tobytes()
+        _accessor_floats(gltf, blob, index, 3)[:, 0] *= -1.0
         accessor = gltf.accessors[index]
         if accessor.min and accessor.max:
             accessor.min, accessor.max = [-accessor.max[0], *accessor.min[1:]], [-accessor.min[0], *accessor.max[1:]]
@@ -287,9 +289,9 @@ def mirrored_glb(source: Path, out: Path) -> Path:
             triangles = np.frombuffer(bytes(blob[start:start + size]), dtype=dtype).reshape(-1, 3)
             blob[start:start + size] = triangles[:, ::-1].astype(dtype).tobytes()
     for skin in gltf.skins:
-        start, ibm = _accessor_floats(gltf, blob, skin.inverseBindMatrices, 16)
-        ibm = np.stack([flip @ m.reshape(4, 4).T @ flip for m in ibm.astype(np.float64)]).transpose(0, 2, 1)
-        blob[start:start + ibm.size * 4] = ibm.astype("<f4").tobytes()
+        stored = _accessor_floats(gltf, blob, skin.inverseBindMatrices, 16)
+        ibm = np.stack([flip @ m.reshape(4, 4).T @ flip for m in stored.astype(np.float64)]).transpose(0, 2, 1)
+        stored[:] = ibm.reshape(-1, 16)
     gltf.animations = []
     gltf.set_binary_blob(bytes(blob))
     gltf.save_binary(str(out))
@@ -309,7 +311,7 @@ def rested_in_pose_gltf(source: Path, out: Path, animation: str) -> Path:
         if channel.target.path not in ("rotation", "translation"):
             continue
         width = 4 if channel.target.path == "rotation" else 3
-        _, keys = _accessor_floats(gltf, blob, chosen.samplers[channel.sampler].output, width)
+        keys = _accessor_floats(gltf, blob, chosen.samplers[channel.sampler].output, width)
         setattr(gltf.nodes[channel.target.node], channel.target.path, keys[0].astype(float).tolist())
     gltf.save(str(out))
     return out
