@@ -12,8 +12,8 @@ zero): elsewhere the retarget is returned bit for bit. Loss: the contact term
 (`semantics.contacts.contact_loss`), L_ana on what the correction adds to the angles' excess (a twist the
 network or the source's frames put there is not undone: "untwisting" a Godot fist's pinky knuckle opened it
 22 deg), smoothness, a pull to the network's pose (harder on the thumb's CMC, most on its lift, and the CMC
-stepped at a share of the others' rate, so a finger comes to the thumb before the thumb leaves the path the
-source's takes), a curl term (no finger's curl moved further from the
+stepped at a share of the others' rate, its swing across the palm slowest, so a finger and the thumb's hinges come
+to a touch before the metacarpal leaves the path the source's takes), a curl term (no finger's curl moved further from the
 source's than the signature's margin allows: a bent ring finger curled to meet the thumb is a pose lost), a
 thumb-out term (a thumb the source holds out to its side, a thumbs-up's, brought out as far: on the Meta hand,
 whose rest thumb lies along the fingers, the network held it in front of the palm), and a sideways term: no
@@ -71,6 +71,11 @@ class ContactFitConfig:
     #: thumb's own hinges reach a touch before its metacarpal swings away from the source's path: ASRN's thumb
     #: followed the authored poses' at 0.59-0.91 (its CMC across the palm), 0.69-0.93 so; 0.1 lost pad touches
     thumb_cmc_rate: float = 0.2
+    #: and its bend, the metacarpal's swing across the palm, at this share of the CMC's rate, in both passes: the
+    #: poses' rig reaches the ring and pinky tips with its metacarpal where it rests and its MCP bent, and a fit
+    #: that swung it there 14-52 deg instead read as a thumb not following (0.74-0.94); reaching with the lift and
+    #: the hinges, 0.80-0.93, the same touches
+    thumb_cmc_bend_rate: float = 0.1
     curl_weight: float = 1e3  # no finger's curl moved further from the source's than `CURL_FREE` (`_curl_excess`)
     thumb_out_weight: float = 1e3  # the thumb out to its side as the source's (`_thumb_out_allowed`)
     reach: int = 4  # frames either side of a disagreement over which the correction fades in and out
@@ -301,6 +306,7 @@ def _fit_runs(q: np.ndarray, source_frames: SourceFrames, lengths: list[int], ha
         start_curls = pose_curls(start_positions)
         rate = torch.ones(len(q), *start.shape[1:])
         rate[:, 0] = config.thumb_cmc_rate
+        rate[:, 0, 1] *= config.thumb_cmc_bend_rate
         if source_frames.thumb_out is not None:
             out_allowed, out_lost = _thumb_out_allowed(source_frames.thumb_out, thumb_out(start_positions), source)
             rate[out_lost, 0] = 1.0  # a thumb to bring out to its side turns at its metacarpal: not slowed
