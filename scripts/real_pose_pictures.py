@@ -21,7 +21,7 @@ SHOWN = {"fist": "Grip", "point": "Sign_Point", "ok": "OK", "pinch": "Pinch Tigh
 #: rigs per picture (file under assets/hands or ../shared/real-rigs, side)
 GROUPS = {"lone_hands": (("real/godot_hand_r.gltf", None), ("r_hand_skeletal_lowres.fbx", None),
                          ("webxr/generic-hand-right.glb", None)),
-          "characters": (("real/human-female.glb", "right"), ("RPM_Template_Mesh_XR.glb", "right"),
+          "characters": (("real/human-female.glb", "right"), ("real/RPM_Template_Mesh_XR.glb", "right"),
                          ("real/godot_hand_l.gltf", None)),
           "vrm_avatars": (("real/debug_robot.vrm", "right"), ("real/cryptovoxels.vrm", "right"),
                           ("real/cryptovoxels.vrm", "left"))}

@@ -21,7 +21,7 @@ from s2h_viewer.retarget.evaluation import evaluate
 ROOT = Path(__file__).resolve().parents[1]
 #: (file under real-rigs/ or assets/hands/, side or None for a lone hand)
 RIGS = (("real/godot_hand_r.gltf", None), ("real/godot_hand_l.gltf", None), ("real/human-female.glb", "right"),
-        ("real/human-female.glb", "left"), ("RPM_Template_Mesh_XR.glb", "right"), ("RPM_Template_Mesh_XR.glb", "left"),
+        ("real/human-female.glb", "left"), ("real/RPM_Template_Mesh_XR.glb", "right"), ("real/RPM_Template_Mesh_XR.glb", "left"),
         ("r_hand_skeletal_lowres.fbx", None), ("l_hand_skeletal_lowres.fbx", None),
         ("webxr/generic-hand-right.glb", None), ("webxr/generic-hand-left.glb", None),
         ("real/debug_robot.vrm", "right"), ("real/debug_robot.vrm", "left"),
