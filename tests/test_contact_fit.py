@@ -57,14 +57,15 @@ def test_frames_far_from_a_disagreement_come_back_bit_for_bit(sample_hands, webx
 
 def test_asrn_keeps_the_source_contacts_on_the_godot_hand(sample_hands):
     # the Godot hand's fingers are long and thin beside the procedural ones: TBS Copy keeps 71% of the touches
-    # (38% before every hand's thumb CMC was framed alike) and about half the frames' signatures, and the network
-    # alone (trained on procedural hands) misses many of them
+    # (38% before every hand's thumb CMC was framed alike) and 92% of the frames' signatures (about half while its
+    # pinky bent about the rays' axes, pressing on the ring), and the network alone (trained on procedural hands)
+    # misses many of them
     godot = load_hand_file(ASSETS_DIR / "hands" / "real" / "godot_hand_r.gltf")
     source = sample_hands["birch"]
     motion = synthesize(["pinch", "ok", "letter_o", "count_3", "fist"], source, seed=6)
     scores = {m: score_retarget(source, motion.q_tbs, godot, retarget(motion, source, godot, m).q_tbs)
               for m in ("tbs_copy", "asrn")}
-    assert scores["tbs_copy"].contact_recall < 0.8 and scores["tbs_copy"].signature_kept < 0.6
+    assert scores["tbs_copy"].contact_recall < 0.8 and scores["tbs_copy"].signature_kept < 0.95
     asrn = scores["asrn"]
     assert asrn.contact_recall >= 0.9 and asrn.contact_precision >= 0.9 and asrn.violation_rate <= 0.01
     assert asrn.signature_kept >= 0.99

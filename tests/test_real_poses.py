@@ -31,6 +31,7 @@ POSED_RIG = ROOT / "assets/motions/real/godot_hand_r_posed_rig.gltf"
 HUMAN = ROOT / "assets/hands/real/human-female.glb"
 GODOT_R = ROOT / "assets/hands/real/godot_hand_r.gltf"
 WEBXR_R = ROOT / "assets/hands/webxr/generic-hand-right.glb"
+RPM = ROOT / "assets/hands/real/RPM_Template_Mesh_XR.glb"
 
 
 @pytest.fixture(scope="module")
@@ -62,6 +63,34 @@ def test_unsure_rays_give_way_to_the_rigs_own_bone_axes_on_a_real_character(samp
     assert scores.source_sideways_deg < 15.0
 
 
+def _pinky_sideways(source, motion, hand) -> float:
+    """The worst sideways bend of the pinky's PIP or DIP at its tightest curls, TBS Copy of ``motion``."""
+    from s2h_viewer.semantics.flexion import finger_peaks
+    q = retarget(motion, source, hand, "tbs_copy").q_tbs
+    peaks = finger_peaks(forward_kinematics(hand, torch.as_tensor(q, dtype=torch.float64)).positions.numpy())
+    return max(peaks["pinky_pip"].degrees, peaks["pinky_dip"].degrees)
+
+
+def test_sure_rays_the_bones_agree_with_stay_and_rays_outvoted_by_bones_and_palm_give_way(sample_hands, gestures,
+                                                                                             tmp_path):
+    """Three readings of a finger's hinge: the rays, the rig's bone axes, the palm plane. The Ready Player Me pinky,
+    curled and fanned at rest: its sure rays and its bones agree (within 5 deg), both 21-28 deg from the palm
+    plane's axes, about which TBS Copy's fists bent the pinky 33 deg sideways: the rays stay (20). The Godot
+    hand's pinky: the rays 12-14 deg from bones and palm plane at the DIP, which agree: the bones win (28 -> 20).
+    A re-rolled copy of the avatar, whose bones carry no hinge, keeps the palm plane, as before."""
+    source = sample_hands[gestures.hand_name]
+    rpm, godot = load_hand_file(RPM, RigOptions(side="right")), load_hand_file(GODOT_R)
+    rolled = load_hand_file(rerolled_glb(RPM, tmp_path / "rolled.glb", 25.0), RigOptions(side="right"))
+    assert solve_tbs_frames(rpm).basis[12:15] == ["rays"] * 3
+    godot_solution = solve_tbs_frames(godot)
+    assert godot_solution.basis[12:15] == ["rig bone axis"] * 3
+    assert any(line.startswith("pinky: ") and "disagree with the rig's bone axes" in line
+               for line in godot_solution.diagnostics)
+    assert solve_tbs_frames(rolled).basis[12:15] == ["palm plane"] * 3
+    assert _pinky_sideways(source, gestures, rpm) < 24.0 and _pinky_sideways(source, gestures, godot) < 24.0
+    assert _pinky_sideways(source, gestures, rolled) > 30.0
+
+
 def test_a_procedural_hand_keeps_its_rays(sample_hands):
     """Procedural rigs roll their bone axes on purpose: their frames still come from rays (or the palm)."""
     solution = solve_tbs_frames(sample_hands["iris"])
@@ -89,11 +118,12 @@ def test_signatures_read_the_authored_poses(poses):
 
 
 def test_asrn_keeps_at_least_the_poses_tbs_copy_keeps_on_a_real_rig(poses):
-    """The guard: on the Godot hand ASRN may not lose what TBS Copy keeps, and its contact fit makes pads
-    touch where the source's do instead of where they do not (TBS Copy: 89 frames with a pad contact the
-    source does not make, the network alone 76)."""
+    """The guard: on the WebXR hand ASRN may not lose what TBS Copy keeps, and its contact fit makes pads
+    touch where the source's do instead of where they do not (TBS Copy: the middle and ring pads side by side in
+    fists the source holds apart; on the Godot hand, before its pinky's frames were outvoted by its bones and the
+    palm plane, the ring and pinky's)."""
     motion, rig = poses
-    target = load_hand_file(GODOT_R)
+    target = load_hand_file(WEBXR_R)
     kept, invented = {}, {}
     for method in ("tbs_copy", "asrn"):
         moved = retarget(motion, rig, target, method)
@@ -105,13 +135,14 @@ def test_asrn_keeps_at_least_the_poses_tbs_copy_keeps_on_a_real_rig(poses):
 
 
 def test_the_contact_fit_opens_invented_contacts_without_bending_fingers_sideways(poses):
-    """TBS Copy of the poses onto the Godot hand leaves the ring and pinky tips side by side in every fist (a pad
-    contact the source does not make, 210 frames) and the thumb off fingertips it is at (OK: 3% of the hand in the
-    source). The fit opened those by bending the pinky DIP 45 deg sideways (a fist's knuckle bent past 90 read as a
-    160 deg twist, which the anatomy term then "untwisted"), and pushed the OK's thumb off the index: now it may bend
-    no hinge past 20 deg sideways, and keeps the thumb where the source's is."""
+    """TBS Copy of the poses onto the WebXR hand leaves the middle and ring tips side by side in fists (a pad
+    contact the source does not make) and the thumb off fingertips it is at (OK: 3% of the hand in the source);
+    so did it onto the Godot hand (ring and pinky, 210 frames) before its pinky's frames were outvoted. The fit
+    opened those by bending the pinky DIP 45 deg sideways (a fist's knuckle bent past 90 read as a 160 deg twist,
+    which the anatomy term then "untwisted"), and pushed the OK's thumb off the index: now it may bend no hinge
+    past 20 deg sideways, and keeps the thumb where the source's is."""
     motion, rig = poses
-    target = load_hand_file(GODOT_R)
+    target = load_hand_file(WEBXR_R)
     start = motion.q_tbs.astype(np.float32)
     fitted = fit_contacts(motion.q_tbs, rig, target, start.copy())
     before, after = (score_retarget(rig, motion.q_tbs, target, q) for q in (start, fitted))
@@ -125,7 +156,7 @@ def test_the_contact_fit_opens_invented_contacts_without_bending_fingers_sideway
     assert (sideways[1] <= np.maximum(sideways[0], SIDEWAYS_LIMIT) + 0.5).all()
     kept = [sum(not lost for lost in pose_differences(rig, motion.q_tbs, target, q, motion.labels).values())
             for q in (start, fitted)]
-    assert kept[1] >= kept[0] + 10, kept
+    assert kept[1] == 35 > kept[0], kept
 
 
 @pytest.mark.parametrize("rig, degrees", [(HUMAN, 20.0), (HUMAN, 90.0), (WEBXR_R, 20.0)])

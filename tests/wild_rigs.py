@@ -189,6 +189,7 @@ def rerolled_glb(source: Path, out: Path, degrees: float, pattern: str = r"(?i)t
     from scipy.spatial.transform import Rotation
 
     gltf = pygltflib.GLTF2().load(str(source))
+    gltf.convert_buffers(pygltflib.BufferFormat.BINARYBLOB)  # a .gltf's embedded buffers into one blob
     blob = bytearray(gltf.binary_blob())
     skin = gltf.skins[0]
     stored = _accessor_floats(gltf, blob, skin.inverseBindMatrices, 16)
@@ -223,6 +224,7 @@ def centimetre_glb(source: Path, out: Path) -> Path:
     (as Blender's and Maya's FBX-to-glTF exports of a cm scene leave it). In world units it is the same avatar.
     Animations are dropped (their translation keys would need the same factor)."""
     gltf = pygltflib.GLTF2().load(str(source))
+    gltf.convert_buffers(pygltflib.BufferFormat.BINARYBLOB)
     blob = bytearray(gltf.binary_blob())
 
     for node in gltf.nodes:

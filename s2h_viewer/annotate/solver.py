@@ -330,7 +330,13 @@ def _overrule_unsure_rays(frames: np.ndarray, confidence: np.ndarray, basis: lis
     the thumb, which the palm plane does not predict) within `AGREE_DEGREES` of the palm plane's; else the
     rig's own bone axes where they lie within `RIG_AXIS_DEGREES` of the palm plane's (the thumb: of the
     rays'), the hinge an authored rig bends about; else the palm plane (the thumb keeps its rays). Sure rays
-    come first so that a rig with re-rolled bones cannot mislead a hand whose sections the rays can read.
+    come first so that a rig with re-rolled bones cannot mislead a hand whose sections the rays can read; and sure
+    rays that point away from the palm plane stay where the rig's bone axes agree with them, two readings of the
+    hand against a guess (the Ready Player Me pinky, curled and fanned at rest: rays and bones within 5 deg of
+    each other, 21-28 deg from the palm plane's axes, about which a fist bent it 31 deg sideways). Where the
+    bones agree with the palm plane and the sure rays with neither, the bones win, two readings against one (the
+    Godot hand's pinky DIP: rays 12-14 deg from both, bones and palm plane within 9 deg; a fist about the rays'
+    axes bent the pinky 27 deg sideways, about the bones' 20).
     A frame the rays did not decide gets confidence `PALM_EVIDENCE` at most and a line saying why."""
     for f in range(topo.N_FINGERS):
         members = [3 * f + level for level in range(3)]
@@ -339,16 +345,18 @@ def _overrule_unsure_rays(frames: np.ndarray, confidence: np.ndarray, basis: lis
         twist = frames[members][:, :, 0]
         rays = frames[members][:, :, 1]
         reference = rays if f == 0 else palm_bend[members]
-        rig = None
+        rig = rays_on_bones = None
         if bone_axes is not None:
             # which of the bone's axes is its hinge: the one nearest the rays' (they are 90 deg apart, so even
             # unsure rays pick right), accepted where it agrees with the palm plane (the thumb: the rays)
             rig = np.stack([_nearest_bone_axis(bone_axes[j], rays[k], twist[k]) for k, j in enumerate(members)])
+            rays_on_bones = bool((_angle_between_lines(rig, rays) <= RIG_AXIS_DEGREES).all())
             if not (_angle_between_lines(rig, reference) <= RIG_AXIS_DEGREES).all():
                 rig = None
         sure = bool((confidence[members] >= TRUST_RAYS).all())
         near = f == 0 or bool((_angle_between_lines(rays, palm_bend[members]) <= AGREE_DEGREES).all())
-        if sure and near:
+        outvoted = f != 0 and rig is not None and not rays_on_bones  # bones and palm plane agree, the rays not
+        if sure and (near or rays_on_bones) and not outvoted:
             continue
         if rig is not None:
             chosen, label = rig, "rig bone axis"
@@ -356,7 +364,8 @@ def _overrule_unsure_rays(frames: np.ndarray, confidence: np.ndarray, basis: lis
             continue  # the palm plane does not predict the thumb's hinge: its rays stay
         else:
             chosen, label = palm_bend[members], "palm plane"
-        why = "the rays could not tell its bend axis" if not sure else "its rays point away from the palm plane"
+        why = ("the rays could not tell its bend axis" if not sure else "its rays point away from the palm plane"
+               if not near else "its rays disagree with the rig's bone axes and the palm plane, which agree")
         diagnostics.append(f"{topo.FINGERS[f]}: {why} (rays' confidence {confidence[members].min():.2f}); "
                            f"bend axes taken from the {label}, confidence {PALM_EVIDENCE:.1f} at most")
         previous = back[members[0]]
