@@ -53,6 +53,10 @@ TRUST_RAYS = 0.8
 #: 7 deg of the palm plane's (a Mixamo hand); at 25 deg the RPM avatar's index bones rolled 30 deg otherwise
 #: (another exporter's roll, `tests/wild_rigs.rerolled_glb`) were still taken, and its frames followed the roll
 RIG_AXIS_DEGREES = 12.0
+#: sure rays give way to the rig's bone axes where, at some joint of the finger, they lie this much further from
+#: both the bones' axis and the palm plane's than those two lie from each other, and the bones agree with the palm
+#: plane (`RIG_AXIS_DEGREES`) at every joint: two readings against one (the Godot pinky DIP: 10-12 deg)
+ODD_ONE_OUT_DEGREES = 8.0
 #: a finger's PIP or DIP section measured wider, side to side, than this fraction of the way to the nearest
 #: neighbouring finger's bone is not the finger's own: the mesh does not part the fingers (a low-poly mitten,
 #: cryptovoxels.vrm: 0.81-1.35), so its rays and widths say nothing of the finger. Separate fingers read
@@ -334,9 +338,9 @@ def _overrule_unsure_rays(frames: np.ndarray, confidence: np.ndarray, basis: lis
     rays that point away from the palm plane stay where the rig's bone axes agree with them, two readings of the
     hand against a guess (the Ready Player Me pinky, curled and fanned at rest: rays and bones within 5 deg of
     each other, 21-28 deg from the palm plane's axes, about which a fist bent it 31 deg sideways). Where the
-    bones agree with the palm plane and the sure rays with neither, the bones win, two readings against one (the
-    Godot hand's pinky DIP: rays 12-14 deg from both, bones and palm plane within 9 deg; a fist about the rays'
-    axes bent the pinky 27 deg sideways, about the bones' 20).
+    bones agree with the palm plane and the sure rays are the odd one out at a joint (`ODD_ONE_OUT_DEGREES`), the
+    bones win, two readings against one (the Godot hand's pinky DIP: rays 12-15 deg from both, bones and palm plane
+    2 deg apart; a fist about the rays' axes bent the pinky 27 deg sideways, about the bones' 20).
     A frame the rays did not decide gets confidence `PALM_EVIDENCE` at most and a line saying why."""
     for f in range(topo.N_FINGERS):
         members = [3 * f + level for level in range(3)]
@@ -345,17 +349,20 @@ def _overrule_unsure_rays(frames: np.ndarray, confidence: np.ndarray, basis: lis
         twist = frames[members][:, :, 0]
         rays = frames[members][:, :, 1]
         reference = rays if f == 0 else palm_bend[members]
-        rig = rays_on_bones = None
+        rig, rays_on_bones, outvoted = None, False, False
+        rays_off_palm = _angle_between_lines(rays, palm_bend[members])
         if bone_axes is not None:
             # which of the bone's axes is its hinge: the one nearest the rays' (they are 90 deg apart, so even
             # unsure rays pick right), accepted where it agrees with the palm plane (the thumb: the rays)
             rig = np.stack([_nearest_bone_axis(bone_axes[j], rays[k], twist[k]) for k, j in enumerate(members)])
-            rays_on_bones = bool((_angle_between_lines(rig, rays) <= RIG_AXIS_DEGREES).all())
-            if not (_angle_between_lines(rig, reference) <= RIG_AXIS_DEGREES).all():
+            rays_off_rig, rig_off = _angle_between_lines(rays, rig), _angle_between_lines(rig, reference)
+            rays_on_bones = bool((rays_off_rig <= RIG_AXIS_DEGREES).all())
+            if not (rig_off <= RIG_AXIS_DEGREES).all():
                 rig = None
+            elif f != 0:  # bones and palm plane agree: are the rays the odd one out somewhere?
+                outvoted = bool((np.minimum(rays_off_palm, rays_off_rig) - rig_off >= ODD_ONE_OUT_DEGREES).any())
         sure = bool((confidence[members] >= TRUST_RAYS).all())
-        near = f == 0 or bool((_angle_between_lines(rays, palm_bend[members]) <= AGREE_DEGREES).all())
-        outvoted = f != 0 and rig is not None and not rays_on_bones  # bones and palm plane agree, the rays not
+        near = f == 0 or bool((rays_off_palm <= AGREE_DEGREES).all())
         if sure and (near or rays_on_bones) and not outvoted:
             continue
         if rig is not None:
