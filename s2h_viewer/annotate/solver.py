@@ -55,7 +55,7 @@ TRUST_RAYS = 0.8
 RIG_AXIS_DEGREES = 12.0
 #: sure rays give way to the rig's bone axes where, at some joint of the finger, they lie this much further from
 #: both the bones' axis and the palm plane's than those two lie from each other, and the bones agree with the palm
-#: plane (`RIG_AXIS_DEGREES`) at every joint: two readings against one (the Godot pinky DIP: 10-12 deg)
+#: plane (`RIG_AXIS_DEGREES`) at every joint: two readings against one (the Godot pinky DIPs: 10.4 and 11.4 deg)
 ODD_ONE_OUT_DEGREES = 8.0
 #: a finger's PIP or DIP section measured wider, side to side, than this fraction of the way to the nearest
 #: neighbouring finger's bone is not the finger's own: the mesh does not part the fingers (a low-poly mitten,
