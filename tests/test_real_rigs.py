@@ -497,8 +497,10 @@ def test_a_lone_left_hand_asked_for_as_right_is_refused_clearly(tmp_path):
 
 def test_real_rigs_ship_with_their_licences():
     readme = (REAL / "README.md").read_text()
-    for name in ("godot_hand_r.gltf", "godot_hand_l.gltf", "human-female.glb", "r_hand_skeletal_lowres.fbx"):
+    for name in ("godot_hand_r.gltf", "godot_hand_l.gltf", "human-female.glb", "r_hand_skeletal_lowres.fbx",
+                 "RPM_Template_Mesh_XR.glb"):
         assert (REAL / name).exists() and name in readme
+    assert "Ready Player Me" in (REAL / "rpm-unity-sdk-core-LICENSE.md").read_text()
     assert (REAL / "godot-xr-tools-hands-License.md").exists() and (REAL / "mesh2motion-LICENSE-CC0.MD").exists()
     assert "Facebook Technologies" in (REAL / "Oculus-SampleFramework-license.txt").read_text()
     assert not (REAL / "human-female.glb").is_symlink()  # a copy in the project, not a link to /work/shared
