@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from PySide6.QtCore import Qt, Signal
-from PySide6.QtGui import QUndoCommand, QUndoStack
+from PySide6.QtGui import QAction, QUndoCommand, QUndoStack
 from PySide6.QtWidgets import QComboBox, QFrame, QLabel, QMenu, QScrollArea, QSplitter, QVBoxLayout, QWidget
 
 from s2h_viewer.annotate.trust import frame_warning
@@ -640,10 +640,13 @@ class CompareMode(QWidget):
     def set_see_through(self, checked: bool) -> None:
         self.view.set_options(opacity=0.4 if checked else 1.0)
 
-    def fill_targets_menu(self, menu: QMenu) -> None:
-        """One "Remove <target>" entry per target (rebuilt whenever the state changes); the last target stays
-        (without one there is nothing to compare, and the grid would keep showing it)."""
+    def fill_targets_menu(self, menu: QMenu, leading: tuple[QAction, ...] = ()) -> None:
+        """``leading`` (adding a target), then one "Remove <target>" entry per target (rebuilt whenever the state
+        changes); the last target stays (without one there is nothing to compare, and the grid would keep showing it)."""
         menu.clear()
+        if leading:
+            menu.addActions(list(leading))
+            menu.addSeparator()
         for index, target in enumerate(self.state.targets):
             action = menu.addAction(f"Remove {target.name}")
             action.triggered.connect(lambda _=False, i=index: self.remove_target(i))

@@ -179,8 +179,10 @@ class MainWindow(QMainWindow):
     def _build_menus(self) -> None:
         bar = self.menuBar()
         file_menu = bar.addMenu("&File")
-        compare_only = [self._action(file_menu, "Open motion...", self.open_motion, "Ctrl+O"),
-                        self._action(file_menu, "Add target hand...", self.add_target, "Ctrl+T"),
+        open_motion = self._action(file_menu, "Open motion...", self.open_motion, "Ctrl+O")
+        # also first in the Targets menu, where a first-time user looked for it
+        self.add_target_action = self._action(file_menu, "Add target hand...", self.add_target, "Ctrl+T")
+        compare_only = [open_motion, self.add_target_action,
                         self._action(file_menu, "Open batch summary...", self.ask_batch, "Ctrl+B")]
         self.recent_menu = file_menu.addMenu("Open recent")
         self._fill_recent()
@@ -218,7 +220,7 @@ class MainWindow(QMainWindow):
             action.setToolTip(method.description)
             self.method_actions[name] = action
         self.targets_menu = bar.addMenu("&Targets")
-        self.compare.fill_targets_menu(self.targets_menu)
+        self.compare.fill_targets_menu(self.targets_menu, (self.add_target_action,))
         view_menu = bar.addMenu("&View")
         self.see_through = self._action(view_menu, "Semi-transparent skin", self.compare.set_see_through, "Ctrl+H",
                                         checkable=True)
@@ -299,7 +301,7 @@ class MainWindow(QMainWindow):
         annotating = self._annotating()
         for item in self._compare_only:
             item.setEnabled(not annotating)
-        self.targets_menu.setEnabled(not annotating and bool(self.setup.targets))
+        self.targets_menu.setEnabled(not annotating)  # adding a target is there too
         for action in self._annotate_only:
             action.setEnabled(annotating and self.annotation is not None)
         self._enable_recent()
@@ -355,7 +357,7 @@ class MainWindow(QMainWindow):
             action.blockSignals(False)
             action.setEnabled(name != last)  # the last method stays (as the last target does): nothing to compare
             action.setStatusTip("the last method ticked: tick another before unticking it" if name == last else "")
-        self.compare.fill_targets_menu(self.targets_menu)
+        self.compare.fill_targets_menu(self.targets_menu, (self.add_target_action,))
         self._follow_mode()
 
     def _frame_hand(self) -> None:
