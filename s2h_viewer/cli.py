@@ -304,35 +304,34 @@ def _corrections(args: argparse.Namespace, retargeted, target):
 
 def _cmd_check(args: argparse.Namespace) -> int:
     """`s2h check FILE`: how far each animation's fingers bend sideways (`semantics.flexion`), on its own rig."""
+    from dataclasses import replace
+
     import numpy as np
     import torch
 
+    from s2h_viewer.errors import InputFileError
     from s2h_viewer.hand.kinematics import forward_kinematics
-    from dataclasses import replace
-
     from s2h_viewer.io.files import list_animations, load_motion_file
+    from s2h_viewer.samples import sample_performer
     from s2h_viewer.semantics.flexion import finger_peaks, sideways_peak
 
     options = _rig_options(args)
-    from s2h_viewer.errors import InputFileError
-
     names = list_animations(args.file) if args.animation is None else [str(args.animation)]
     if not names:
         raise InputFileError(args.file, "has no animations to check (s2h check reads the animations of a file)")
     rig = None
     worst = float("nan")
-    for index, label in enumerate(names):
+    for index in range(len(names)):
         chosen = replace(options, animation=index if args.animation is None else args.animation)
         motion, rig = load_motion_file(args.file, rig, chosen)
         if rig is None:
-            from s2h_viewer.samples import sample_performer
             rig = sample_performer(motion, args.file)
         with torch.no_grad():
             positions = forward_kinematics(rig, torch.as_tensor(motion.q_tbs, dtype=torch.float64)).positions.numpy()
         peak = sideways_peak(positions)
         worst = np.nanmax([worst, peak.degrees]) if not np.isnan(peak.degrees) else worst
         pose = motion.labels[peak.frame] if peak.frame >= 0 else ""
-        print(f"{label}: {motion.n_frames} frames; {peak.describe()}" + (f" (pose {pose!r})" if pose else ""))
+        print(f"{motion.name}: {motion.n_frames} frames; {peak.describe()}" + (f" (pose {pose!r})" if pose else ""))
         if args.joints:
             for joint, p in finger_peaks(positions).items():
                 print(f"    {joint:10s} " + ("does not curl" if np.isnan(p.degrees) else
