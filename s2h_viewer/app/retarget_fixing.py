@@ -112,11 +112,14 @@ class RetargetFixing(QObject):
         return self.mode.shown_keys()[index], self.mode.comparison.results[index]
 
     def _follow_solo(self, *_) -> None:
-        """A retarget shown alone gets the bar and a ring in its cell; the grid neither."""
+        """A retarget shown alone gets the bar and a ring in its cell; the grid neither, and lets go of the joint:
+        the first click of the double-click back to the grid picked one, and its ring covered the next hand shown
+        alone."""
         hand = self.mode.view.solo_hand()
         self._drop_ring()
         self.bar.setVisible(hand is not None)
         if hand is None:
+            self.joint = None
             return
         self.ring = RotationRing(self.mode.view.interactor, self._begin, self._turn, self._end, self._clicked,
                                  renderer=hand.renderer)
@@ -208,6 +211,16 @@ class RetargetFixing(QObject):
         positions = to_view(result.target, result.pose.positions[self.mode.timeline.frame].numpy().astype(np.float64))
         nearest = nearest_on_screen(self.ring.renderer, positions[[joint for joint, _ in PICKABLE]], x, y)
         self._picked(None if nearest is None else PICKABLE[nearest][1])
+
+    def let_go(self) -> None:
+        """Escape: the picked joint let go (its ring hidden); with none picked, a hand shown alone back to the grid.
+        A drag under way keeps its joint."""
+        if self._drag is not None:
+            return
+        if self.joint is not None and self._solo() is not None:
+            self._picked(None)
+        elif self.mode.view.solo >= 0:
+            self.mode.view.set_solo(-1)
 
     def pick(self, joint: str) -> None:
         """Pick ``joint`` (an articulated joint's name) as a click on it would (keyboard users, scripts)."""
@@ -332,6 +345,8 @@ class RetargetFixing(QObject):
         for text, slot, shortcut in (("Next ring axis (bend, splay, twist)", self.next_axis, "R"),
                                      ("Delete the joint's key at this frame", self.delete_key, "Shift+K"),
                                      ("Clear the joint's corrections", self.clear_joint, "Ctrl+Shift+K"),
+                                     ("Let go of the joint (hide its ring); again: back to the grid", self.let_go,
+                                      "Esc"),
                                      ("Blend the joint's key at this frame over the marked range",
                                       self.use_marked_range, None),
                                      ("Remove every correction of the retarget", self.clear_all, None)):
