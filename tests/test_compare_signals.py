@@ -31,7 +31,7 @@ from s2h_viewer.hand import topology as topo  # noqa: E402
 from s2h_viewer.hand.model import HandModel  # noqa: E402
 from s2h_viewer.io.files import load_hand_file  # noqa: E402
 from s2h_viewer.render.compare_scene import (BANNER_BACKGROUND, CONTACT_COLOUR, INVENTED_COLOUR,  # noqa: E402
-                                             ViewOptions, render_comparison)
+                                             LABEL_PAD, ViewOptions, render_comparison, text_extent)
 from s2h_viewer.retarget.comparison import build_comparison  # noqa: E402
 from s2h_viewer.retarget.methods import retarget  # noqa: E402
 from s2h_viewer.samples import ASSETS_DIR  # noqa: E402
@@ -109,6 +109,44 @@ def test_a_target_with_unsure_frames_is_flagged_on_its_cells_its_rows_and_over_t
     assert "human-female: frames unsure" in window.compare.sideways_note.text()
     table.selectRow(rows["iris"])
     assert "frames unsure" not in window.compare.sideways_note.text()
+
+
+def test_a_narrow_cell_says_the_banner_in_fewer_words_and_the_banner_shows_all_of_it_as_a_tooltip(window,
+                                                                                                   human_female):
+    """A fresh-eyes user saw "! frames guessed: i..." in small cells, with no way to read the rest there."""
+    from PySide6.QtCore import QEvent, QPoint
+    from PySide6.QtGui import QHelpEvent
+    from PySide6.QtWidgets import QApplication, QToolTip
+    from s2h_viewer.widgets.tooltips import wrapped
+    view, warning = window.view, frame_warning(human_female)
+    hand = next(h for h in view._hands[1:] if h.hand.name == "human-female")
+    banner, drawn = hand.banner, hand.banner.fitted
+    px = drawn[2][0]
+    assert warning.banners == ("frames unsure: index DIP, pinky MCP/PIP/DIP", "frames unsure: index, pinky",
+                               "frames unsure")
+    whole = text_extent(banner.text, px)[0] + 2 * LABEL_PAD
+    for width, said in ((whole, banner.text), (whole - 10, "! frames unsure: index, pinky"), (whole // 2, "! frames unsure")):
+        banner.fit(width, 400, (px, 1))
+        assert banner.actor.GetInput() == said
+    banner.fit(*drawn)  # as drawn in its cell again
+    x0, y0, x1, y1 = hand.renderer.GetViewport()
+    w, h = view.interactor.width(), view.interactor.height()
+
+    def at(x: float, y: float) -> QPoint:
+        return QPoint(round(x * w), round((1.0 - y) * h) - 1)
+    on_banner = at(x0 + 0.3 * (x1 - x0), y0 + 2 / h)
+    QApplication.sendEvent(view.interactor, QHelpEvent(QEvent.Type.ToolTip, on_banner,
+                                                       view.interactor.mapToGlobal(on_banner)))
+    assert QToolTip.isVisible() and QToolTip.text() == wrapped(warning.describe())  # on the banner: all of it,
+    # wrapped (on one line it ran off the screen)
+    on_hand = at(x0 + 0.3 * (x1 - x0), (y0 + y1) / 2)
+    assert view.banner_tip(on_hand.x(), on_hand.y()) == ""  # on the hand: none
+    iris = next(h for h in view._hands[1:] if h.hand.name == "iris")
+    x0, y0, x1, y1 = iris.renderer.GetViewport()
+    assert view.banner_tip(at(x0 + 0.3 * (x1 - x0), y0 + 2 / h).x(), at(0, y0 + 2 / h).y()) == ""  # no banner there
+    view.set_solo(view._hands.index(hand))  # alone, its banner spans the view's bottom
+    w, h = view.interactor.width(), view.interactor.height()  # the fixing bar over a retarget alone
+    assert view.banner_tip(at(0.5, 2 / h).x(), at(0.5, 2 / h).y()) == warning.describe()
 
 
 def test_contacts_show_in_three_states_and_invented_ones_are_not_drawn_as_kept(window, tmp_path):

@@ -25,15 +25,16 @@ def record(hand: HandModel, set_by: list[str], confidence: np.ndarray) -> None:
     hand.meta[CONFIDENCE_KEY] = [float(c) for c in np.asarray(confidence, dtype=float)]
 
 
-def _joint_names(joints: list[int]) -> str:
-    """"index DIP, pinky MCP/PIP/DIP": the joints grouped by finger ("every joint": all 15)."""
+def _joint_names(joints: list[int], levels: bool = True) -> str:
+    """"index DIP, pinky MCP/PIP/DIP": the joints grouped by finger ("every joint": all 15); without ``levels``
+    the fingers alone ("index, pinky")."""
     if len(joints) == topo.N_ARTICULATED:
         return "every joint"
     by_finger: dict[str, list[str]] = {}
     for j in joints:
         finger, _, level = topo.ARTICULATED_NAMES[j].partition("_")
         by_finger.setdefault(finger, []).append(level.upper())
-    return ", ".join(f"{finger} {'/'.join(levels)}" for finger, levels in by_finger.items())
+    return ", ".join(f"{finger} {'/'.join(names)}" if levels else finger for finger, names in by_finger.items())
 
 
 @dataclass(frozen=True)
@@ -49,9 +50,17 @@ class FrameWarning:
     @property
     def banner(self) -> str:
         """One short line for a grid cell: "frames unsure: pinky MCP/PIP/DIP"."""
-        parts = ([f"unsure: {_joint_names(list(self.unsure))}"] if self.unsure else []) + \
-                ([f"guessed: {_joint_names(list(self.guessed))}"] if self.guessed else [])
-        return "frames " + "; ".join(parts)
+        return self.banners[0]
+
+    @property
+    def banners(self) -> tuple[str, str, str]:
+        """The banner, then shorter for narrower cells: the fingers alone ("frames guessed: index"), then what
+        is wrong alone ("frames guessed"), so a small cell does not cut it to "frames guessed: i..."."""
+        kinds = (("unsure", self.unsure), ("guessed", self.guessed))
+        return ("frames " + "; ".join(f"{kind}: {_joint_names(list(joints))}" for kind, joints in kinds if joints),
+                "frames " + "; ".join(f"{kind}: {_joint_names(list(joints), False)}" for kind, joints in kinds
+                                      if joints),
+                "frames " + ", ".join(kind for kind, joints in kinds if joints))
 
     def describe(self) -> str:
         """The whole warning, for the table's tooltip and the note over the curve."""

@@ -107,6 +107,8 @@ class PosedHand:
         self.renderer = plotter.renderer  # the subplot it is drawn in
         self.warned = False  # its target's frames are unsure (`annotate.trust`): framed in the banner's colour
         self.label: CellLabel | None = None  # its cell's text
+        self.banner: CellLabel | None = None  # its warning at the cell's bottom, if any
+        self.banner_tip = ""  # the whole warning, for a tooltip over the banner
         self.border: vtkActor2D | None = None
         self.frame, self.playing = 0, False
         self.levels: list[Skin] = []  # the full skin, then the one drawn while playing (if any)
@@ -266,6 +268,7 @@ class CellLabel:
     text: str
     fitted: tuple = ()  # the cell's size and the font it was last fitted to
     bottom: bool = False  # a banner: at the cell's bottom left, one line
+    shorter: tuple[str, ...] = ()  # the text said in fewer words, longest first: the first that fits is drawn
 
     def set_text(self, text: str) -> None:
         """New text, fitted to its cell at the next `fit_cells`."""
@@ -278,20 +281,32 @@ class CellLabel:
         self.fitted = (width, height, font)
         px, lines = font
         self.actor.prop.font_size = px
-        kept = self.text.split("\n")[:lines]
-        self.actor.SetInput("\n".join(elide(line, px, width - 2 * LABEL_PAD) for line in kept))
+        room = width - 2 * LABEL_PAD
+        text = self.text
+        if self.shorter and text_extent(text, px)[0] > room:
+            text = next((t for t in self.shorter if text_extent(t, px)[0] <= room), self.shorter[-1])
+        kept = text.split("\n")[:lines]
+        self.actor.SetInput("\n".join(elide(line, px, room) for line in kept))
         self.actor.SetPosition(LABEL_PAD / width, LABEL_PAD / height if self.bottom else 1.0 - LABEL_PAD / height)
 
 
-def add_banner(plotter: pv.Plotter, text: str) -> CellLabel:
-    """A warning at the bottom left of the current subplot, dark on a light orange band, fitted as the labels."""
+    def drawn_height(self) -> int:
+        """Pixels from the cell's edge to past the text's far side as last fitted (0 before a fit)."""
+        if not self.fitted:
+            return 0
+        return text_extent(self.actor.GetInput(), self.fitted[2][0])[1] + 2 * LABEL_PAD
+
+
+def add_banner(plotter: pv.Plotter, text: str, shorter: tuple[str, ...] = ()) -> CellLabel:
+    """A warning at the bottom left of the current subplot, dark on a light orange band, fitted as the labels
+    (``shorter``: the same in fewer words, longest first, drawn where the whole does not fit)."""
     actor = plotter.add_text(text, position=(0.02, 0.02), viewport=True, color=BANNER_COLOUR)
     actor.prop.font_size = LABEL_PX
     actor.prop.SetFontFamilyToArial()
     actor.prop.SetVerticalJustificationToBottom()
     actor.prop.SetBackgroundColor(pv.Color(BANNER_BACKGROUND).float_rgb)
     actor.prop.SetBackgroundOpacity(1.0)
-    return CellLabel(plotter.renderer, actor, text, bottom=True)
+    return CellLabel(plotter.renderer, actor, text, bottom=True, shorter=shorter)
 
 
 def add_label(plotter: pv.Plotter, text: str) -> CellLabel:
@@ -450,11 +465,16 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
         labels.append(posed.label)
         warning = frame_warning(hand) if expected is not None else None
         if warning is not None:  # the banner at the cell's bottom, the cell framed: it is not the next row's
-            labels.append(add_banner(plotter, f"! {warning.banner}"))
+            whole, *fewer = (f"! {banner}" for banner in warning.banners)
+            posed.banner, posed.banner_tip = add_banner(plotter, whole, tuple(fewer)), warning.describe()
             posed.warned = True
             posed.set_framed(False)
         elif expected is None and hand.meta.get("rest_note"):  # a skeleton-only source resting in a pose
-            labels.append(add_banner(plotter, SOURCE_IN_POSE))
+            posed.banner = add_banner(plotter, SOURCE_IN_POSE)
+            posed.banner_tip = (f"{hand.name}: {hand.meta['rest_note']}; open the clip again and give the rig it "
+                                f"was made for")
+        if posed.banner is not None:
+            labels.append(posed.banner)
     below = source_cell_below(comparison)
     if below is not None:
         plotter.subplot(*below)

@@ -4,7 +4,7 @@ linked cameras, rendered off screen and shown as an image (`widgets.vtk_widget`)
 A new frame asks for a repaint (``update``): one render per frame for the whole grid. While the
 timeline plays, each skin of the grid is drawn with fewer faces; paused or shown alone, the full
 display mesh. A double-click on a hand shows its viewport alone (solo), a second one brings the grid
-back. ``drawn`` fires after every render, so the timeline can show the frames actually drawn per
+back; a cell's warning banner has its whole text as a tooltip. ``drawn`` fires after every render, so the timeline can show the frames actually drawn per
 second. While playing, the frame expected next is posed on a worker thread (numpy alone) while the
 current one is drawn (`prefetch`): the GUI thread then only copies it in. The worker starts when the
 render does: VTK lets go of Python's lock while it draws, where the GUI thread's own Python (the heatmap,
@@ -18,17 +18,19 @@ from concurrent.futures import Future, ThreadPoolExecutor
 import numpy as np
 import pyvista as pv
 from PySide6.QtCore import QEvent, QObject, QTimer, Signal
-from PySide6.QtWidgets import QHBoxLayout, QLabel, QToolButton, QVBoxLayout, QWidget
+from PySide6.QtWidgets import QHBoxLayout, QLabel, QToolButton, QToolTip, QVBoxLayout, QWidget
 from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
 
 from s2h_viewer.render.compare_scene import (PLAYING_FACES, CellLabel, Framing, Ghost, PosedHand, PosedSkin,
                                              ViewOptions, apply_options, fit_cells, grid_layout, populate,
                                              result_label, show_alone, solo_ghost)
 from s2h_viewer.retarget.comparison import Comparison, target_ids, target_page
+from s2h_viewer.widgets.tooltips import wrapped
 from s2h_viewer.widgets.vtk_widget import PlotterWidget, window_plotter
 
 #: the mouse in the grid beyond the camera (`vtk_widget.MOUSE`), for Help's list
-MOUSE = (("double-click a hand", "show it alone and select it; double-click again for the grid"),)
+MOUSE = (("double-click a hand", "show it alone and select it; double-click again for the grid"),
+         ("rest the pointer on a cell's orange banner", "its whole warning"))
 #: pixels a target's row needs at least (its label band and a hand that reads): more targets than fit page
 MIN_ROW_PX = 130
 FRAME_FILL = 0.9  # View > Frame the hand: the share of the cell the hand's box fills
@@ -342,10 +344,31 @@ class CompareView(QWidget):
         if index < 0:
             self._refit.start()  # the window may have changed size while one hand was shown
 
+    def banner_tip(self, x: int, y: int) -> str:
+        """The whole warning of the banner drawn under widget pixel (x, y), in the grid or a hand alone ("" off
+        any): a small cell draws it in fewer words ("! frames guessed: index")."""
+        w, h = max(1, self.interactor.width()), max(1, self.interactor.height())
+        u, v = x / w, 1.0 - y / h
+        for hand in self._hands:
+            x0, y0, x1, y1 = hand.renderer.GetViewport()
+            if hand.banner is not None and hand.renderer.GetDraw() and x0 <= u < x1 and y0 <= v < y1:
+                scale = self.interactor.devicePixelRatioF()  # the banner is measured in the window's pixels
+                return hand.banner_tip if (v - y0) * h * scale <= hand.banner.drawn_height() else ""
+        return ""
+
     def eventFilter(self, watched: QObject, event: QEvent) -> bool:
-        if watched is self.interactor and event.type() == QEvent.Type.MouseButtonDblClick:
+        if watched is not self.interactor:
+            return False
+        if event.type() == QEvent.Type.MouseButtonDblClick:
             self.set_solo(-1 if self.solo >= 0 else self.hand_at(int(event.position().x()),
                                                                  int(event.position().y())))
+            return True
+        if event.type() == QEvent.Type.ToolTip:
+            tip = self.banner_tip(event.pos().x(), event.pos().y())
+            if tip:
+                QToolTip.showText(event.globalPos(), wrapped(tip), self.interactor)
+            else:
+                QToolTip.hideText()
             return True
         return False
 

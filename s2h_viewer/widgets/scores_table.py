@@ -18,6 +18,7 @@ from s2h_viewer.render.compare_scene import BANNER_BACKGROUND, BANNER_COLOUR
 from s2h_viewer.retarget.comparison import Comparison
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.semantics.flexion import SidewaysPeak
+from s2h_viewer.widgets.tooltips import wrapped
 
 #: (header, score key or None for a name column, header tooltip)
 COLUMNS = (("Method", None, "retargeting method"), ("Target", None, "target hand"),
@@ -104,7 +105,7 @@ class ScoresTable(QTableWidget):
         for row, result in enumerate(comparison.results):
             values = result.scores.as_dict()
             warning = frame_warning(result.target)
-            target = (f"! {result.target.name}", warning.describe()) if warning else (result.target.name,) * 2
+            target = (f"! {result.target.name}", wrapped(warning.describe())) if warning else (result.target.name,) * 2
             method = METHODS[result.method].label
             fixes = result.corrections
             cells = [(f"{method} (fixed)", f"{method}, corrected: {fixes.describe()}") if fixes else (method,) * 2,
