@@ -75,7 +75,7 @@ def _render_comparison(args: argparse.Namespace) -> int:
 
     from s2h_viewer.io.files import load_hand_file
     from s2h_viewer.render.caption import page_caption
-    from s2h_viewer.render.compare_scene import render_comparison
+    from s2h_viewer.render.compare_scene import ViewOptions, render_comparison
     from s2h_viewer.render.video import VIDEO_SUFFIXES, frame_range
     from s2h_viewer.retarget.comparison import build_comparison
 
@@ -89,11 +89,13 @@ def _render_comparison(args: argparse.Namespace) -> int:
         frames = frame_range(motion.n_frames, args.frame or 0, args.frame or 0, clip=args.motion)  # the one frame
     targets = [load_hand_file(t, _rig_options(args)) for t in (args.target or ["iris", "laurel"])]
     methods = (args.methods or "tbs_copy,asrn").split(",")
+    options = ViewOptions(camera="default" if args.view == "three_quarter" else args.view, skeleton=args.skeleton,
+                          contacts=args.contacts)
     with _progress_bar("retarget", len(targets) * len(methods), "retarget", disable=args.quiet):
         comparison = build_comparison(motion, source, targets, methods)
     with tqdm(total=len(frames), desc="render", unit="frame", file=sys.stderr, disable=args.quiet) as bar:
         path = render_comparison(comparison, args.out, frame=frames.start, frames=frames,
-                                 progress=lambda done, total: bar.update(done - bar.n),
+                                 progress=lambda done, total: bar.update(done - bar.n), options=options,
                                  caption=lambda f: page_caption(motion.name, f, motion.n_frames, motion.fps,
                                                                 [t.name for t in targets]))
     print(f"wrote {path}")
@@ -394,6 +396,8 @@ def _cmd_view(args: argparse.Namespace) -> int:
     return run(setup, _rig_options(args))
 
 
+#: `s2h render --view`: `render.scene.CAMERA_DIRECTIONS`' names (not imported: `s2h --help` loads no pyvista)
+VIEWS = ("three_quarter", "palm", "back", "side")
 NO_MOTION_FOR_SOURCE = "--source names the rig a --motion file was made for: give the --motion too"
 SOURCE_HELP = ("hand file (or sample name) of the rig the motion was made for, where its file lacks it (a skeleton "
                "with no mesh resting in a pose: s2h says so); a glTF/FBX animation is read onto that rig's bones "
@@ -462,9 +466,13 @@ def build_parser() -> argparse.ArgumentParser:
                                                     "files (.glb .gltf .fbx .bvh .npz)")
     rd.add_argument("--gesture", default="relaxed", help="gesture name (see `s2h gestures`)")
     rd.add_argument("--no-fit", dest="fit", action="store_false", help="use the authored angles as they are")
-    rd.add_argument("--view", default="three_quarter", choices=["three_quarter", "palm", "back"])
+    rd.add_argument("--view", default="three_quarter", choices=VIEWS,
+                    help="the camera: from the palm and the thumb's side (default), the palm, the back, the thumb's "
+                         "side (a pinch's touch)")
     rd.add_argument("--columns", type=int, default=6)
     rd.add_argument("--skeleton", action="store_true", help="draw bones through a see-through skin")
+    rd.add_argument("--contacts", action="store_true", help="with --motion: the contact overlay (kept green, lost "
+                                                            "red, invented blue), as View > Contact overlay")
     rd.add_argument("--frames", action="store_true", help="draw each joint's TBS frame (twist red, bend green, "
                                                           "splay blue) through a see-through skin")
     rd.add_argument("--out", default="hands.png", help=".png, or with --motion also .mp4 / .gif (the whole timeline, "

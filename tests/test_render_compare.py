@@ -35,6 +35,31 @@ def test_render_compare_writes_a_frame_and_a_whole_clip(sample_hands, tmp_path):
     assert not np.array_equal(frames[0], frames[len(frames) // 2])  # the hands move
 
 
+def test_render_compare_takes_the_camera_and_the_overlays_asked_for(sample_hands, tmp_path):
+    """`--view` and `--skeleton` were read for hands in one gesture only: a compare picture always came from the
+    three-quarter camera, where a pinch's touch hides behind the fingers; now they and `--contacts` act on it."""
+    import pyvista as pv
+
+    from s2h_viewer.render.compare_scene import CONTACT_COLOUR
+    motion = synthesize(["ok"], sample_hands["birch"], seed=1, name="ok")
+    clip = save_motion(motion, tmp_path / "ok.npz")
+    common = ["render", "--motion", str(clip), "--target", "laurel", "--methods", "asrn", "--quiet",
+              "--frame", str(motion.n_frames - 1)]  # the OK held: the thumb on the index tip
+
+    def picture(*options: str) -> np.ndarray:
+        out = tmp_path / f"ok{'_'.join(options)}.png"
+        assert main([*common, *options, "--out", str(out)]) == 0
+        return imageio.imread(out)[:-BAND, :, :3].astype(int)
+
+    def green(image: np.ndarray) -> int:  # the kept contacts' colour
+        return int((np.abs(image - np.array(pv.Color(CONTACT_COLOUR).int_rgb)).max(-1) < 12).sum())
+    default, side = picture(), picture("--view", "side")
+    assert np.array_equal(default, picture("--view", "three_quarter"))
+    assert np.abs(default - side).max(-1).astype(bool).mean() > 0.02  # another camera: the hands drawn elsewhere
+    assert green(default) == 0 and green(picture("--view", "side", "--contacts")) > 30  # the OK's touch drawn
+    assert not np.array_equal(picture("--skeleton"), default)
+
+
 LONG_NAME = "laurel_exported_from_a_vendor_rig_with_a_very_long_file_name_v2"
 
 

@@ -24,7 +24,8 @@ from s2h_viewer.hand.kinematics import HandPose
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.skinning import skin_vertices
 from s2h_viewer.render.keypoint_dots import KeypointDots
-from s2h_viewer.render.scene import BONE_COLOUR, SKIN_COLOUR, display_hand, skeleton, surface, to_view
+from s2h_viewer.render.scene import (BONE_COLOUR, CAMERA_DIRECTIONS, SKIN_COLOUR, display_hand, skeleton, surface,
+                                     to_view)
 from s2h_viewer.render.text_lock import TEXT_LOCK
 from s2h_viewer.retarget.comparison import Comparison, MethodResult
 from s2h_viewer.retarget.methods import METHODS
@@ -516,13 +517,9 @@ def colour_bar_beside_solo(plotter: pv.Plotter) -> None:
     bar.SetDraw(True)
 
 
-#: camera directions in view space (x = fingers, y = thumb side, z = back of the hand) and up vectors.
-CAMERA_PRESETS = {
-    "default": ((0.15, 0.45, -0.85), (1.0, 0.0, 0.0)),
-    "palm": ((0.0, 0.0, -1.0), (1.0, 0.0, 0.0)),
-    "back": ((0.0, 0.0, 1.0), (1.0, 0.0, 0.0)),
-    "side": ((0.0, 1.0, 0.0), (1.0, 0.0, 0.0)),
-}
+#: the grid's camera presets (`scene.CAMERA_DIRECTIONS`), "default" the three-quarter view
+CAMERA_PRESETS = {"default" if name == "three_quarter" else name: direction
+                  for name, direction in CAMERA_DIRECTIONS.items()}
 
 
 VIEW_ANGLE = 30.0  # degrees, vertical

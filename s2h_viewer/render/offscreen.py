@@ -10,18 +10,11 @@ import pyvista as pv
 
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.io.atomic import atomic_path
-from s2h_viewer.render.scene import AXIS_COLOURS, BONE_COLOUR, SKIN_COLOUR, frame_arrows, pose_frame, posed_mesh, skeleton
-
-#: camera directions in view space (x = fingers, y = thumb side, z = back of the hand).
-VIEWS = {
-    "back": ((0.0, 0.0, 1.0), (1.0, 0.0, 0.0)),
-    "palm": ((0.0, 0.0, -1.0), (1.0, 0.0, 0.0)),
-    "three_quarter": ((0.15, 0.45, -0.85), (1.0, 0.0, 0.0)),
-}
-
+from s2h_viewer.render.scene import (AXIS_COLOURS, BONE_COLOUR, CAMERA_DIRECTIONS, SKIN_COLOUR, frame_arrows,
+                                     pose_frame, posed_mesh, skeleton)
 
 def _set_camera(plotter: pv.Plotter, bounds: tuple, view: str) -> None:
-    direction, up = VIEWS[view]
+    direction, up = CAMERA_DIRECTIONS[view]
     centre = np.array([(bounds[0] + bounds[1]) / 2, (bounds[2] + bounds[3]) / 2, (bounds[4] + bounds[5]) / 2])
     radius = 0.5 * np.linalg.norm([bounds[1] - bounds[0], bounds[3] - bounds[2], bounds[5] - bounds[4]])
     d = np.asarray(direction) / np.linalg.norm(direction)

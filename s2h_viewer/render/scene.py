@@ -23,6 +23,14 @@ SKIN_COLOUR = "#e0ac8c"
 BONE_COLOUR = "#30343f"
 #: twist, bend, splay arrow colours (x, y, z as in most 3D tools).
 AXIS_COLOURS = ("#d62728", "#2ca02c", "#1f77b4")
+#: camera directions in view space (x = fingers, y = thumb side, z = back of the hand) and up vectors: from the
+#: palm and the thumb's side, the palm, the back, the thumb's side (where a pinch's touch shows)
+CAMERA_DIRECTIONS = {
+    "three_quarter": ((0.15, 0.45, -0.85), (1.0, 0.0, 0.0)),
+    "palm": ((0.0, 0.0, -1.0), (1.0, 0.0, 0.0)),
+    "back": ((0.0, 0.0, 1.0), (1.0, 0.0, 0.0)),
+    "side": ((0.0, 1.0, 0.0), (1.0, 0.0, 0.0)),
+}
 
 
 def pose_frame(hand: HandModel, q_tbs: np.ndarray) -> HandPose:
