@@ -134,12 +134,16 @@ def test_a_batch_row_says_a_posed_rest_and_its_source_rig_fixes_it(tmp_path):
 
 def test_a_take_the_exporter_named_is_called_by_its_file(pinch, capsys):
     """The pinch's only take is "Take 001": captions, export names, batch rows and `s2h check` call it by the
-    file."""
+    file, and `s2h rig` says so beside the take's name."""
     from s2h_viewer.cli import main
     from s2h_viewer.io.gltf import clip_name
     assert pinch[0].name == "r_hand_pinch_anim"
     assert main(["check", str(PINCH)]) == 0
     assert capsys.readouterr().out.startswith("r_hand_pinch_anim: 2 frames; index PIP bends ")
+    assert main(["rig", str(PINCH)]) == 0  # the take's own name, for --animation, and the clip's
+    assert "animations: [0] Take 001 (read as r_hand_pinch_anim)\n" in capsys.readouterr().out
+    assert main(["rig", str(GODOT_POSES)]) == 0
+    assert "animations: [0] Cup (0.04 s), [1] Default (0.04 s)," in capsys.readouterr().out
     assert load_motion_file(GODOT_POSES, None, RigOptions(animation="Pinch Up"))[0].name == "Pinch Up"
     for default in ("Take 001", "mixamo.com", "Armature|mixamo.com|Layer0", "Armature|Action.001", "Animation_0", ""):
         assert clip_name(default, PINCH) == "r_hand_pinch_anim" and clip_name(default, PINCH, 2) == "r_hand_pinch_anim_2"
