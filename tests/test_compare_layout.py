@@ -109,11 +109,11 @@ def test_targets_past_what_fits_page_and_the_selection_turns_the_page(qtbot, sam
     assert view.page == 0 and view.selected == 0 and view._hands[1].border.GetVisibility()
     hand = view.hand_of_result(3)
     assert view._hands[hand].hand.name == "juniper"
-    from s2h_viewer.app.exports import caption_for  # a picture of this page names its targets, not iris
+    from s2h_viewer.app.exports import Shown  # a picture of this page names its targets, not iris
     shown = list(dict.fromkeys(r.target.name for r in view.comparison.results))
-    assert "iris" not in shown and caption_for(window.compare, 0).endswith(f"targets: {', '.join(shown)}")
+    assert "iris" not in shown and Shown.of(window.compare).caption(0).endswith(f"targets: {', '.join(shown)}")
     view.set_page(0)
-    assert caption_for(window.compare, 0).endswith("selected: TBS Copy -> iris")
+    assert Shown.of(window.compare).caption(0).endswith("selected: TBS Copy -> iris")
     window.resize(1600, 1000)  # room for every row: one page
     qtbot.waitUntil(lambda: view.page_count == 1, timeout=10_000)
     assert not view.pager.isVisible() and len(view._hands) == 5 and view._hands[1].border.GetVisibility()  # iris

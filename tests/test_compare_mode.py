@@ -446,8 +446,8 @@ def test_png_export_carries_a_caption_of_the_selected_retarget(window, tmp_path)
     assert image.shape[0] == window.view.interactor.height() + BAND
     band = image[-BAND:]
     assert (band < 80).any() and (band > 250).mean() > 0.8  # dark text on white
-    from s2h_viewer.app.exports import caption_for
-    text = caption_for(window.compare, 7)
+    from s2h_viewer.app.exports import Shown
+    text = Shown.of(window.compare).caption(7)
     assert "short" in text and "frame 7/" in text and "ASRN -> iris" in text
     bvh = window.export_motion(str(tmp_path / "selected.bvh"))
     assert bvh.read_text().startswith("HIERARCHY")
@@ -941,6 +941,45 @@ def test_export_dialogs_start_in_the_export_folder_with_a_suggested_name(window,
     window.export_screenshot(str(exported / "first.png"))  # an export: its folder is where the next ones start
     assert ask(window.export_video) == str(exported / "short_iris_asrn.mp4")
     assert not list(work.iterdir())
+
+
+def test_an_export_writes_what_was_shown_when_asked_though_the_grid_changes_under_its_dialog(window, qtbot,
+                                                                                          tmp_path):
+    """A fresh-eyes user pressed Ctrl+S while another clip computed: the dialog offered the shown clip's name, the
+    other clip came in while it waited, and the PNG held that one. Here the frame and the selection change while
+    the dialog is up: the PNG is the grid as it was asked, under the caption and name of then; the motion is the
+    retarget selected then."""
+    from PIL import Image
+    from PySide6.QtWidgets import QFileDialog
+
+    from s2h_viewer.app.exports import Shown
+    from s2h_viewer.render.caption import add_caption
+    window.timeline.set_frame(7)
+    window.scores.selectRow(0)
+    asked = add_caption(window.view.grab_rgb(), Shown.of(window.compare).caption(7))
+    offered = []
+
+    def meanwhile(dialog, name: str) -> None:
+        offered.append(Path(dialog.selectedFiles()[0]).name)
+        window.timeline.set_frame(12)  # the grid moves on while the dialog waits
+        window.scores.selectRow(1)
+        dialog.selectFile(str(tmp_path / name))
+        dialog.accept()
+    when_shown(QFileDialog, lambda dialog: meanwhile(dialog, "asked.png"))
+    png = window.export_screenshot()
+    assert offered == ["short_iris_tbs_copy_f0007.png"] and png == tmp_path / "asked.png"
+    written = np.asarray(Image.open(png).convert("RGB")).astype(int)
+    assert written.shape == asked.shape and np.abs(written - asked).mean() < 1.0  # frame 7, TBS Copy framed
+    now = add_caption(window.view.grab_rgb(), Shown.of(window.compare).caption(12)).astype(int)
+    assert np.abs(now - asked).mean() > 1.0  # what the grid shows after the dialog is not what was asked
+    window.timeline.set_frame(7)
+    window.scores.selectRow(0)
+    tbs_copy = window.compare.selected_result()
+    when_shown(QFileDialog, lambda dialog: meanwhile(dialog, "asked.npz"))
+    window._ask_frames = lambda path, what, shown: range(shown.comparison.n_frames)  # the frames dialog: all
+    motion_file = window.export_motion()
+    assert offered[-1] == "short_iris_tbs_copy.glb" and window.compare.selected_result() is not tbs_copy
+    np.testing.assert_allclose(np.load(motion_file)["q_tbs"], tbs_copy.motion.q_tbs, atol=1e-6)
 
 
 def test_two_jobs_show_their_progress_side_by_side_in_the_status_bar_covering_no_control(long_window, qtbot,
@@ -1477,7 +1516,7 @@ def test_a_video_export_writes_the_frames_chosen_with_their_own_frame_numbers(wi
     frames 40 to 47; the file holds those eight, the first one frame 40 as the window shows it, captioned 40."""
     from PySide6.QtWidgets import QDialogButtonBox
 
-    from s2h_viewer.app.exports import caption_for
+    from s2h_viewer.app.exports import Shown
     from s2h_viewer.render.caption import add_caption
     n = window.comparison.n_frames
     window.settings.setValue("files/export_dir", str(tmp_path))
@@ -1513,7 +1552,7 @@ def test_a_video_export_writes_the_frames_chosen_with_their_own_frame_numbers(wi
     off = {frame: np.abs(first[:height, :width] - image).mean() for frame, image in grid.items()}
     assert off[40] < 0.5 * off[0]  # the hands of frame 40, not of the clip's first frame
     band = first[height:height + BAND, :width]
-    captions = {frame: add_caption(np.zeros((0, width, 3), np.uint8), caption_for(window.compare, frame)).astype(int)
+    captions = {frame: add_caption(np.zeros((0, width, 3), np.uint8), Shown.of(window.compare).caption(frame)).astype(int)
                 for frame in (0, 40, 41)}
     error = {frame: ((band - caption) ** 2).sum() for frame, caption in captions.items()}
     assert error[40] < min(error[0], error[41])  # "frame 40/...": the clip's own frame number

@@ -1,46 +1,71 @@
 """Exports of compare mode: a PNG of the grid, an MP4/GIF of the clip or of frames of it, the selected
 retarget's motion.
-Every image carries a caption (clip, frame, selected method and target). The video is rendered off
-screen in a worker thread (its own VTK window), so the window stays live; Cancel stops it between
-frames and nothing is written."""
+Every image carries a caption (clip, frame, selected method and target). Each export writes what the window
+showed when it was asked (`Shown`): its file dialog waits while retargets come in, and the grid may change
+meanwhile (a clip opened before it finished). The video is rendered off screen in a worker thread (its own VTK
+window), so the window stays live; Cancel stops it between frames and nothing is written."""
 
 from __future__ import annotations
 
 import re
 import threading
+from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
 from PySide6.QtCore import QObject, Signal
 from PySide6.QtWidgets import QWidget
 
 from s2h_viewer.app.compare_mode import CompareMode, label
 from s2h_viewer.app.job_progress import JobProgress
 from s2h_viewer.render.caption import add_caption, caption_text, page_caption
-from s2h_viewer.render.compare_scene import render_comparison
+from s2h_viewer.render.compare_scene import Framing, ViewOptions, render_comparison
+from s2h_viewer.retarget.comparison import Comparison, MethodResult
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.retarget.progress import Cancelled
 
 
-def caption_for(mode: CompareMode, frame: int) -> str:
-    """The picture's line: clip, frame and the selected retarget, or, where the selection is on another page of
-    targets than the one exported, the page's targets (the caption names what the picture shows)."""
-    comparison, result = mode.comparison, mode.selected_result()
-    shown = mode.view.comparison
-    if shown is not None and not any(r is result for r in shown.results):
-        return page_caption(comparison.motion.name, frame, comparison.n_frames, comparison.motion.fps,
-                            list(dict.fromkeys(r.target.name for r in shown.results)))
-    return caption_text(comparison.motion.name, frame, comparison.n_frames, comparison.motion.fps,
-                        METHODS[result.method].label + (" (fixed)" if result.corrections else ""),
-                        result.target.name)
+@dataclass(frozen=True)
+class Shown:
+    """What the compare window shows at one moment, for an export asked then: the comparison, its page of
+    targets in the grid, the selected retarget, the frame, the view's options, camera and size, and with
+    ``grab`` its picture. A PNG written after its file dialog closed had held another clip than its name said:
+    the clip opened before had come in meanwhile."""
 
+    comparison: Comparison  # every target's results
+    page: Comparison  # the page of targets in the grid
+    selected: MethodResult
+    frame: int
+    options: ViewOptions
+    framing: Framing
+    view_size: tuple[int, int]
+    image: np.ndarray | None = None  # the view grabbed (RGB), for a PNG at the view's size
 
-def suggested_name(mode: CompareMode, suffix: str, frame: int | None = None, result=None) -> str:
-    """'<clip>_<target>_<method>[_f<frame>]<suffix>' for the selected retarget (or ``result``), safe as a file
-    name."""
-    result = result or mode.selected_result()
-    parts = [mode.comparison.motion.name, result.target.name, result.method] + ["fixed"] * bool(result.corrections)
-    stem = "_".join(re.sub(r"[^\w.-]+", "-", part).strip("-.") or "x" for part in parts)
-    return f"{stem}{'' if frame is None else f'_f{frame:04d}'}{suffix}"
+    @classmethod
+    def of(cls, mode: CompareMode, grab: bool = False) -> "Shown":
+        view = mode.view
+        size = (view.interactor.width(), view.interactor.height()) if view.interactor is not None else (1400, 900)
+        return cls(mode.comparison, view.comparison, mode.selected_result(), mode.timeline.frame, view.options,
+                   view.framing(), size, view.grab_rgb() if grab else None)
+
+    def caption(self, frame: int) -> str:
+        """The picture's line: clip, frame and the selected retarget, or, where the selection is on another page
+        of targets than the one exported, the page's targets (the caption names what the picture shows)."""
+        motion, n_frames = self.comparison.motion, self.comparison.n_frames
+        if self.page is not None and not any(r is self.selected for r in self.page.results):
+            return page_caption(motion.name, frame, n_frames, motion.fps,
+                                list(dict.fromkeys(r.target.name for r in self.page.results)))
+        return caption_text(motion.name, frame, n_frames, motion.fps,
+                            METHODS[self.selected.method].label + (" (fixed)" if self.selected.corrections else ""),
+                            self.selected.target.name)
+
+    def name(self, suffix: str, frame: int | None = None, result: MethodResult | None = None) -> str:
+        """'<clip>_<target>_<method>[_f<frame>]<suffix>' for the selected retarget (or ``result``), safe as a file
+        name."""
+        result = result or self.selected
+        parts = [self.comparison.motion.name, result.target.name, result.method] + ["fixed"] * bool(result.corrections)
+        stem = "_".join(re.sub(r"[^\w.-]+", "-", part).strip("-.") or "x" for part in parts)
+        return f"{stem}{'' if frame is None else f'_f{frame:04d}'}{suffix}"
 
 
 #: the export sizes File > Export size offers, pixels; None: the view's own
@@ -51,18 +76,16 @@ def size_text(size: tuple[int, int] | None) -> str:
     return "as the view" if size is None else f"{size[0]} x {size[1]}"
 
 
-def export_screenshot(mode: CompareMode, path: str, size: tuple[int, int] | None = None) -> Path:
-    """The grid as it is on screen with its caption, written atomically: grabbed from the view, or at ``size``
-    pixels rendered off screen with the view's page of targets, camera, overlays, solo and selection."""
+def export_screenshot(shown: Shown, path: str, size: tuple[int, int] | None = None) -> Path:
+    """The grid as it was ``shown`` with its caption, written atomically: its grabbed picture, or at ``size``
+    pixels rendered off screen with its page of targets, camera, overlays, solo and selection."""
     from PIL import Image
 
     from s2h_viewer.io.atomic import atomic_path
-    frame = mode.timeline.frame
-    if size is not None:
-        return render_comparison(mode.view.comparison, path, frame=frame, size=size,
-                                 caption=lambda f: caption_for(mode, f), options=mode.view.options,
-                                 framing=mode.view.framing())
-    image = add_caption(mode.view.grab_rgb(), caption_for(mode, frame))
+    if size is not None or shown.image is None:
+        return render_comparison(shown.page, path, frame=shown.frame, size=size or shown.view_size,
+                                 caption=shown.caption, options=shown.options, framing=shown.framing)
+    image = add_caption(shown.image, shown.caption(shown.frame))
     with atomic_path(path) as tmp:
         Image.fromarray(image).save(tmp, format="PNG")
     return Path(path)
@@ -83,17 +106,15 @@ class VideoExport(QObject):
     cancelled = Signal()
     failed = Signal(str)
 
-    def __init__(self, mode: CompareMode, path: str, parent: QWidget, frames: range | None = None,
+    def __init__(self, shown: Shown, path: str, parent: QWidget, frames: range | None = None,
                  size: tuple[int, int] | None = None):
         super().__init__(parent)
-        comparison, view = mode.comparison, mode.view
-        self.path, self.frames = path, range(comparison.n_frames) if frames is None else frames
+        n_frames = shown.comparison.n_frames
+        self.path, self.frames = path, range(n_frames) if frames is None else frames
         self._cancel = threading.Event()
-        captions = {f: caption_for(mode, f) for f in self.frames}  # the selection now, not later
-        if size is None:  # the view's size
-            size = (view.interactor.width(), view.interactor.height()) if view.interactor is not None else (1400, 900)
-        self._job = (view.comparison, captions, size, view.options, view.framing())  # the page shown
-        label = f"Rendering {Path(path).name}\n({frames_text(self.frames, comparison.n_frames)})..."  # the range whole
+        captions = {f: shown.caption(f) for f in self.frames}
+        self._job = (shown.page, captions, size or shown.view_size, shown.options, shown.framing)
+        label = f"Rendering {Path(path).name}\n({frames_text(self.frames, n_frames)})..."  # the range whole
         self.strip = JobProgress(label, "Cancel", len(self.frames), parent,
                                         "s2h-viewer: video export")  # non-modal: the timeline stays usable
         self.strip.canceled.connect(self.cancel)
@@ -129,12 +150,12 @@ class VideoExport(QObject):
             self.written.emit(path)
 
 
-def export_motion(mode: CompareMode, path: str, frames: range | None = None) -> Path:
+def export_motion(shown: Shown, path: str, frames: range | None = None) -> Path:
     """The selected retarget's motion on its target's rig: ``frames`` of it (default: the whole clip)."""
     import dataclasses
 
     from s2h_viewer.io.files import save_motion_file
-    result = mode.selected_result()
+    result = shown.selected
     motion = result.motion
     if frames is not None and len(frames) < motion.n_frames:
         part = slice(frames.start, frames.stop)
@@ -144,15 +165,16 @@ def export_motion(mode: CompareMode, path: str, frames: range | None = None) -> 
     return Path(path)
 
 
-def export_corrections(mode: CompareMode, motion_path: str | Path, frames: range | None = None) -> tuple[Path | None, str]:
+def export_corrections(mode: CompareMode, shown: Shown, motion_path: str | Path, frames: range | None = None
+                       ) -> tuple[Path | None, str]:
     """Beside a motion just exported from the selected retarget (``frames`` of the clip): the sidecar of its
     corrections (`io.corrections`; a part says which frames it is of), or, without corrections, none (an
     earlier export's sidecar there is removed: it would tell of corrections the motion no longer has). Returns the
     sidecar written (or None) and a note for the status line (a removed sidecar, and whose corrections it held)."""
     from s2h_viewer.io.corrections import is_corrections_file, sidecar_path
-    result = mode.selected_result()
+    result = shown.selected
     sidecar = sidecar_path(motion_path)
-    part = frames if frames is not None and len(frames) < mode.comparison.n_frames else None
+    part = frames if frames is not None and len(frames) < shown.comparison.n_frames else None
     if result.corrections:
         return mode.fixing.save(sidecar, result, part), ""
     if not is_corrections_file(sidecar):

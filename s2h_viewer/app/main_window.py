@@ -724,9 +724,11 @@ class MainWindow(QMainWindow):
         playing = self.timeline.playing
         self.timeline.set_playing(False)
         try:
-            path = self._ask_to_save("Export screenshot", "PNG (*.png)", path, lambda: exports.suggested_name(
-                self.compare, ".png", self.timeline.frame))
-            return self._wrote(exports.export_screenshot(self.compare, path, self.export_size)) if path else None
+            if self.comparison is None:
+                return None
+            shown = exports.Shown.of(self.compare, grab=self.export_size is None)  # before the dialog waits
+            path = self._ask_to_save("Export screenshot", "PNG (*.png)", path, lambda: shown.name(".png", shown.frame))
+            return self._wrote(exports.export_screenshot(shown, path, self.export_size)) if path else None
         finally:
             self.timeline.set_playing(playing)
 
@@ -736,13 +738,16 @@ class MainWindow(QMainWindow):
         if self.video_export is not None:
             self.error("A video export is running; wait for it or cancel it first.")
             return None
+        if self.comparison is None:
+            return None
+        shown = exports.Shown.of(self.compare)  # what the dialogs' wait must not change
         if not path:
-            path, frames = self._ask_video() or (None, None)
+            path, frames = self._ask_video(shown) or (None, None)
         if not path:
             return None
         frames = frames if frames is not None else self.timeline.marked  # a marked range, else the whole clip
-        job = exports.VideoExport(self.compare, path, self, frames, self.export_size)
-        what = f" ({exports.frames_text(job.frames, self.comparison.n_frames)})"
+        job = exports.VideoExport(shown, path, self, frames, self.export_size)
+        what = f" ({exports.frames_text(job.frames, shown.comparison.n_frames)})"
         job.written.connect(lambda written: self._wrote(written, what))
         name = Path(path).name
         job.strip.canceled.connect(lambda: self.statusBar().showMessage(  # said at once: the job stops after a frame
@@ -755,26 +760,27 @@ class MainWindow(QMainWindow):
         self.video_export = job
         return job.start()
 
-    def _ask_video(self) -> tuple[str, range] | None:
+    def _ask_video(self, shown: exports.Shown) -> tuple[str, range] | None:
         """The file, then the frames (`FrameRangeDialog`) the user chooses; None if they cancel either. Playback
         pauses meanwhile (the current frame is one of the choices, and must stay the one offered), then plays on."""
         playing = self.timeline.playing
         self.timeline.set_playing(False)
         try:
-            path = self._ask_to_save("Export video", "Video (*.mp4 *.gif)", None,
-                                     lambda: exports.suggested_name(self.compare, ".mp4"))
+            path = self._ask_to_save("Export video", "Video (*.mp4 *.gif)", None, lambda: shown.name(".mp4"))
             if not path:
                 return None
-            frames = self._ask_frames(path, "video")
+            frames = self._ask_frames(path, "video", shown)
             return None if frames is None else (path, frames)
         finally:
             self.timeline.set_playing(playing)
 
-    def _ask_frames(self, path: str, what: str) -> range | None:
-        """The frames of an export to ``path`` (`FrameRangeDialog`, the marked range first); None: cancelled."""
+    def _ask_frames(self, path: str, what: str, shown: exports.Shown) -> range | None:
+        """The frames of an export to ``path`` of the clip ``shown`` (`FrameRangeDialog`, the marked range first);
+        None: cancelled."""
         from s2h_viewer.widgets.frame_range_dialog import FrameRangeDialog
-        dialog = FrameRangeDialog(Path(path).name, self.comparison.n_frames, self.comparison.motion.fps,
-                                  self.timeline.frame, self, what=what, marked=self.timeline.marked)
+        clip = shown.comparison
+        dialog = FrameRangeDialog(Path(path).name, clip.n_frames, clip.motion.fps, shown.frame, self, what=what,
+                                  marked=self.timeline.marked)
         frames = dialog.frames() if dialog.exec() == QDialog.DialogCode.Accepted else None
         dialog.deleteLater()
         if frames is None:
@@ -787,19 +793,19 @@ class MainWindow(QMainWindow):
     def export_motion(self, path: str | None = None) -> Path | None:
         if self.comparison is None:
             return None
-        result = self.compare.selected_result()
+        shown = exports.Shown.of(self.compare)
+        result = shown.selected
         asked = path is None
         path = self._ask_to_save(f"Export {result.method} -> {result.target.name}",
-                                 "Motion (*.glb *.bvh *.npz *.fbx)", path,
-                                 lambda: exports.suggested_name(self.compare, ".glb"))
+                                 "Motion (*.glb *.bvh *.npz *.fbx)", path, lambda: shown.name(".glb"))
         if not path:
             return None
-        frames = self._ask_frames(path, "motion") if asked else self.timeline.marked
+        frames = self._ask_frames(path, "motion", shown) if asked else self.timeline.marked
         if asked and frames is None:
             return None
         try:
-            written = exports.export_motion(self.compare, path, frames)
-            fixes, removed = exports.export_corrections(self.compare, written, frames)
+            written = exports.export_motion(shown, path, frames)
+            fixes, removed = exports.export_corrections(self.compare, shown, written, frames)
         except S2HError as exc:
             self.error(str(exc))
             return None
@@ -821,7 +827,7 @@ class MainWindow(QMainWindow):
             self.statusBar().showMessage(f"{exports.label(result)} has no corrections to save", STATUS_MS_EXPORT)
             return None
         path = self._ask_to_save(f"Save corrections of {exports.label(result)}", "Corrections (*.corrections.json)",
-                                 path, lambda: exports.suggested_name(self.compare, ".corrections.json", result=result))
+                                 path, lambda: exports.Shown.of(self.compare).name(".corrections.json", result=result))
         if not path:
             return None
         try:
