@@ -309,20 +309,26 @@ def test_a_second_key_changes_its_own_frames_only_and_space_waits_for_the_drag(w
 
 def test_the_hand_alone_follows_the_selection_and_stays_alone_when_a_method_is_ticked(qtbot, sample_hands, tmp_path):
     """The second fresh-eyes round: a table click while one hand was shown alone moved the heatmap and curve to
-    another retarget while the ring kept fixing the first; ticking a method dropped back to the grid."""
+    another retarget while the ring kept fixing the first; ticking a method dropped back to the grid. A later one:
+    the joint picked on the first stayed picked on the next."""
     win = open_compare_window(qtbot, sample_hands, tmp_path, methods=("tbs_copy",), targets=("iris", "laurel"))
     mode = win.compare
     keyboard_to(qtbot, win.view.interactor)
     win.scores.selectRow(0)
     QTest.keyClick(win, Qt.Key.Key_M, Qt.KeyboardModifier.ControlModifier)
     assert win.view.solo_hand().hand.name == "iris"
+    mode.fixing.pick(JOINT)
     win.scores.selectRow(1)  # laurel in the table: laurel alone, the bar's and ring's hand with it
     assert win.view.solo_hand().hand.name == "laurel" and mode.selected_result().target.name == "laurel"
     assert mode.fixing.ring.renderer is win.view.solo_hand().renderer
+    # the joint picked on iris is let go of: its ring had covered laurel's thumb-index contact (a fresh-eyes user)
+    assert mode.fixing.joint is None and not mode.fixing.ring.actor.GetVisibility()
+    mode.fixing.pick(JOINT)
     with qtbot.waitSignal(mode.comparison_ready, timeout=120_000):
-        win.method_actions["dm"].trigger()  # a method ticked beside it: still laurel alone
+        win.method_actions["dm"].trigger()  # a method ticked beside it: still laurel alone, its joint still picked
     assert win.view.solo_hand() is not None and win.view.solo_hand().hand.name == "laurel"
     assert mode.fixing.bar.isVisible() and mode.fixing.ring is not None
+    assert mode.fixing.joint == ARTICULATED and mode.fixing.ring.actor.GetVisibility()
 
 
 def test_an_export_over_another_retargets_sidecar_says_so_and_a_part_says_its_frames(window, qtbot, tmp_path):

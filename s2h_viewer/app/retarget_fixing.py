@@ -85,6 +85,7 @@ class RetargetFixing(QObject):
         self.bar = CorrectionBar()
         mode.view.add_bar(self.bar)
         self.joint: int | None = None  # the articulated joint picked
+        self._picked_on: ResultKey | None = None  # the retarget it was picked on
         self.ring: RotationRing | None = None
         self._drag: Drag | None = None
         self._saved: dict[ResultKey, Corrections] = {}  # the corrections last exported or saved, per retarget
@@ -93,8 +94,8 @@ class RetargetFixing(QObject):
         self._live.setSingleShot(True)
         self._live.setInterval(LIVE_MS)
         self._live.timeout.connect(self._measure_drag)
-        mode.view.grid_built.connect(self._follow_solo)
-        mode.view.solo_changed.connect(self._follow_solo)
+        mode.view.grid_built.connect(lambda: self._follow_solo(let_go=False))  # the same retarget alone again
+        mode.view.solo_changed.connect(lambda _: self._follow_solo(let_go=True))
         mode.timeline.frame_changed.connect(self._frame_changed)
         mode.timeline.play_button.toggled.connect(self._playing_changed)
         mode.result_changed.connect(self._place)
@@ -111,15 +112,18 @@ class RetargetFixing(QObject):
         index = view.result_of_hand(view.solo)
         return self.mode.shown_keys()[index], self.mode.comparison.results[index]
 
-    def _follow_solo(self, *_) -> None:
-        """A retarget shown alone gets the bar and a ring in its cell; the grid neither, and lets go of the joint:
-        the first click of the double-click back to the grid picked one, and its ring covered the next hand shown
-        alone."""
+    def _follow_solo(self, let_go: bool) -> None:
+        """A retarget shown alone gets the bar and a ring in its cell; the grid neither. With ``let_go`` (another
+        hand alone, or the grid) the joint is let go of unless the same retarget is shown alone again: the first
+        click of the double-click back to the grid had picked one, and its ring covered the contacts of the next
+        hand shown alone, as it did of a retarget picked in the table."""
         hand = self.mode.view.solo_hand()
         self._drop_ring()
         self.bar.setVisible(hand is not None)
-        if hand is None:
+        shown = self._solo()
+        if let_go and (shown is None or shown[0] != self._picked_on):
             self.joint = None
+        if hand is None:
             return
         self.ring = RotationRing(self.mode.view.interactor, self._begin, self._turn, self._end, self._clicked,
                                  renderer=hand.renderer)
@@ -229,6 +233,8 @@ class RetargetFixing(QObject):
     def _picked(self, joint: int | None) -> None:
         """The joint picked (None: none): its ring, and the error curve's joint bend follows it."""
         self.joint = joint
+        shown = self._solo()
+        self._picked_on = None if shown is None else shown[0]
         if joint is not None:
             self.mode.choose_joint(int(topo.ARTICULATED_JOINTS[joint]) - 1)  # its heatmap row
         self._place()
