@@ -650,8 +650,16 @@ def test_double_click_solos_a_viewport_and_back(window, qtbot):
     bar = view.plotter.renderers[view.plotter.renderers.loc_to_index((0, view.plotter.shape[1] - 1))]
     assert len(drawn) == 2 and view._hands[hand].renderer in drawn and bar in drawn  # the hand and its colour bar
     assert tuple(view._hands[hand].renderer.GetViewport()) == (0.0, 0.0, 1.0 - COLOUR_BAR_SHARE, 1.0)
+    grid_camera = np.array([view.plotter.camera.position, view.plotter.camera.focal_point])
+    from PySide6.QtGui import QAction
+    next(a for a in window.findChildren(QAction) if a.text().startswith("Frame the hand shown alone")).trigger()
+    # framed (F): the hand fills the view, the camera nearer
+    framed = np.array([view.plotter.camera.position, view.plotter.camera.focal_point])
+    assert np.linalg.norm(framed[0] - framed[1]) < 0.8 * np.linalg.norm(grid_camera[0] - grid_camera[1])
     qtbot.mouseDClick(view.interactor, Qt.MouseButton.LeftButton, pos=centre)
     assert view.solo == -1 and all(r.GetDraw() for r in view.plotter.renderers)
+    # the grid's camera again: framed, the hands overflowed their cells over the labels (a fresh-eyes user)
+    np.testing.assert_allclose([view.plotter.camera.position, view.plotter.camera.focal_point], grid_camera)
 
 
 def test_every_hand_has_a_viewport_of_the_same_size_and_the_colour_bar_its_own(window):

@@ -66,6 +66,7 @@ class CompareView(QWidget):
         self.selected = -1  # the retarget framed (the comparison's results' order)
         self._ghost: Ghost | None = None  # the source's ghost over the retarget shown alone
         self._viewports: list[tuple[float, ...]] = []
+        self._grid_camera: tuple | None = None  # the camera before a hand alone was framed (F): the grid's again
         self.frame = 0
         self.playing = False
         self._posing = ThreadPoolExecutor(max_workers=1, thread_name_prefix="posing")
@@ -216,6 +217,9 @@ class CompareView(QWidget):
             return False
         shape = hand.mesh if hand.levels else hand.bones
         renderer = hand.renderer
+        if self._grid_camera is None:  # the grid's camera, back when the grid is
+            camera = self.plotter.camera
+            self._grid_camera = (camera.position, camera.focal_point, camera.up)
         renderer.ResetCamera(*shape.bounds)  # the bounding sphere in view: a long hand fills little of it
         x0, x1, y0, y1, z0, z1 = shape.bounds
         corners = []
@@ -336,6 +340,12 @@ class CompareView(QWidget):
     def set_solo(self, index: int) -> None:
         """Show hand ``index``'s viewport alone over the whole view; -1 restores the grid."""
         self.solo = index
+        if index < 0 and self._grid_camera is not None:  # a hand framed alone (F) overflowed its cell in the grid
+            camera = self.plotter.camera
+            camera.position, camera.focal_point, camera.up = self._grid_camera
+            for renderer in self.plotter.renderers:
+                renderer.ResetCameraClippingRange()
+        self._grid_camera = None if index < 0 else self._grid_camera
         show_alone(self.plotter, self._hands, self._viewports, index)
         self._show_ghost()
         self._choose_skins()
