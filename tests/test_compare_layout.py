@@ -20,7 +20,7 @@ from PySide6.QtWidgets import QScrollArea  # noqa: E402
 
 from compare_window import open_compare_window  # noqa: E402
 from s2h_viewer.app.main_window import MIN_SIZE  # noqa: E402
-from s2h_viewer.render.caption import BAND  # noqa: E402
+from s2h_viewer.render.caption import BAND, band_within  # noqa: E402
 from s2h_viewer.render.compare_scene import SELECTED_COLOUR  # noqa: E402
 
 
@@ -79,9 +79,17 @@ def test_pictures_are_exported_at_the_chosen_size_whatever_the_window(window, tm
     window.scores.selectRow(1)
     png = window.export_screenshot(str(tmp_path / "sized.png"))
     image = np.asarray(Image.open(png).convert("RGB"))
-    assert image.shape[:2] == (size[1] + BAND, size[0])
+    assert image.shape[:2] == (size[1], size[0])  # the caption band within: 720 tall, not 748
     blue = (np.abs(image.astype(int) - np.array(pv.Color(SELECTED_COLOUR).int_rgb)).max(-1) < 10).sum()
     assert blue > 200  # the selected retarget framed there too
+
+    def text_rows(picture: np.ndarray) -> int:  # the caption's dark rows, in its band at the bottom
+        band = picture[-band_within(picture.shape[0]):]
+        return int((band.min(-1) < 100).any(1).sum())
+    window.export_size_actions[(1920, 1080)].trigger()
+    full_hd = np.asarray(Image.open(window.export_screenshot(str(tmp_path / "full_hd.png"))).convert("RGB"))
+    assert full_hd.shape[:2] == (1080, 1920)  # a fresh-eyes user's 1920 x 1080 was 1108 tall
+    assert text_rows(full_hd) > text_rows(image) + 2  # and its caption as small as at 720: now larger
     window.export_size_actions[None].trigger()
     png = window.export_screenshot(str(tmp_path / "as_view.png"))
     shown = np.asarray(Image.open(png)).shape[:2]

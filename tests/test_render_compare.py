@@ -60,6 +60,28 @@ def test_render_compare_takes_the_camera_and_the_overlays_asked_for(sample_hands
     assert not np.array_equal(picture("--skeleton"), default)
 
 
+def test_a_last_page_of_one_target_keeps_the_clip_and_the_legend_under_the_source(sample_hands):
+    """A page of targets keeps its pages' rows: one target on a grid of three rows. The clip's text and the contacts'
+    legend went in the source's cell (a fresh-eyes user saw the legend cover the source's hand there, and no clip
+    line); they go in the cell under it, as on the other pages."""
+    import pyvista as pv
+
+    from s2h_viewer.render.compare_scene import grid_layout, populate
+    from s2h_viewer.retarget.comparison import build_comparison
+    motion = synthesize(["ok"], sample_hands["birch"], seed=1, name="ok")
+    comparison = build_comparison(motion, sample_hands["birch"], [sample_hands["iris"]], ["tbs_copy"])
+    for rows, below in ((1, False), (3, True)):
+        plotter = pv.Plotter(off_screen=True, window_size=(1000, 700), **grid_layout(comparison, rows))
+        try:
+            hands, labels = populate(plotter, comparison)
+            source = hands[0]
+            assert (source.overlay.legend.renderer is not source.renderer) == below
+            clip = [label for label in labels if label.text.startswith("clip: ok")]
+            assert len(clip) == below and all(label.renderer is not source.renderer for label in clip)
+        finally:
+            plotter.close()
+
+
 LONG_NAME = "laurel_exported_from_a_vendor_rig_with_a_very_long_file_name_v2"
 
 

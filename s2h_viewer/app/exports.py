@@ -18,7 +18,7 @@ from PySide6.QtWidgets import QWidget
 
 from s2h_viewer.app.compare_mode import CompareMode, label
 from s2h_viewer.app.job_progress import JobProgress
-from s2h_viewer.render.caption import add_caption, caption_text, page_caption
+from s2h_viewer.render.caption import add_caption, band_within, caption_text, page_caption
 from s2h_viewer.render.compare_scene import Framing, ViewOptions, render_comparison
 from s2h_viewer.retarget.comparison import Comparison, MethodResult
 from s2h_viewer.retarget.methods import METHODS
@@ -76,15 +76,25 @@ def size_text(size: tuple[int, int] | None) -> str:
     return "as the view" if size is None else f"{size[0]} x {size[1]}"
 
 
+def sized(size: tuple[int, int] | None, shown: Shown) -> tuple[tuple[int, int], int | None]:
+    """The grid's pixels and its caption band's for an export at ``size`` (band included: a 1920 x 1080 export
+    was 1108 tall, its caption as small as at 720), or at the view's size with the band under it (None)."""
+    if size is None:
+        return shown.view_size, None
+    band = band_within(size[1])
+    return (size[0], size[1] - band), band
+
+
 def export_screenshot(shown: Shown, path: str, size: tuple[int, int] | None = None) -> Path:
-    """The grid as it was ``shown`` with its caption, written atomically: its grabbed picture, or at ``size``
-    pixels rendered off screen with its page of targets, camera, overlays, solo and selection."""
+    """The grid as it was ``shown`` with its caption, written atomically: its grabbed picture, or a ``size``
+    picture rendered off screen with its page of targets, camera, overlays, solo and selection."""
     from PIL import Image
 
     from s2h_viewer.io.atomic import atomic_path
     if size is not None or shown.image is None:
-        return render_comparison(shown.page, path, frame=shown.frame, size=size or shown.view_size,
-                                 caption=shown.caption, options=shown.options, framing=shown.framing)
+        grid, band = sized(size, shown)
+        return render_comparison(shown.page, path, frame=shown.frame, size=grid, band=band, caption=shown.caption,
+                                 options=shown.options, framing=shown.framing)
     image = add_caption(shown.image, shown.caption(shown.frame))
     with atomic_path(path) as tmp:
         Image.fromarray(image).save(tmp, format="PNG")
@@ -113,7 +123,7 @@ class VideoExport(QObject):
         self.path, self.frames = path, range(n_frames) if frames is None else frames
         self._cancel = threading.Event()
         captions = {f: shown.caption(f) for f in self.frames}
-        self._job = (shown.page, captions, size or shown.view_size, shown.options, shown.framing)
+        self._job = (shown.page, captions, *sized(size, shown), shown.options, shown.framing)
         label = f"Rendering {Path(path).name}\n({frames_text(self.frames, n_frames)})..."  # the range whole
         self.strip = JobProgress(label, "Cancel", len(self.frames), parent,
                                         "s2h-viewer: video export")  # non-modal: the timeline stays usable
@@ -137,9 +147,9 @@ class VideoExport(QObject):
         self.progress.emit(done, total)
 
     def _run(self) -> None:
-        comparison, captions, size, options, framing = self._job
+        comparison, captions, size, band, options, framing = self._job
         try:
-            path = render_comparison(comparison, self.path, size=size, progress=self._frame_done,
+            path = render_comparison(comparison, self.path, size=size, band=band, progress=self._frame_done,
                                      caption=captions.__getitem__, options=options, frames=self.frames,
                                      framing=framing)
         except Cancelled:

@@ -7,13 +7,23 @@ import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
 BAND = 28  # pixels
+FONT_PX = 15  # the caption's text in a band of BAND pixels; a taller band's is as much larger
 
 
-def add_caption(image: np.ndarray, text: str) -> np.ndarray:
-    """(H, W, 3) uint8 -> (H + BAND, W, 3): the image over a white band holding ``text`` in black."""
-    band = Image.new("RGB", (image.shape[1], BAND), "white")
-    ImageDraw.Draw(band).text((8, 6), text, fill="black", font=ImageFont.load_default(size=15))
-    return np.concatenate([np.asarray(image)[..., :3], np.asarray(band)], 0)
+def band_within(height: int) -> int:
+    """The caption band of a picture ``height`` pixels tall, band included (an export at a chosen size is that
+    size): BAND up to 900 + BAND pixels, in proportion above (1080: 33, 2160: 65), so its text reads as large."""
+    return max(BAND, round(BAND * height / (900 + BAND)))
+
+
+def add_caption(image: np.ndarray, text: str, band: int = BAND) -> np.ndarray:
+    """(H, W, 3) uint8 -> (H + band, W, 3): the image over a white band holding ``text`` in black, sized with
+    the band."""
+    scale = band / BAND
+    strip = Image.new("RGB", (image.shape[1], band), "white")
+    ImageDraw.Draw(strip).text((round(8 * scale), round(6 * scale)), text, fill="black",
+                               font=ImageFont.load_default(size=round(FONT_PX * scale)))
+    return np.concatenate([np.asarray(image)[..., :3], np.asarray(strip)], 0)
 
 
 def frame_readout(frame: int, n_frames: int, fps: float) -> str:

@@ -246,10 +246,10 @@ def grid_layout(comparison: Comparison, rows: int | None = None) -> dict:
             "col_weights": [1.0] * columns + [columns * COLOUR_BAR_SHARE / (1.0 - COLOUR_BAR_SHARE)]}
 
 
-def source_cell_below(comparison: Comparison) -> tuple[int, int] | None:
-    """The empty cell under the source (with two or more targets), where the clip's legend goes."""
-    rows = len(dict.fromkeys(id(r.target) for r in comparison.results))
-    return (1, 0) if rows > 1 else None
+def source_cell_below(plotter: pv.Plotter) -> tuple[int, int] | None:
+    """The empty cell under the source (a grid of two rows or more: two targets, or a last page of one that keeps
+    its pages' rows), where the clip's legend goes; in the source's cell, it covered a short cell's hand."""
+    return (1, 0) if plotter.shape[0] > 1 else None
 
 
 def plain_text() -> None:
@@ -476,7 +476,7 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
                                 f"was made for")
         if posed.banner is not None:
             labels.append(posed.banner)
-    below = source_cell_below(comparison)
+    below = source_cell_below(plotter)
     if below is not None:
         plotter.subplot(*below)
         labels.append(add_label(plotter, f"clip: {comparison.motion.name}\n{comparison.n_frames} frames at "
@@ -760,15 +760,16 @@ def render_comparison(comparison: Comparison, path: str | Path, frame: int | Non
                       progress: Callable[[int, int], None] | None = None,
                       caption: Callable[[int], str] | None = None,
                       options: ViewOptions = ViewOptions(), frames: range | None = None,
-                      framing: Framing = Framing()) -> Path:
+                      framing: Framing = Framing(), band: int | None = None) -> Path:
     """Off screen: one frame as PNG (``frame``, default 0), or ``frames`` (default: every frame) as MP4/GIF
     (by suffix), ``size`` pixels whatever the window's; ``framing``: the window's camera, solo and selection.
 
-    ``caption(frame)`` adds a line under each image (``frame`` the clip's index); ``progress(done, total)``
+    ``caption(frame)`` adds a line under each image (``frame`` the clip's index) in a band of ``band`` pixels
+    (default `caption.BAND`) under the ``size``; ``progress(done, total)``
     counts the images rendered of those asked, is called after every one and may raise
     (``retarget.progress.Cancelled``) to stop: nothing is written then."""
     from s2h_viewer.io.atomic import atomic_path
-    from s2h_viewer.render.caption import add_caption
+    from s2h_viewer.render.caption import BAND, add_caption
     from s2h_viewer.render.video import VIDEO_SUFFIXES, write_video
 
     path = Path(path)
@@ -795,7 +796,7 @@ def render_comparison(comparison: Comparison, path: str | Path, frame: int | Non
             rgb = np.asarray(plotter.screenshot(return_img=True))[..., :3]
             if progress:
                 progress(done, len(shown))
-            yield add_caption(rgb, caption(f)) if caption else rgb
+            yield add_caption(rgb, caption(f), band or BAND) if caption else rgb
 
     try:
         if video:
