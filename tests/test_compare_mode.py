@@ -644,6 +644,16 @@ def test_double_click_solos_a_viewport_and_back(window, qtbot):
     w, h = view.interactor.width(), view.interactor.height()
     centre = QPoint(int((x0 + x1) / 2 * w), int((1 - (y0 + y1) / 2) * h))
     assert view.hand_at(centre.x(), centre.y()) == hand
+    qtbot.mouseClick(view.interactor, Qt.MouseButton.LeftButton, pos=centre)  # a click selects it (a fresh-eyes user)
+    assert window.compare.selected_result() is window.comparison.results[view.result_of_hand(hand)]
+    assert window.scores.currentRow() == view.result_of_hand(hand) and view.selected == view.result_of_hand(hand)
+    first = view.hand_of_result(0)
+    x0, y0, x1, y1 = viewports[first]
+    start = QPoint(int((x0 + x1) / 2 * w), int((1 - (y0 + y1) / 2) * h))
+    qtbot.mousePress(view.interactor, Qt.MouseButton.LeftButton, pos=start)  # a drag turns the camera, selects nothing
+    qtbot.mouseMove(view.interactor, start + QPoint(40, 10))
+    qtbot.mouseRelease(view.interactor, Qt.MouseButton.LeftButton, pos=start + QPoint(40, 10))
+    assert view.selected == view.result_of_hand(hand)
     qtbot.mouseDClick(view.interactor, Qt.MouseButton.LeftButton, pos=centre)
     assert view.solo == hand
     drawn = [r for r in view.plotter.renderers if r.GetDraw()]

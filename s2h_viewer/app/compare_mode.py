@@ -224,7 +224,8 @@ class CompareMode(QWidget):
         self.timeline.play_button.toggled.connect(self._playing_changed)
         self.curve.frame_clicked.connect(self.timeline.set_frame)
         self.timeline.range_changed.connect(self.curve.set_range)
-        self.view.solo_changed.connect(self._solo_changed)
+        self.view.solo_changed.connect(self._hand_chosen)
+        self.view.hand_clicked.connect(self._hand_chosen)  # a retarget clicked in the grid is selected
         self.heatmap_choice.currentIndexChanged.connect(self._choice_changed)
         self.heatmap.row_chosen.connect(self.choose_joint)
         self.scores.currentCellChanged.connect(lambda row, *_: self._select_row(row))
@@ -576,8 +577,9 @@ class CompareMode(QWidget):
         if self.comparison is not None and 0 <= row < len(self.comparison.results):
             self.select(self.shown_keys()[row])
 
-    def _solo_changed(self, hand: int) -> None:
-        """A retarget shown alone (double-click, Ctrl+M) is the selected one; the source alone changes nothing."""
+    def _hand_chosen(self, hand: int) -> None:
+        """A retarget shown alone (double-click, Ctrl+M) or clicked in the grid is the selected one; the source
+        changes nothing."""
         if self.comparison is not None and hand >= 1:
             self.select(self.shown_keys()[self.view.result_of_hand(hand)])
 

@@ -17,7 +17,7 @@ from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
 import pyvista as pv
-from PySide6.QtCore import QEvent, QObject, QTimer, Signal
+from PySide6.QtCore import QEvent, QObject, Qt, QTimer, Signal
 from PySide6.QtWidgets import QHBoxLayout, QLabel, QToolButton, QToolTip, QVBoxLayout, QWidget
 from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
 
@@ -25,11 +25,13 @@ from s2h_viewer.render.compare_scene import (PLAYING_FACES, CellLabel, Framing, 
                                              ViewOptions, apply_options, fit_cells, grid_layout, populate,
                                              result_label, show_alone, solo_ghost)
 from s2h_viewer.retarget.comparison import Comparison, target_ids, target_page
+from s2h_viewer.widgets.rotation_handle import CLICK_PIXELS
 from s2h_viewer.widgets.tooltips import wrapped
 from s2h_viewer.widgets.vtk_widget import PlotterWidget, window_plotter
 
 #: the mouse in the grid beyond the camera (`vtk_widget.MOUSE`), for Help's list
-MOUSE = (("double-click a hand", "show it alone and select it; double-click again for the grid"),
+MOUSE = (("click a retarget in the grid", "select it (the heatmap, the curve, the table and the exports follow)"),
+         ("double-click a hand", "show it alone and select it; double-click again for the grid"),
          ("rest the pointer on a cell's orange banner", "its whole warning"))
 #: pixels a target's row needs at least (its label band and a hand that reads): more targets than fit page
 MIN_ROW_PX = 130
@@ -42,6 +44,7 @@ class CompareView(QWidget):
 
     drawn = Signal()
     solo_changed = Signal(int)  # the hand shown alone (index into the grid's hands), -1 for the grid
+    hand_clicked = Signal(int)  # a click (not a camera drag) on a hand of the grid (index into its hands)
     page_changed = Signal(int)  # the page of targets shown
     grid_built = Signal()  # a new render window and widget hold the grid (a new comparison, page or size)
 
@@ -67,6 +70,7 @@ class CompareView(QWidget):
         self._ghost: Ghost | None = None  # the source's ghost over the retarget shown alone
         self._viewports: list[tuple[float, ...]] = []
         self._grid_camera: tuple | None = None  # the camera before a hand alone was framed (F): the grid's again
+        self._pressed_at: tuple[int, int] | None = None  # where the left button went down in the grid
         self.frame = 0
         self.playing = False
         self._posing = ThreadPoolExecutor(max_workers=1, thread_name_prefix="posing")
@@ -370,9 +374,20 @@ class CompareView(QWidget):
         if watched is not self.interactor:
             return False
         if event.type() == QEvent.Type.MouseButtonDblClick:
+            self._pressed_at = None
             self.set_solo(-1 if self.solo >= 0 else self.hand_at(int(event.position().x()),
                                                                  int(event.position().y())))
             return True
+        left = getattr(event, "button", lambda: None)() == Qt.MouseButton.LeftButton
+        if event.type() == QEvent.Type.MouseButtonPress and left:
+            self._pressed_at = (int(event.position().x()), int(event.position().y()))
+        elif event.type() == QEvent.Type.MouseButtonRelease and left and self._pressed_at is not None:
+            x, y = int(event.position().x()), int(event.position().y())
+            if self.solo < 0 and max(abs(x - self._pressed_at[0]), abs(y - self._pressed_at[1])) <= CLICK_PIXELS:
+                hand = self.hand_at(x, y)
+                if hand >= 0:
+                    self.hand_clicked.emit(hand)
+            self._pressed_at = None
         if event.type() == QEvent.Type.ToolTip:
             tip = self.banner_tip(event.pos().x(), event.pos().y())
             if tip:
