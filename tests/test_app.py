@@ -153,13 +153,21 @@ def test_timeline_readout_counts_frames_as_the_clip_does(window):
 def test_shortcut_help_lists_every_shortcut_the_menus_define(window, qtbot):
     from PySide6.QtGui import QKeySequence, QUndoCommand
     window.compare.undo_stack.push(QUndoCommand("remove iris"))  # Edit > Undo now reads "Undo remove iris"
+    from s2h_viewer.widgets.text_dialog import TextDialog
     shown = []
-    when_shown(QMessageBox, lambda box: (shown.append(box.text()), box.accept()))
+
+    def read(dialog) -> None:  # it fits the screen (a message box ran 1052 pixels tall on a 1000-pixel one)
+        screen = dialog.screen().availableGeometry()
+        shown.append((dialog.text.toPlainText(), dialog.height() <= screen.height(), dialog.width() <= screen.width()))
+        dialog.reject()
+    when_shown(TextDialog, read)
     help_action = next(a for m in window.menuBar().actions() for a in m.menu().actions() if a.text() ==
                        "Keyboard shortcuts")
     help_action.trigger()
     qtbot.waitUntil(lambda: bool(shown), timeout=10_000)
-    lines = shown[0].splitlines()
+    text, fits_height, fits_width = shown[0]
+    assert fits_height and fits_width
+    lines = text.splitlines()
 
     def in_menus(menu) -> list[QAction]:
         return [b for a in menu.actions() for b in (in_menus(a.menu()) if a.menu() else [a])]
@@ -175,7 +183,8 @@ def test_shortcut_help_lists_every_shortcut_the_menus_define(window, qtbot):
     assert any(line.startswith("Ctrl+H: View > Semi-transparent skin") for line in lines)
     mouse = lines[lines.index("Mouse, in the 3D views of both tabs"):]  # the mouse after the keys
     for entry in ("left drag: rotate the camera", "Shift+left drag or middle drag: pan", "right drag or wheel: zoom",
-                  "double-click a hand: show it alone", "click the error curve (or drag along it): jump to that frame (scrub)",
+                  "double-click a hand: show it alone", "click a retarget in the grid: select it",
+                  "click the error curve (or drag along it): jump to that frame (scrub)",
                   "click a heatmap row (a cell or its name): that joint's bend on the error curve",
                   "click a joint (in 3D or the list): select it", "drag the ring"):
         assert any(line.startswith(entry) for line in mouse), entry

@@ -328,7 +328,10 @@ class MainWindow(QMainWindow):
         return lines
 
     def show_shortcuts(self) -> None:
-        QMessageBox.information(self, "Keyboard shortcuts and mouse", "\n".join(self.shortcut_lines()))
+        from s2h_viewer.widgets.text_dialog import TextDialog
+        dialog = TextDialog(self, "Keyboard shortcuts and mouse", "\n".join(self.shortcut_lines()))
+        dialog.exec()
+        dialog.deleteLater()
 
     def error(self, message: str) -> None:
         """Every failure the user caused or met ends here: a dialog with the message, nothing silent."""
