@@ -10,8 +10,12 @@ import traceback
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from s2h_viewer.errors import S2HError
+
+if TYPE_CHECKING:
+    from s2h_viewer.hand.model import HandModel
 
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
@@ -87,7 +91,9 @@ def _render_comparison(args: argparse.Namespace) -> int:
                        f"one --frame")
     else:
         frames = frame_range(motion.n_frames, args.frame or 0, args.frame or 0, clip=args.motion)  # the one frame
-    targets = [load_hand_file(t, _rig_options(args)) for t in (args.target or ["iris", "laurel"])]
+    names = args.target or ["iris", "laurel"]
+    targets = [load_hand_file(t, _rig_options(args)) for t in names]
+    _say_hand_notes([(source, args.source or args.motion), *zip(targets, names)])
     methods = (args.methods or "tbs_copy,asrn").split(",")
     options = ViewOptions(camera="default" if args.view == "three_quarter" else args.view, skeleton=args.skeleton,
                           contacts=args.contacts)
@@ -254,20 +260,26 @@ def _cmd_annotate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cmd_retarget(args: argparse.Namespace) -> int:
+def _say_hand_notes(hands: list[tuple[HandModel, str]]) -> None:
+    """Each (hand, file)'s guessed length unit, and for the targets (all but the first, the source) what the
+    viewer's banner says on their cells: frames the solver is unsure of or guessed."""
     from s2h_viewer.annotate.trust import frame_warning
+    for index, (hand, path) in enumerate(hands):
+        if hand.meta.get("unit_note"):
+            print(f"{path}: {hand.meta['unit_note']}")
+        warning = frame_warning(hand) if index else None
+        if warning is not None:
+            print(f"{path}: {warning.describe()}")
+
+
+def _cmd_retarget(args: argparse.Namespace) -> int:
     from s2h_viewer.io.files import export_sidecar, load_hand_file, save_motion_file
     from s2h_viewer.retarget import retarget
 
     options = _rig_options(args)
     motion, source = _performed(args.motion, args.source, options)
     target = load_hand_file(args.target, options)
-    for hand, path in ((source, args.source or args.motion), (target, args.target)):
-        if hand.meta.get("unit_note"):
-            print(f"{path}: {hand.meta['unit_note']}")
-    warning = frame_warning(target)
-    if warning is not None:  # what the viewer's banner says on the target's cells
-        print(f"{args.target}: {warning.describe()}")
+    _say_hand_notes([(source, args.source or args.motion), (target, args.target)])
     if motion.fit is not None:
         print(f"{args.motion}: {motion.fit.describe()}")
     with _progress_bar(f"retarget ({args.method})", motion.n_frames, "frame",

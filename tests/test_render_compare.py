@@ -82,6 +82,21 @@ def test_a_last_page_of_one_target_keeps_the_clip_and_the_legend_under_the_sourc
             plotter.close()
 
 
+def test_render_compare_says_what_the_banners_say_of_a_targets_frames(tmp_path, capsys):
+    """A fresh-eyes user's command-line picture showed "! frames guessed" on the RPM avatar's cells, and the
+    command said nothing of it; `s2h retarget` did. Both say it now, for each target whose frames are guessed."""
+    from s2h_viewer.samples import ASSETS_DIR
+    rpm = ASSETS_DIR / "hands/real/RPM_Template_Mesh_XR.glb"
+    assert main(["render", "--motion", str(ASSETS_DIR / "motions/real/r_hand_pinch_anim.fbx"), "--source",
+                 str(ASSETS_DIR / "hands/real/r_hand_skeletal_lowres.fbx"), "--target", str(rpm), "--target", "iris",
+                 "--methods", "tbs_copy", "--quiet", "--out", str(tmp_path / "pinch.png")]) == 0
+    said = capsys.readouterr().out.splitlines()
+    assert [line for line in said if "frames from the palm plane" in line] == [
+        f"{rpm}: RPM_Template_Mesh_XR: index MCP/PIP/DIP: frames from the palm plane (a guess: no rays decided them); "
+        f"retargets there may bend a finger sideways: check its frames (Annotate > Open hand...)"]
+    assert said[-1] == f"wrote {tmp_path / 'pinch.png'}"
+
+
 LONG_NAME = "laurel_exported_from_a_vendor_rig_with_a_very_long_file_name_v2"
 
 
