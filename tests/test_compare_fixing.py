@@ -134,9 +134,10 @@ def test_a_ring_drag_in_solo_keys_the_joint_live_and_undo_brings_back_the_method
         qtbot.waitUntil(lambda: abs(turned(before, joint_frame(win)[1]) - 20.0) < 3.0, timeout=5000)
         result = mode.selected_result()
         live.append((turned(before, joint_frame(win, result)[1]), list(mode.curve.error), result.scores.s_finger,
-                     mode.scores.item(0, 0).text()))
+                     mode.scores.item(0, 0).text(), mode.fixing.bar.readout.toolTip()))
     drag(qtbot, win, 40.0, while_held)
-    angle, curve, s_finger, method_cell = live[0]
+    angle, curve, s_finger, method_cell, said = live[0]
+    assert said.startswith("index PIP: bend +") and "deg (curls it in) at frame 40" in said  # which way: said
     assert abs(angle - 20.0) < 3.0 and s_finger != method.scores.s_finger  # half the turn, live
     assert curve[FRAME] > method.frame_error[FRAME]  # the curve too
     assert method_cell == "TBS Copy (fixed)"

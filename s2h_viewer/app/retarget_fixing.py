@@ -273,9 +273,10 @@ class RetargetFixing(QObject):
         drag = self._drag
         if drag is not None:
             self.mode.show_result(drag.key, self.mode.corrected(drag.before, drag.corrections()))
-            self.bar.say(f"{topo.joint_label(topo.ARTICULATED_NAMES[drag.joint])}: {drag.axis} "
-                         f"{drag.sense * drag.degrees:+.0f} deg at frame {drag.frame} (blended over frames "
-                         f"{drag.frames[0]}-{drag.frames[1]})")
+            turn = drag.sense * drag.degrees
+            way = {"bend": (" (curls it in)", " (opens it out)")}.get(drag.axis, ("", ""))[turn < 0]
+            self.bar.say(f"{topo.joint_label(topo.ARTICULATED_NAMES[drag.joint])}: {drag.axis} {turn:+.0f} deg{way} "
+                         f"at frame {drag.frame} (blended over frames {drag.frames[0]}-{drag.frames[1]})")
 
     def _end(self) -> None:
         drag, self._drag = self._drag, None
