@@ -53,8 +53,9 @@ TEXT_DPI = 72  # VTK's render windows' default: a font size in points is then in
 CONTACT_COLOUR = "#1a9850"
 LOST_COLOUR = "#ff1f1f"
 INVENTED_COLOUR = "#0a84ff"
-CONTACT_STATES = (("kept contact", CONTACT_COLOUR), ("lost: the source touches", LOST_COLOUR),
-                  ("invented: the source does not", INVENTED_COLOUR))
+CONTACT_STATES = (("kept contact", CONTACT_COLOUR), ("lost contact", LOST_COLOUR),
+                  ("invented contact", INVENTED_COLOUR))  # short: the legend's text is scaled to its box, and
+#: "invented: the source does not" drew it 6 pixels tall in a narrow cell (what each means: View's menu, README)
 #: the overlays' pixel sizes (bones, contact links, pad dots) in a cell OVERLAY_CELL pixels on its short side or
 #: more; smaller cells scale them down (at least `OVERLAY_LEAST`): fixed dots would hide a small cell's fingers.
 #: A dot is narrower than two touching pads' centres are apart (about 18 pixels at 300), so their link shows.
