@@ -99,6 +99,7 @@ def _render_comparison(args: argparse.Namespace) -> int:
                           contacts=args.contacts)
     with _progress_bar("retarget", len(targets) * len(methods), "retarget", disable=args.quiet):
         comparison = build_comparison(motion, source, targets, methods)
+    comparison = _fixed(comparison, args.corrections or [])
     with tqdm(total=len(frames), desc="render", unit="frame", file=sys.stderr, disable=args.quiet) as bar:
         path = render_comparison(comparison, args.out, frame=frames.start, frames=frames,
                                  progress=lambda done, total: bar.update(done - bar.n), options=options,
@@ -106,6 +107,30 @@ def _render_comparison(args: argparse.Namespace) -> int:
                                                                 [t.name for t in targets]))
     print(f"wrote {path}")
     return 0
+
+
+def _fixed(comparison, files: list[str]):
+    """``comparison`` with each corrections sidecar of ``files`` applied to the retarget it was made on (its method
+    onto its target, by name), as the viewer's Fix > Load corrections: an error naming the file where the picture
+    has no such retarget."""
+    from s2h_viewer.errors import InputFileError
+    from s2h_viewer.io.corrections import load_corrections
+    from s2h_viewer.retarget.comparison import corrected_result, source_semantics
+
+    results = list(comparison.results)
+    source_asm = source_semantics(comparison.motion, comparison.source)[1] if files else None
+    for file in files:
+        fixes = load_corrections(file, comparison.n_frames)
+        index = next((i for i, r in enumerate(results) if (r.method, r.target.name) == (fixes.method, fixes.target)),
+                     None)
+        if index is None:
+            shown = ", ".join(dict.fromkeys(f"{r.method} -> {r.target.name}" for r in results))
+            raise InputFileError(file, f"made on {fixes.method} -> {fixes.target}, which this picture does not hold "
+                                       f"(it holds {shown}): add that --target and method")
+        results[index] = corrected_result(results[index], fixes.corrections, comparison.motion, comparison.source,
+                                          source_asm)
+        print(f"{file}: {fixes.corrections.n_keys} correction keys applied to {fixes.method} -> {fixes.target}")
+    return dataclasses.replace(comparison, results=results)
 
 
 def _cmd_render(args: argparse.Namespace) -> int:
@@ -485,6 +510,9 @@ def build_parser() -> argparse.ArgumentParser:
     rd.add_argument("--skeleton", action="store_true", help="draw bones through a see-through skin")
     rd.add_argument("--contacts", action="store_true", help="with --motion: the contact overlay (kept green, lost "
                                                             "red, invented blue), as View > Contact overlay")
+    rd.add_argument("--corrections", metavar="FILE", action="append",
+                    help="with --motion: a corrections sidecar (Fix > Save corrections, or beside a motion export) "
+                         "applied to the retarget it was made on, drawn fixed (repeatable)")
     rd.add_argument("--frames", action="store_true", help="draw each joint's TBS frame (twist red, bend green, "
                                                           "splay blue) through a see-through skin")
     rd.add_argument("--out", default="hands.png", help=".png, or with --motion also .mp4 / .gif (the whole timeline, "

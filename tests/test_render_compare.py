@@ -97,6 +97,35 @@ def test_render_compare_says_what_the_banners_say_of_a_targets_frames(tmp_path, 
     assert said[-1] == f"wrote {tmp_path / 'pinch.png'}"
 
 
+def test_render_compare_draws_a_retarget_with_its_corrections(sample_hands, tmp_path, capsys):
+    """`s2h render --corrections FILE` draws the retarget the sidecar was made on fixed (a fresh-eyes user could
+    not make a command-line picture of a fixed retarget); a sidecar made on a retarget the picture lacks is one
+    error line naming the file."""
+    from scipy.spatial.transform import Rotation
+
+    from s2h_viewer.hand import topology as topo
+    from s2h_viewer.io.corrections import CorrectionsFile, save_corrections
+    from s2h_viewer.retarget.corrections import Corrections
+    motion = synthesize(["ok"], sample_hands["birch"], seed=1, name="ok")
+    clip = save_motion(motion, tmp_path / "ok.npz")
+    last = motion.n_frames - 1
+    turn = Rotation.from_rotvec([0.0, np.radians(40.0), 0.0])  # the index PIP bent 40 deg more at the end
+    fixes = Corrections().with_turn(topo.ARTICULATED_NAMES.index("index_pip"), last, turn, last - 10, last)
+    sidecar = save_corrections(tmp_path / "fix.corrections.json", CorrectionsFile(
+        fixes, "ok", motion.n_frames, motion.fps, "birch", "laurel", "tbs_copy"))
+    common = ["render", "--motion", str(clip), "--target", "laurel", "--quiet", "--frame", str(last)]
+    plain, fixed = tmp_path / "plain.png", tmp_path / "fixed.png"
+    assert main([*common, "--methods", "tbs_copy", "--out", str(plain)]) == 0
+    assert main([*common, "--methods", "tbs_copy", "--corrections", str(sidecar), "--out", str(fixed)]) == 0
+    assert f"{sidecar}: 1 correction keys applied to tbs_copy -> laurel" in capsys.readouterr().out
+    a, b = (imageio.imread(p)[:-BAND, :, :3].astype(int) for p in (plain, fixed))
+    assert np.abs(a - b).max(-1).astype(bool).mean() > 0.002  # the finger drawn elsewhere
+    assert main([*common, "--methods", "asrn", "--corrections", str(sidecar), "--out", str(tmp_path / "x.png")]) == 2
+    err = capsys.readouterr().err
+    assert "fix.corrections.json: made on tbs_copy -> laurel, which this picture does not hold (it holds asrn -> " \
+           "laurel)" in err and not (tmp_path / "x.png").exists()
+
+
 LONG_NAME = "laurel_exported_from_a_vendor_rig_with_a_very_long_file_name_v2"
 
 
