@@ -30,8 +30,9 @@ from s2h_viewer.app.main_window import CompareSetup  # noqa: E402
 from s2h_viewer.hand import topology as topo  # noqa: E402
 from s2h_viewer.hand.model import HandModel  # noqa: E402
 from s2h_viewer.io.files import load_hand_file  # noqa: E402
-from s2h_viewer.render.compare_scene import (BANNER_BACKGROUND, CONTACT_COLOUR, INVENTED_COLOUR,  # noqa: E402
-                                             LABEL_PAD, ViewOptions, render_comparison, text_extent)
+from s2h_viewer.render.compare_scene import (BANNER_BACKGROUND, COLOUR_BAR_SHARE, CONTACT_COLOUR,  # noqa: E402
+                                             INVENTED_COLOUR, LABEL_PAD, LEGEND_PX, LOST_COLOUR, ViewOptions,
+                                             render_comparison, text_extent)
 from s2h_viewer.retarget.comparison import build_comparison  # noqa: E402
 from s2h_viewer.retarget.methods import retarget  # noqa: E402
 from s2h_viewer.samples import ASSETS_DIR  # noqa: E402
@@ -167,9 +168,17 @@ def test_contacts_show_in_three_states_and_invented_ones_are_not_drawn_as_kept(w
     assert all(actor.prop.render_points_as_spheres for actor in overlay.actors[1:])  # round pads, not squares
     window.view.set_solo(window.view._hands.index(hand))
     image = window.view.grab_rgb()
-    assert colour_pixels(image, INVENTED_COLOUR) > 30 and colour_pixels(image, CONTACT_COLOUR) == 0
+    # the legend with the hand alone, at its cell's bottom right (a fresh-eyes user found none there)
+    assert source.legend.renderer is hand.renderer and source.legend.right
+    height, width = image.shape[:2]
+    right = round((1.0 - COLOUR_BAR_SHARE) * width)
+    box = (slice(height - LEGEND_PX[1] - 2 * LABEL_PAD, height), slice(right - LEGEND_PX[0] - 2 * LABEL_PAD, right))
+    assert all(colour_pixels(image[box], colour) > 10 for colour in (CONTACT_COLOUR, LOST_COLOUR, INVENTED_COLOUR))
+    image[box] = 255
+    assert colour_pixels(image, INVENTED_COLOUR) > 30 and colour_pixels(image, CONTACT_COLOUR) == 0  # on the hand
     window.view.set_solo(-1)
     legend = source.legend
+    assert legend.renderer is legend.home and not legend.right
     assert legend is not None and legend.actor.GetVisibility()
     assert [legend.actor.GetEntryString(i) for i in range(3)] == [
         "kept contact", "lost contact", "invented contact"]  # short: larger in a narrow cell

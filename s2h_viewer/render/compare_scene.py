@@ -498,12 +498,16 @@ def populate(plotter: pv.Plotter, comparison: Comparison, opacity: float = 1.0,
 
 
 def show_alone(plotter: pv.Plotter, hands: list[PosedHand], viewports: list[tuple[float, ...]], index: int) -> None:
-    """Hand ``index``'s cell alone over the whole grid (its colour bar beside a retarget), -1: the grid again;
-    ``viewports`` the renderers' grid viewports."""
+    """Hand ``index``'s cell alone over the whole grid (its colour bar beside a retarget, the contacts' legend
+    in it), -1: the grid again; ``viewports`` the renderers' grid viewports."""
     solo = hands[index].renderer if index >= 0 else None
     for renderer, viewport in zip(plotter.renderers, viewports):
         renderer.SetViewport(*((0.0, 0.0, 1.0, 1.0) if renderer is solo else viewport))
         renderer.SetDraw(solo is None or renderer is solo)
+    legend = hands[0].overlay.legend if hands and hands[0].overlay is not None else None
+    if legend is not None:  # the contacts' legend with the hand alone (its own cell is not drawn then)
+        there = solo if solo is not None else legend.home
+        legend.move_to(there, right=there is not legend.home)
     if index >= 0 and hands[index].error_actor is not None:
         colour_bar_beside_solo(plotter)  # a retarget alone keeps the colour bar of its error colours
 
@@ -640,18 +644,27 @@ class ContactLegend:
     whatever the cell's (`fit`); shown with the contact overlay."""
 
     def __init__(self, plotter: pv.Plotter):
-        self.renderer = plotter.renderer
+        self.home = self.renderer = plotter.renderer
         self.actor = plotter.add_legend([[text, colour] for text, colour in CONTACT_STATES], bcolor="white",
                                         face="circle", size=(0.5, 0.2), loc="lower left")
         self.actor.SetVisibility(False)
         self.fitted: tuple = ()
+        self.right = False  # at the bottom right (of a hand shown alone: its bottom left may hold a banner)
+
+    def move_to(self, renderer, right: bool) -> None:
+        """Draw it in ``renderer``'s cell (a hand shown alone, whose cell alone is drawn: the legend's own cell is
+        not), at its bottom right with ``right``; fitted again at the next `fit`."""
+        self.renderer.RemoveActor(self.actor)
+        renderer.AddActor(self.actor)
+        self.renderer, self.right, self.fitted = renderer, right, ()
 
     def fit(self, width: int, height: int) -> None:
         if (width, height) == self.fitted:
             return
         self.fitted = (width, height)
         w, h = min(1.0, LEGEND_PX[0] / width), min(0.5, LEGEND_PX[1] / height)
-        self.actor.GetPositionCoordinate().SetValue(LABEL_PAD / width, LABEL_PAD / height)
+        x = 1.0 - w - LABEL_PAD / width if self.right else LABEL_PAD / width
+        self.actor.GetPositionCoordinate().SetValue(x, LABEL_PAD / height)
         self.actor.GetPosition2Coordinate().SetValue(w, h)
 
 
