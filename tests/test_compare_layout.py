@@ -113,6 +113,10 @@ def test_targets_past_what_fits_page_and_the_selection_turns_the_page(qtbot, sam
     assert view.page == 1 and view.comparison.results[0].target.name == four[view.rows]
     window.scores.selectRow(3)  # juniper, on the last page
     assert view.page == view.page_count - 1 and view.comparison.results[-1].target.name == "juniper"
+    view.set_solo(view.hand_of_result(len(view.comparison.results) - 1))  # alone: no pages to turn, no page bar
+    assert not view.pager.isVisible() and window.compare.fixing.bar.isVisible()
+    view.set_solo(-1)
+    assert view.pager.isVisible()
     window.scores.selectRow(0)  # iris, on the first page: the grid turns back to it and frames it
     assert view.page == 0 and view.selected == 0 and view._hands[1].border.GetVisibility()
     hand = view.hand_of_result(3)

@@ -350,6 +350,7 @@ class CompareView(QWidget):
             for renderer in self.plotter.renderers:
                 renderer.ResetCameraClippingRange()
         self._grid_camera = None if index < 0 else self._grid_camera
+        self.pager.setVisible(index < 0 and self.page_count > 1)  # pages are the grid's: alone, over the Fix bar
         show_alone(self.plotter, self._hands, self._viewports, index)
         self._show_ghost()
         self._choose_skins()
