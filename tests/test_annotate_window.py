@@ -32,6 +32,7 @@ from s2h_viewer.render.scene import to_view  # noqa: E402
 from s2h_viewer.samples import ASSETS_DIR  # noqa: E402
 from s2h_viewer.widgets.annotation_view import RING_RADIUS  # noqa: E402
 from s2h_viewer.widgets.joint_map_dialog import NO_BONE, JointMapDialog  # noqa: E402
+from s2h_viewer.widgets.text_dialog import TextDialog  # noqa: E402
 
 WEBXR = ASSETS_DIR / "hands" / "webxr" / "generic-hand-right.glb"
 
@@ -350,17 +351,20 @@ def test_shortcuts_work_again_once_a_dialog_closes(window, qtbot, hand_file):
     keyboard_to(qtbot, window.annotate_view.interactor)
     had_the_keyboard: list[bool] = []
 
-    def escape_once_it_has_the_keyboard(box: QMessageBox, tries: int = 250) -> None:
-        """Escape once the box holds the keyboard, as a user sees it and presses the key (5 s at most)."""
-        if box.isActiveWindow() or not tries:
-            had_the_keyboard.append(box.isActiveWindow())
-            QTest.keyClick(box, Qt.Key.Key_Escape)
-        else:
-            QTimer.singleShot(20, lambda: escape_once_it_has_the_keyboard(box, tries - 1))
+    listed: list[str] = []
 
-    shown = answer((QMessageBox, escape_once_it_has_the_keyboard))
+    def escape_once_it_has_the_keyboard(dialog: TextDialog, tries: int = 250) -> None:
+        """Escape once the dialog holds the keyboard, as a user sees it and presses the key (5 s at most)."""
+        if dialog.isActiveWindow() or not tries:
+            had_the_keyboard.append(dialog.isActiveWindow())
+            listed.append(dialog.text.toPlainText())
+            QTest.keyClick(dialog, Qt.Key.Key_Escape)
+        else:
+            QTimer.singleShot(20, lambda: escape_once_it_has_the_keyboard(dialog, tries - 1))
+
+    shown = answer((TextDialog, escape_once_it_has_the_keyboard))
     QTest.keyClick(window, Qt.Key.Key_F1)  # Help > Keyboard shortcuts, closed with Escape
-    assert shown and "Ctrl+Z" in shown[0] and had_the_keyboard == [True]
+    assert shown == ["Keyboard shortcuts and mouse"] and "Ctrl+Z" in listed[0] and had_the_keyboard == [True]
     # without a window manager the focus fell to the root window: the app hands it back to the main window
     qtbot.waitUntil(window.isActiveWindow, timeout=5000)
     QTest.keyClick(window, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
