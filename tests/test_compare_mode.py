@@ -406,7 +406,7 @@ def test_video_export_runs_in_the_background_while_the_timeline_plays(window, qt
     first = reader.get_data(0)
     reader.close()
     view_height = window.view.interactor.height()
-    assert first.shape[0] >= view_height + BAND  # the caption band under the grid (padded to 16)
+    assert first.shape[0] >= view_height + BAND  # the caption band under the grid (an odd height padded to even)
     assert window.video_export is None
 
 

@@ -255,7 +255,8 @@ def test_render_compare_writes_frames_start_to_end(sample_hands, tmp_path):
     first = reader.get_data(0).astype(int)
     reader.close()
     at = {frame: imageio.imread(tmp_path / f"f{frame}.png")[..., :3].astype(int) for frame in (0, 30)}
-    height, width = at[30].shape[:2]  # the MP4 padded to 16 pixels
+    height, width = at[30].shape[:2]
+    assert first.shape[:2] == (height, width)  # 1400 x 928: even, so not padded (to 16, it was 1408 x 944)
     off = {frame: np.abs(first[:height, :width] - image).mean() for frame, image in at.items()}
     assert off[30] < 2.0 and off[0] > 2 * off[30]  # frame 30 (H.264 loses a little), not the clip's first
     assert main([*common, "--start", "30", "--end", "45", "--out", str(tmp_path / "part.gif")]) == 0

@@ -25,7 +25,7 @@ def write_video(path: str | Path, frames: Iterable[np.ndarray], fps: float, n_fr
         raise ValueError(f"{path}: video must be {' or '.join(VIDEO_SUFFIXES)}")
     with atomic_path(path) as tmp:
         if suffix == ".mp4":
-            with imageio.get_writer(tmp, fps=fps, codec="libx264", quality=8, macro_block_size=16,
+            with imageio.get_writer(tmp, fps=fps, codec="libx264", quality=8, macro_block_size=2,
                                     ffmpeg_log_level="error") as writer:
                 for frame in frames:
                     writer.append_data(_even(np.asarray(frame)[..., :3]))
@@ -52,6 +52,7 @@ def frame_range(n_frames: int, start: int | None = None, end: int | None = None,
 
 
 def _even(frame: np.ndarray) -> np.ndarray:
-    """H.264 wants sizes in multiples of 16 (macro blocks): pad with the edge colour rather than rescale."""
+    """H.264 in 4:2:0 wants even sizes: an odd one padded by a row or column of the edge colour rather than
+    rescaled. Padding to whole 16-pixel macro blocks, as before, wrote a 1920 x 1080 export 1088 tall."""
     h, w = frame.shape[:2]
-    return np.pad(frame, ((0, -h % 16), (0, -w % 16), (0, 0)), mode="edge")
+    return np.pad(frame, ((0, h % 2), (0, w % 2), (0, 0)), mode="edge")
