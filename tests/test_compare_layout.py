@@ -115,8 +115,11 @@ def test_targets_past_what_fits_page_and_the_selection_turns_the_page(qtbot, sam
     assert view.page == view.page_count - 1 and view.comparison.results[-1].target.name == "juniper"
     view.set_solo(view.hand_of_result(len(view.comparison.results) - 1))  # alone: no pages to turn, no page bar
     assert not view.pager.isVisible() and window.compare.fixing.bar.isVisible()
-    view.set_solo(-1)
+    window.heatmap_choice.setCurrentIndex(0)  # iris, on the first page, picked in the drop-down: alone in turn
+    assert view.page == 0 and view.solo_hand() is not None and view.solo_hand().hand.name == "iris"
+    view.set_solo(-1)  # (it dropped back to the grid: a fresh-eyes user; a table click kept it alone)
     assert view.pager.isVisible()
+    window.scores.selectRow(3)
     window.scores.selectRow(0)  # iris, on the first page: the grid turns back to it and frames it
     assert view.page == 0 and view.selected == 0 and view._hands[1].border.GetVisibility()
     hand = view.hand_of_result(3)

@@ -358,9 +358,9 @@ class CompareMode(QWidget):
                     widget.blockSignals(True)
                     setter()
                     widget.blockSignals(False)
-                self.view.set_selected(index, turn_page)
-                solo = self.view.solo_hand()
-                if solo is not None and self.view.result_of_hand(self.view.solo) != index:
+                alone = self.view.solo_hand() is not None
+                self.view.set_selected(index, turn_page)  # a page turned builds the grid anew: no hand alone
+                if alone and (self.view.solo_hand() is None or self.view.result_of_hand(self.view.solo) != index):
                     self.view.set_solo(self.view.hand_of_result(index))  # the hand alone is the one selected
             self._show_selected_curve()
             self.show_frame(self.timeline.frame)
