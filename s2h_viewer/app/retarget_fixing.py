@@ -7,6 +7,7 @@ which Fix > Load corrections and ``s2h retarget --corrections`` read back."""
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,7 +16,7 @@ import numpy as np
 import shiboken6
 from PySide6.QtCore import QObject, QTimer
 from PySide6.QtGui import QAction, QKeySequence, QUndoCommand
-from PySide6.QtWidgets import QMenu, QMessageBox
+from PySide6.QtWidgets import QApplication, QMenu, QMessageBox
 
 from s2h_viewer.app.annotate_mode import ask
 from s2h_viewer.hand import topology as topo
@@ -86,6 +87,7 @@ class RetargetFixing(QObject):
         mode.view.add_bar(self.bar)
         self.joint: int | None = None  # the articulated joint picked
         self._picked_on: ResultKey | None = None  # the retarget it was picked on
+        self._before_click: tuple | None = None  # the joint, its retarget and the time before the last click picked
         self.ring: RotationRing | None = None
         self._drag: Drag | None = None
         self._saved: dict[ResultKey, Corrections] = {}  # the corrections last exported or saved, per retarget
@@ -94,8 +96,9 @@ class RetargetFixing(QObject):
         self._live.setSingleShot(True)
         self._live.setInterval(LIVE_MS)
         self._live.timeout.connect(self._measure_drag)
-        mode.view.grid_built.connect(lambda: self._follow_solo(let_go=False))  # the same retarget alone again
-        mode.view.solo_changed.connect(lambda _: self._follow_solo(let_go=True))
+        mode.view.grid_built.connect(self._follow_solo)
+        mode.view.solo_changed.connect(self._follow_solo)
+        mode.view.double_clicked.connect(self._double_clicked)
         mode.timeline.frame_changed.connect(self._frame_changed)
         mode.timeline.play_button.toggled.connect(self._playing_changed)
         mode.result_changed.connect(self._place)
@@ -112,16 +115,15 @@ class RetargetFixing(QObject):
         index = view.result_of_hand(view.solo)
         return self.mode.shown_keys()[index], self.mode.comparison.results[index]
 
-    def _follow_solo(self, let_go: bool) -> None:
-        """A retarget shown alone gets the bar and a ring in its cell; the grid neither. With ``let_go`` (another
-        hand alone, or the grid) the joint is let go of unless the same retarget is shown alone again: the first
-        click of the double-click back to the grid had picked one, and its ring covered the contacts of the next
-        hand shown alone, as it did of a retarget picked in the table."""
+    def _follow_solo(self, *_) -> None:
+        """A retarget shown alone gets the bar and a ring in its cell; the grid neither. The picked joint stays
+        with its retarget (the grid and back, however it went there) until Esc or another retarget is shown
+        alone: a joint picked on one, its ring over the next one's thumb-index contact, read as a stray pick."""
         hand = self.mode.view.solo_hand()
         self._drop_ring()
         self.bar.setVisible(hand is not None)
         shown = self._solo()
-        if let_go and (shown is None or shown[0] != self._picked_on):
+        if shown is not None and shown[0] != self._picked_on:
             self.joint = None
         if hand is None:
             return
@@ -211,10 +213,17 @@ class RetargetFixing(QObject):
         shown = self._solo()
         if shown is None:
             return
+        self._before_click = (self.joint, self._picked_on, time.monotonic())
         _, result = shown
         positions = to_view(result.target, result.pose.positions[self.mode.timeline.frame].numpy().astype(np.float64))
         nearest = nearest_on_screen(self.ring.renderer, positions[[joint for joint, _ in PICKABLE]], x, y)
         self._picked(None if nearest is None else PICKABLE[nearest][1])
+
+    def _double_clicked(self) -> None:
+        """A double-click (back to the grid) picks nothing: its first click's pick is undone."""
+        before, self._before_click = self._before_click, None
+        if before is not None and time.monotonic() - before[2] < QApplication.doubleClickInterval() / 1000 + 0.2:
+            self.joint, self._picked_on = before[0], before[1]
 
     def let_go(self) -> None:
         """Escape: the picked joint let go (its ring hidden); with none picked, a hand shown alone back to the grid.

@@ -45,6 +45,7 @@ class CompareView(QWidget):
     drawn = Signal()
     solo_changed = Signal(int)  # the hand shown alone (index into the grid's hands), -1 for the grid
     hand_clicked = Signal(int)  # a click (not a camera drag) on a hand of the grid (index into its hands)
+    double_clicked = Signal()  # a double-click, before it shows a hand alone or the grid (its first click was one)
     page_changed = Signal(int)  # the page of targets shown
     grid_built = Signal()  # a new render window and widget hold the grid (a new comparison, page or size)
 
@@ -376,6 +377,7 @@ class CompareView(QWidget):
             return False
         if event.type() == QEvent.Type.MouseButtonDblClick:
             self._pressed_at = None
+            self.double_clicked.emit()
             self.set_solo(-1 if self.solo >= 0 else self.hand_at(int(event.position().x()),
                                                                  int(event.position().y())))
             return True
