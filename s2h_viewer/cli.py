@@ -129,7 +129,8 @@ def _fixed(comparison, files: list[str]):
                                        f"(it holds {shown}): add that --target and method")
         results[index] = corrected_result(results[index], fixes.corrections, comparison.motion, comparison.source,
                                           source_asm)
-        print(f"{file}: {fixes.corrections.n_keys} correction keys applied to {fixes.method} -> {fixes.target}")
+        keys = fixes.corrections.n_keys
+        print(f"{file}: {keys} correction key{'s' * (keys != 1)} applied to {fixes.method} -> {fixes.target}")
     return dataclasses.replace(comparison, results=results)
 
 
@@ -322,7 +323,7 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
         from s2h_viewer.io.corrections import save_corrections, sidecar_path
         record = save_corrections(sidecar_path(path), dataclasses.replace(
             fixes, clip=motion.name, fps=motion.fps, source=source.name, target=target.name, method=args.method))
-        print(f"applied {fixes.corrections.n_keys} correction keys ({fixes.corrections.describe()}); "
+        print(f"applied {fixes.corrections.n_keys} correction key{'s' * (fixes.corrections.n_keys != 1)} ({fixes.corrections.describe()}); "
               f"recorded in {record}")
     return 0
 

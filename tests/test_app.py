@@ -178,6 +178,7 @@ def test_shortcut_help_lists_every_shortcut_the_menus_define(window, qtbot):
         key = action.shortcut().toString(QKeySequence.SequenceFormat.NativeText)
         name = action.property("help_name") or action.text()
         assert any(line.startswith(key) and name in line for line in lines), (key, name)
+    assert [line for line in lines if line.startswith("Ctrl+T: ")] == ["Ctrl+T: File > Add target hand..."]  # once
     edit = [line for line in lines if "Edit > " in line]
     assert edit == ["Ctrl+Z: Edit > Undo", "Ctrl+Shift+Z: Edit > Redo"]  # not "Undo remove iris"
     assert any(line.startswith("Ctrl+H: View > Semi-transparent skin") for line in lines)

@@ -35,6 +35,13 @@ def test_render_compare_writes_a_frame_and_a_whole_clip(sample_hands, tmp_path):
     assert not np.array_equal(frames[0], frames[len(frames) // 2])  # the hands move
 
 
+def test_frame_counts_say_one_frame_and_ranges_their_ends():
+    from s2h_viewer.app.exports import frames_text
+    assert [frames_text(range(n), 138) for n in (138,)] == ["138 frames"]
+    assert frames_text(range(40, 121), 138) == "81 frames: 40 to 120"
+    assert frames_text(range(1, 2), 2) == "1 frame: 1"  # was "1 frames: 1 to 1" (a fresh-eyes user)
+
+
 def test_render_compare_takes_the_camera_and_the_overlays_asked_for(sample_hands, tmp_path):
     """`--view` and `--skeleton` were read for hands in one gesture only: a compare picture always came from the
     three-quarter camera, where a pinch's touch hides behind the fingers; now they and `--contacts` act on it."""
@@ -117,7 +124,7 @@ def test_render_compare_draws_a_retarget_with_its_corrections(sample_hands, tmp_
     plain, fixed = tmp_path / "plain.png", tmp_path / "fixed.png"
     assert main([*common, "--methods", "tbs_copy", "--out", str(plain)]) == 0
     assert main([*common, "--methods", "tbs_copy", "--corrections", str(sidecar), "--out", str(fixed)]) == 0
-    assert f"{sidecar}: 1 correction keys applied to tbs_copy -> laurel" in capsys.readouterr().out
+    assert f"{sidecar}: 1 correction key applied to tbs_copy -> laurel" in capsys.readouterr().out
     a, b = (imageio.imread(p)[:-BAND, :, :3].astype(int) for p in (plain, fixed))
     assert np.abs(a - b).max(-1).astype(bool).mean() > 0.002  # the finger drawn elsewhere
     assert main([*common, "--methods", "asrn", "--corrections", str(sidecar), "--out", str(tmp_path / "x.png")]) == 2

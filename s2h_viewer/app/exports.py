@@ -102,8 +102,11 @@ def export_screenshot(shown: Shown, path: str, size: tuple[int, int] | None = No
 
 
 def frames_text(frames: range, n_frames: int) -> str:
-    """'138 frames' for a whole clip of 138, else '81 frames: 40 to 120' (the clip's indices)."""
-    return f"{len(frames)} frames" + ("" if len(frames) == n_frames else f": {frames.start} to {frames[-1]}")
+    """'138 frames' for a whole clip of 138, else '81 frames: 40 to 120' (the clip's indices), '1 frame: 1'."""
+    count = f"{len(frames)} frame{'s' * (len(frames) != 1)}"
+    if len(frames) == n_frames:
+        return count
+    return f"{count}: {frames.start}" + (f" to {frames[-1]}" if len(frames) > 1 else "")
 
 
 class VideoExport(QObject):

@@ -311,6 +311,7 @@ class MainWindow(QMainWindow):
         read from the actions themselves (so the help cannot drift from the menus), then 'gesture: what it does'
         for the mouse in the 3D views, the grid and the annotation view (`MOUSE_SECTIONS`)."""
         lines = ["Keyboard (from the menus)"]
+        listed: set[tuple[str, str]] = set()  # an action in two menus (Add target hand: File and Targets) once
 
         def walk(menu, path: str) -> None:
             for action in menu.actions():
@@ -318,6 +319,9 @@ class MainWindow(QMainWindow):
                     walk(action.menu(), f"{path} > {action.text()}")
                 elif action.shortcuts():
                     keys = " or ".join(k.toString(QKeySequence.SequenceFormat.NativeText) for k in action.shortcuts())
+                    if (keys, action.text()) in listed:
+                        continue
+                    listed.add((keys, action.text()))
                     name = action.property("help_name") or action.text().replace("&", "")
                     lines.append(f"{keys}: {path} > {name}")
 
@@ -799,7 +803,7 @@ class MainWindow(QMainWindow):
         shown = exports.Shown.of(self.compare)
         result = shown.selected
         asked = path is None
-        path = self._ask_to_save(f"Export {result.method} -> {result.target.name}",
+        path = self._ask_to_save(f"Export {exports.label(result)}",
                                  "Motion (*.glb *.bvh *.npz *.fbx)", path, lambda: shown.name(".glb"))
         if not path:
             return None

@@ -79,5 +79,5 @@ class FrameRangeDialog(QDialog):
         ok = len(frames) > 0
         self.buttons.button(QDialogButtonBox.StandardButton.Ok).setEnabled(ok)
         self.summary.setStyleSheet("" if ok else "color: #b00020")
-        self.summary.setText(f"{len(frames)} frames, {len(frames) / self.fps:.2f} s" if ok else
+        self.summary.setText(f"{len(frames)} frame{'s' * (len(frames) != 1)}, {len(frames) / self.fps:.2f} s" if ok else
                              f"From ({self.start.value()}) is after To ({self.end.value()}): nothing to export")

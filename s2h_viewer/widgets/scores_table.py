@@ -67,7 +67,7 @@ class ScoresTable(QTableWidget):
         super().__init__(0, len(COLUMNS), parent)
         self.setHorizontalHeaderLabels([c for c, _, _ in COLUMNS])
         for column, (_, _, tip) in enumerate(COLUMNS):
-            self.horizontalHeaderItem(column).setToolTip(tip)
+            self.horizontalHeaderItem(column).setToolTip(wrapped(tip))  # long: on one line it ran off the window
         self.horizontalHeader().setSectionResizeMode(QHeaderView.ResizeMode.Interactive)
         self.verticalHeader().setVisible(False)
         self.verticalHeader().setDefaultSectionSize(self.fontMetrics().height() + 8)  # one line per retarget
