@@ -142,8 +142,6 @@ def test_a_take_the_exporter_named_is_called_by_its_file(pinch, capsys):
     assert capsys.readouterr().out.startswith("r_hand_pinch_anim: 2 frames; index PIP bends ")
     assert main(["rig", str(PINCH)]) == 0  # the take's own name, for --animation, and the clip's
     assert "animations: [0] Take 001 (read as r_hand_pinch_anim)\n" in capsys.readouterr().out
-    assert main(["rig", str(GODOT_POSES)]) == 0
-    assert "animations: [0] Cup (0.04 s), [1] Default (0.04 s)," in capsys.readouterr().out
     assert load_motion_file(GODOT_POSES, None, RigOptions(animation="Pinch Up"))[0].name == "Pinch Up"
     for default in ("Take 001", "mixamo.com", "Armature|mixamo.com|Layer0", "Armature|Action.001", "Animation_0", ""):
         assert clip_name(default, PINCH) == "r_hand_pinch_anim" and clip_name(default, PINCH, 2) == "r_hand_pinch_anim_2"
