@@ -35,6 +35,16 @@ def test_render_compare_writes_a_frame_and_a_whole_clip(sample_hands, tmp_path):
     assert not np.array_equal(frames[0], frames[len(frames) // 2])  # the hands move
 
 
+def test_a_target_with_no_skin_says_its_bones_are_drawn(sample_hands):
+    """The debug robot VRM has no mesh: its cells drew grey bones with no error colour, and nothing said why."""
+    from s2h_viewer.render.compare_scene import result_label
+    from s2h_viewer.retarget.comparison import build_comparison
+    motion = synthesize(["ok"], sample_hands["birch"], seed=1, name="ok")
+    bones = dataclasses.replace(sample_hands["laurel"], name="bones", mesh=None)
+    skinned, bare = build_comparison(motion, sample_hands["birch"], [sample_hands["laurel"], bones], ["tbs_copy"]).results
+    assert result_label(bare).endswith(", no skin: bones") and "no skin" not in result_label(skinned)
+
+
 def test_frame_counts_say_one_frame_and_ranges_their_ends():
     from s2h_viewer.app.exports import frames_text
     assert [frames_text(range(n), 138) for n in (138,)] == ["138 frames"]
