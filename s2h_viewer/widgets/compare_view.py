@@ -1,14 +1,14 @@
 """Compare mode's viewport: the compare grid (`render.compare_scene`) in one render window with
 linked cameras, rendered off screen and shown as an image (`widgets.vtk_widget`), redrawn on ``show_frame``.
 
-A new frame asks for a repaint (``update``): one render per frame for the whole grid. While the
-timeline plays, each skin of the grid is drawn with fewer faces; paused or shown alone, the full
-display mesh. A double-click on a hand shows its viewport alone (solo), a second one brings the grid
-back; a cell's warning banner has its whole text as a tooltip. ``drawn`` fires after every render, so the timeline can show the frames actually drawn per
-second. While playing, the frame expected next is posed on a worker thread (numpy alone) while the
-current one is drawn (`prefetch`): the GUI thread then only copies it in. The worker starts when the
-render does: VTK lets go of Python's lock while it draws, where the GUI thread's own Python (the heatmap,
-the curve, the paint) would wait for the worker to let go of it."""
+A new frame asks for a repaint (``update``): one render per frame for the whole grid. While the timeline
+plays, each skin of the grid is drawn with fewer faces; paused or shown alone, the full display mesh. A click
+on a retarget selects it; a double-click on a hand shows its viewport alone (solo), a second one brings the
+grid back; a cell's warning banner has its whole text as a tooltip. ``drawn`` fires after every render, so the
+timeline can show the frames actually drawn per second. While playing, the frame expected next is posed on a
+worker thread (numpy alone) while the current one is drawn (`prefetch`): the GUI thread then only copies it
+in. The worker starts when the render does: VTK lets go of Python's lock while it draws, where the GUI
+thread's own Python (the heatmap, the curve, the paint) would wait for the worker to let go of it."""
 
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ from s2h_viewer.render.compare_scene import (PLAYING_FACES, CellLabel, Framing, 
                                              ViewOptions, apply_options, fit_cells, grid_layout, populate,
                                              result_label, show_alone, solo_ghost)
 from s2h_viewer.retarget.comparison import Comparison, target_ids, target_page
-from s2h_viewer.widgets.rotation_handle import CLICK_PIXELS
+from s2h_viewer.widgets.rotation_handle import is_click
 from s2h_viewer.widgets.tooltips import wrapped
 from s2h_viewer.widgets.vtk_widget import PlotterWidget, window_plotter
 
@@ -381,16 +381,14 @@ class CompareView(QWidget):
             self.set_solo(-1 if self.solo >= 0 else self.hand_at(int(event.position().x()),
                                                                  int(event.position().y())))
             return True
-        left = getattr(event, "button", lambda: None)() == Qt.MouseButton.LeftButton
-        if event.type() == QEvent.Type.MouseButtonPress and left:
-            self._pressed_at = (int(event.position().x()), int(event.position().y()))
-        elif event.type() == QEvent.Type.MouseButtonRelease and left and self._pressed_at is not None:
-            x, y = int(event.position().x()), int(event.position().y())
-            if self.solo < 0 and max(abs(x - self._pressed_at[0]), abs(y - self._pressed_at[1])) <= CLICK_PIXELS:
-                hand = self.hand_at(x, y)
+        if event.type() in (QEvent.Type.MouseButtonPress, QEvent.Type.MouseButtonRelease) and \
+                event.button() == Qt.MouseButton.LeftButton:
+            at = (int(event.position().x()), int(event.position().y()))
+            pressed, self._pressed_at = self._pressed_at, at if event.type() == QEvent.Type.MouseButtonPress else None
+            if self._pressed_at is None and pressed is not None and self.solo < 0 and is_click(pressed, at):
+                hand = self.hand_at(*at)
                 if hand >= 0:
                     self.hand_clicked.emit(hand)
-            self._pressed_at = None
         if event.type() == QEvent.Type.ToolTip:
             tip = self.banner_tip(event.pos().x(), event.pos().y())
             if tip:

@@ -24,6 +24,11 @@ RING_COLOUR = "#e8a317"
 ACTIVE_COLOUR = "#ffe34d"
 #: a press and release this many pixels apart or fewer are a click, not a camera drag
 CLICK_PIXELS = 4
+
+
+def is_click(pressed: tuple[int, int], released: tuple[int, int]) -> bool:
+    """A press at ``pressed`` released at ``released`` (pixels) is a click, not a drag (`CLICK_PIXELS`)."""
+    return max(abs(released[0] - pressed[0]), abs(released[1] - pressed[1])) <= CLICK_PIXELS
 #: the ring follows the pointer on its plane while the view ray meets the plane at this cosine or more
 #: (about 70 deg off face-on); nearer edge-on it rolls under the pointer instead
 FACING = 0.35
@@ -210,6 +215,6 @@ class RotationRing(QObject):
             self._highlight(self._over_ring(x, y))
             self.on_end()
             return True
-        if press is not None and max(abs(x - press[0]), abs(y - press[1])) <= CLICK_PIXELS:
+        if press is not None and is_click(press, (x, y)):
             self.on_click(x, y)
         return False
