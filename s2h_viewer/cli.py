@@ -323,7 +323,8 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
         from s2h_viewer.io.corrections import save_corrections, sidecar_path
         record = save_corrections(sidecar_path(path), dataclasses.replace(
             fixes, clip=motion.name, fps=motion.fps, source=source.name, target=target.name, method=args.method))
-        print(f"applied {fixes.corrections.n_keys} correction key{'s' * (fixes.corrections.n_keys != 1)} ({fixes.corrections.describe()}); "
+        keys = fixes.corrections.n_keys
+        print(f"applied {keys} correction key{'s' * (keys != 1)} ({fixes.corrections.describe()}); "
               f"recorded in {record}")
     return 0
 

@@ -644,7 +644,8 @@ class CompareMode(QWidget):
 
     def fill_targets_menu(self, menu: QMenu, leading: tuple[QAction, ...] = ()) -> None:
         """``leading`` (adding a target), then one "Remove <target>" entry per target (rebuilt whenever the state
-        changes); the last target stays (without one there is nothing to compare, and the grid would keep showing it)."""
+        changes); the last target stays (without one there is nothing to compare, and the grid would keep showing
+        it)."""
         menu.clear()
         if leading:
             menu.addActions(list(leading))

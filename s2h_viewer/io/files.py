@@ -203,21 +203,21 @@ def list_animations(path: str | Path) -> list[str]:
     """Names of a motion file's animations (glTF, with their lengths) or takes (FBX), each with the name its clip
     is read as where that is the file's (an exporter's default name: `io.gltf.clip_name`); one unnamed clip for
     BVH, npz and recordings."""
-    from s2h_viewer.io.gltf import clip_name
+    from s2h_viewer.io.gltf import clip_name, list_gltf_animations
     path = Path(path)
     suffix = _suffix(path, MOTION_SUFFIXES, "motion")
     if suffix in GLTF_FAMILY:
-        from s2h_viewer.io.gltf import list_gltf_animations
-        clips = [(name, f"{seconds:.2f} s") for name, seconds in list_gltf_animations(path)]
+        clips = [(name, [f"{seconds:.2f} s"]) for name, seconds in list_gltf_animations(path)]
     elif suffix == ".fbx":
         from s2h_viewer.io.fbx import list_fbx_takes
-        clips = [(name, "") for name in list_fbx_takes(path)]
+        clips = [(name, []) for name in list_fbx_takes(path)]
     else:
         return [path.stem]
     listed = []
-    for index, (name, length) in enumerate(clips):
+    for index, (name, notes) in enumerate(clips):
         read_as = clip_name(name, path, index)
-        notes = [length] * bool(length) + [f"read as {read_as}"] * (read_as != name)
+        if read_as != name:
+            notes = [*notes, f"read as {read_as}"]
         listed.append(f"{name or '(no name)'}" + (f" ({'; '.join(notes)})" if notes else ""))
     return listed
 

@@ -13,6 +13,7 @@ from s2h_viewer.io.atomic import atomic_path
 from s2h_viewer.render.scene import (AXIS_COLOURS, BONE_COLOUR, CAMERA_DIRECTIONS, SKIN_COLOUR, frame_arrows,
                                      pose_frame, posed_mesh, skeleton)
 
+
 def _set_camera(plotter: pv.Plotter, bounds: tuple, view: str) -> None:
     direction, up = CAMERA_DIRECTIONS[view]
     centre = np.array([(bounds[0] + bounds[1]) / 2, (bounds[2] + bounds[3]) / 2, (bounds[4] + bounds[5]) / 2])

@@ -29,4 +29,5 @@ class TextDialog(QDialog):
         wanted_w = max(metrics.horizontalAdvance(line) for line in lines) + 60
         wanted_h = metrics.lineSpacing() * len(lines) + 90
         screen = (parent.screen() if parent is not None else self.screen()).availableGeometry()
-        self.resize(min(wanted_w, int(SCREEN_SHARE * screen.width())), min(wanted_h, int(SCREEN_SHARE * screen.height())))
+        self.resize(min(wanted_w, int(SCREEN_SHARE * screen.width())),
+                    min(wanted_h, int(SCREEN_SHARE * screen.height())))
