@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from s2h_viewer.errors import S2HError
+from s2h_viewer.wording import counted
 
 if TYPE_CHECKING:
     from s2h_viewer.hand.model import HandModel
@@ -45,8 +46,8 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
         rows = evaluate(motions, hands, targets, methods)
     summary = summarise(rows)
     held_out = set(samples.hand_names("test"))
-    kind = ("held-out hand" if set(targets) <= held_out else "target hand") + "s" * (len(targets) != 1)
-    print(f"{len(motions)} motion{'s' * (len(motions) != 1)} x {len(targets)} {kind} "
+    kind = "held-out hand" if set(targets) <= held_out else "target hand"
+    print(f"{counted(len(motions), 'motion')} x {counted(len(targets), kind)} "
           f"({', '.join(Path(t).name for t in targets)})")
     print(format_markdown(summary))
     for path in write_results(rows, summary, args.out):
@@ -130,7 +131,7 @@ def _fixed(comparison, files: list[str]):
         results[index] = corrected_result(results[index], fixes.corrections, comparison.motion, comparison.source,
                                           source_asm)
         keys = fixes.corrections.n_keys
-        print(f"{file}: {keys} correction key{'s' * (keys != 1)} applied to {fixes.method} -> {fixes.target}")
+        print(f"{file}: {counted(keys, 'correction key')} applied to {fixes.method} -> {fixes.target}")
     return dataclasses.replace(comparison, results=results)
 
 
@@ -324,7 +325,7 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
         record = save_corrections(sidecar_path(path), dataclasses.replace(
             fixes, clip=motion.name, fps=motion.fps, source=source.name, target=target.name, method=args.method))
         keys = fixes.corrections.n_keys
-        print(f"applied {keys} correction key{'s' * (keys != 1)} ({fixes.corrections.describe()}); "
+        print(f"applied {counted(keys, 'correction key')} ({fixes.corrections.describe()}); "
               f"recorded in {record}")
     return 0
 

@@ -23,6 +23,7 @@ from s2h_viewer.render.compare_scene import Framing, ViewOptions, render_compari
 from s2h_viewer.retarget.comparison import Comparison, MethodResult
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.retarget.progress import Cancelled
+from s2h_viewer.wording import counted
 
 
 @dataclass(frozen=True)
@@ -103,7 +104,7 @@ def export_screenshot(shown: Shown, path: str, size: tuple[int, int] | None = No
 
 def frames_text(frames: range, n_frames: int) -> str:
     """'138 frames' for a whole clip of 138, else '81 frames: 40 to 120' (the clip's indices), '1 frame: 1'."""
-    count = f"{len(frames)} frame{'s' * (len(frames) != 1)}"
+    count = counted(len(frames), "frame")
     if len(frames) == n_frames:
         return count
     return f"{count}: {frames.start}" + (f" to {frames[-1]}" if len(frames) > 1 else "")

@@ -13,6 +13,7 @@ from pathlib import Path
 from s2h_viewer.batch.summary import ordered
 from s2h_viewer.io.atomic import atomic_path
 from s2h_viewer.semantics.flexion import SidewaysPeak
+from s2h_viewer.wording import counted
 
 _NAMES = (("motion", "motion"), ("target", "target"), ("method", "method"), ("status", "status"))
 _SCORES = (("s_finger", "S_finger"), ("s_palm", "S_palm"), ("contact_p", "contact P"), ("contact_r", "contact R"),
@@ -91,7 +92,7 @@ def _failure_groups(rows: list[dict]) -> str:
             groups[row.get("error") or "no error recorded"] = groups.get(row.get("error") or "no error recorded", 0) + 1
     if not groups:
         return ""
-    items = "".join(f"<li>{html.escape(error)} <span class=tasks>({count} task{'s' if count > 1 else ''})</span></li>"
+    items = "".join(f"<li>{html.escape(error)} <span class=tasks>({counted(count, 'task')})</span></li>"
                     for error, count in sorted(groups.items(), key=lambda g: -g[1]))
     return f'<div class="failures"><b>Failures</b><ul>{items}</ul></div>'
 

@@ -20,6 +20,7 @@ from s2h_viewer.errors import TooFewBonesError, UnrecognisedRigError
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.rig_mapping import (SCHEMES, SIDES, RigMapping, best_name_match, describe_missing, map_user,
                                          normalise_name, sides_named, split_side)
+from s2h_viewer.wording import counted
 
 #: a side or thumb call below this confidence is reported as a guess to check
 SURE = 0.5
@@ -331,7 +332,7 @@ def recognise_rig(skeleton: Skeleton, source: str | Path, side: str | None = Non
         found = partial[0] if partial else None
         free = free_bones(skeleton, by_name, found)
         if len(free) < len(by_name.missing):
-            raise TooFewBonesError(source, f"{len(free)} bone{'' if len(free) == 1 else 's'} left for "
+            raise TooFewBonesError(source, f"{counted(len(free), 'bone')} left for "
                                            f"{len(by_name.missing)} joints ({', '.join(by_name.missing)}): a hand "
                                            f"needs 5 fingers of 3 bones each; "
                                            f"{_refusal(skeleton, by_name, found, chosen, hint=False)}")

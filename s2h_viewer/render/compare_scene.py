@@ -30,6 +30,7 @@ from s2h_viewer.render.text_lock import TEXT_LOCK
 from s2h_viewer.retarget.comparison import Comparison, MethodResult
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.semantics.contacts import CONTACT_PAIRS, SITES, detect_contacts, pad_centres, touching_and_near
+from s2h_viewer.wording import counted
 
 ERROR_RANGE = (0.0, 0.1)  # 1 - cosine; 0.1 is already a clearly different pose
 ERROR_COLOURMAP = "plasma"
@@ -416,7 +417,7 @@ def result_label(result: MethodResult) -> str:
     (a start of line that survives eliding) and its keys counted; a target with no skin says its bones are drawn
     uncoloured (a fresh-eyes user saw grey sticks and no colour bar, and nothing said why)."""
     keys = result.corrections.n_keys
-    star, fixed = ("*", f", {keys} fix{'es' * (keys != 1)}") if keys else ("", "")
+    star, fixed = ("*", f", {counted(keys, 'fix', 'fixes')}") if keys else ("", "")
     bones = ", no skin: bones" if result.target.mesh is None else ""
     return (f"{METHODS[result.method].label}{star} -> {result.target.name}\nS_finger {result.scores.s_finger:.3f}\n"
             f"kept {result.scores.signature_kept:.3f}{fixed}{bones}")

@@ -9,6 +9,8 @@ from PySide6.QtCore import QEvent, QPointF, QRectF, Qt, Signal
 from PySide6.QtGui import QColor, QPainter, QPen, QPixmap, QPolygonF
 from PySide6.QtWidgets import QToolTip, QWidget
 
+from s2h_viewer.wording import counted
+
 WORST = 5  # frames marked
 #: for Help's list
 MOUSE = (("click the error curve (or drag along it)", "jump to that frame (scrub)"),
@@ -240,7 +242,7 @@ class ErrorCurve(QWidget):
 
     def caption(self) -> str:
         """The line under the curve: what it measures, whose, its maximum, how far it parts from its reference, keys."""
-        keyed = f", keys at {len(self.keys)} frame{'s' * (len(self.keys) != 1)} (orange)" if len(self.keys) else ""
+        keyed = f", keys at {counted(len(self.keys), 'frame')} (orange)" if len(self.keys) else ""
         return f"{self.quantity} ({self.title})   max {self._figure(self.error.max())}{self.apart()}{keyed}"
 
     def _draw_axes(self, painter: QPainter) -> None:

@@ -7,6 +7,8 @@ from __future__ import annotations
 from PySide6.QtWidgets import (QDialog, QDialogButtonBox, QFormLayout, QHBoxLayout, QLabel, QPushButton, QSpinBox,
                                QVBoxLayout, QWidget)
 
+from s2h_viewer.wording import counted
+
 
 class FrameRangeDialog(QDialog):
     """Asks which frames of a clip of ``n_frames`` at ``fps`` go into ``file_name``; ``current`` is the
@@ -79,5 +81,5 @@ class FrameRangeDialog(QDialog):
         ok = len(frames) > 0
         self.buttons.button(QDialogButtonBox.StandardButton.Ok).setEnabled(ok)
         self.summary.setStyleSheet("" if ok else "color: #b00020")
-        self.summary.setText(f"{len(frames)} frame{'s' * (len(frames) != 1)}, {len(frames) / self.fps:.2f} s" if ok else
+        self.summary.setText(f"{counted(len(frames), 'frame')}, {len(frames) / self.fps:.2f} s" if ok else
                              f"From ({self.start.value()}) is after To ({self.end.value()}): nothing to export")
