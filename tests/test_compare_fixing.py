@@ -36,7 +36,8 @@ from s2h_viewer.widgets.error_curve import KEY_COLOUR  # noqa: E402
 JOINT = "index_pip"
 ARTICULATED = topo.ARTICULATED_NAMES.index(JOINT)
 JOINT_INDEX = topo.JOINT_NAMES.index(JOINT)
-FRAME = 40
+FRAME = 40  # the first frame of the clip's fist (40-66)
+SECOND = 72  # between its fist and its OK (67-77)
 
 
 @pytest.fixture
@@ -72,7 +73,7 @@ def joint_frame(win, result=None, frame: int = FRAME) -> tuple[np.ndarray, np.nd
 def ring_path(win, degrees: float) -> list[QPoint]:
     """11 pointer positions along the joint's bend ring, ``degrees`` round it (right-handed about the bend axis
     in view space), from where that turn moves the pointer well apart on screen."""
-    centre, axes = joint_frame(win)
+    centre, axes = joint_frame(win, frame=win.timeline.frame)  # where the ring is drawn
     radius = win.compare.fixing.ring.radius
     assert radius >= RING_RADIUS * win.compare.selected_result().target.hand_length
     bend = AXES.index("bend")
@@ -138,15 +139,19 @@ def test_a_ring_drag_in_solo_keys_the_joint_live_and_undo_brings_back_the_method
     drag(qtbot, win, 40.0, while_held)
     angle, curve, s_finger, method_cell, said = live[0]
     assert said.startswith("index PIP: bend +") and "deg (curls it in) at frame 40" in said  # which way: said
+    assert "(held over the fist pose, frames 40-66, blended over frames 30-76)" in said
     assert abs(angle - 20.0) < 3.0 and s_finger != method.scores.s_finger  # half the turn, live
     assert curve[FRAME] > method.frame_error[FRAME]  # the curve too
     assert method_cell == "TBS Copy (fixed)"
     fixed = mode.selected_result()
     assert turned(before, joint_frame(win, fixed)[1]) == pytest.approx(40.0, abs=3.0)
     correction = fixed.corrections.of(ARTICULATED)
-    assert [(k.frame, k.start, k.end) for k in correction.keys] == [(FRAME, 30, 50)]  # the ease frames: 10, 10
-    np.testing.assert_allclose(fixed.pose.positions[:30], method.pose.positions[:30], atol=1e-6)  # outside: unchanged
-    np.testing.assert_allclose(fixed.pose.positions[51:], method.pose.positions[51:], atol=1e-6)
+    # frame 40 holds the fist (40-66): the key holds over it, eased over the 10 frames before it and the 10 between
+    # it and the OK (67-76)
+    assert [(k.frame, k.start, k.end, k.hold) for k in correction.keys] == [(FRAME, 30, 76, (40, 66))]
+    np.testing.assert_allclose(fixed.pose.positions[:31], method.pose.positions[:31], atol=1e-6)  # outside: unchanged
+    np.testing.assert_allclose(fixed.pose.positions[76:], method.pose.positions[76:], atol=1e-6)
+    assert turned(joint_frame(win, method, 66)[1], joint_frame(win, fixed, 66)[1]) == pytest.approx(40.0, abs=3.0)
     others = [j for j in range(topo.N_JOINTS) if j not in (JOINT_INDEX + 1, JOINT_INDEX + 2)]
     np.testing.assert_allclose(fixed.pose.positions[:, others], method.pose.positions[:, others], atol=1e-5)
     np.testing.assert_allclose(mode.curve.error, fixed.frame_error)  # the curve shows the corrected retarget
@@ -292,20 +297,22 @@ def test_a_second_key_changes_its_own_frames_only_and_space_waits_for_the_drag(w
     drag(qtbot, win, 30.0)
     first = mode.selected_result()
     with qtbot.waitSignal(win.view.drawn, timeout=5000):  # the ring drawn at the new frame's pose
-        win.timeline.set_frame(FRAME + 25)
+        win.timeline.set_frame(SECOND)
 
     def press_space() -> None:  # Space while the ring is held: playback stays paused, the frame stays
         QTest.keyClick(win, Qt.Key.Key_Space)
-        assert not win.timeline.playing and win.timeline.frame == FRAME + 25
+        assert not win.timeline.playing and win.timeline.frame == SECOND
     drag(qtbot, win, -35.0, press_space)
     second = mode.selected_result()
     keys = second.corrections.of(ARTICULATED).keys
-    assert [(k.frame, k.start, k.end) for k in keys] == [(FRAME, 30, 50), (FRAME + 25, 55, 75)]
-    np.testing.assert_allclose(second.pose.positions[:55], first.pose.positions[:55], atol=1e-6)  # only its frames
-    assert not np.allclose(second.pose.positions[FRAME + 25], first.pose.positions[FRAME + 25], atol=1e-4)
+    # between the fist and the OK (67-77): eased within those frames, none held
+    assert [(k.frame, k.start, k.end, k.hold) for k in keys] == [(FRAME, 30, 76, (40, 66)), (SECOND, 67, 77, None)]
+    np.testing.assert_allclose(second.pose.positions[:68], first.pose.positions[:68], atol=1e-6)  # only its frames
+    np.testing.assert_allclose(second.pose.positions[77:], first.pose.positions[77:], atol=1e-6)
+    assert not np.allclose(second.pose.positions[SECOND], first.pose.positions[SECOND], atol=1e-4)
     QTest.keyClick(win, Qt.Key.Key_K, Qt.KeyboardModifier.ShiftModifier)  # delete it: back to the first exactly
     np.testing.assert_allclose(mode.selected_result().pose.positions, first.pose.positions, atol=1e-7)
-    assert mode.undo_stack.undoText() == f"delete index PIP's key at frame {FRAME + 25}"
+    assert mode.undo_stack.undoText() == f"delete index PIP's key at frame {SECOND}"
 
 
 def test_the_hand_alone_follows_the_selection_and_stays_alone_when_a_method_is_ticked(qtbot, sample_hands, tmp_path):

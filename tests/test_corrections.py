@@ -20,7 +20,7 @@ from s2h_viewer.io.files import load_motion_file
 from s2h_viewer.io.npz import save_motion
 from s2h_viewer.motions.synthesis import synthesize
 from s2h_viewer.retarget.comparison import compute_result, corrected_result, source_semantics
-from s2h_viewer.retarget.corrections import AXES, Corrections, smoothstep, turn_about
+from s2h_viewer.retarget.corrections import AXES, Corrections, key_span, smoothstep, turn_about
 from s2h_viewer.retarget.methods import retarget
 
 INDEX_PIP = topo.ARTICULATED_NAMES.index("index_pip")
@@ -42,6 +42,31 @@ def test_a_key_holds_its_turn_at_its_frame_and_eases_to_nothing_at_its_range_end
     np.testing.assert_allclose(curve[40:71], 30.0 * smoothstep(np.arange(30, -1, -1) / 30), atol=1e-9)
     axis = fixes.of(INDEX_PIP).offsets(100)[30].as_rotvec()
     np.testing.assert_allclose(axis / np.linalg.norm(axis), [0.0, 1.0, 0.0], atol=1e-12)  # about its bend axis
+
+
+def test_a_key_on_a_held_pose_holds_over_the_pose_and_eases_only_between_poses():
+    """The authored poses read as one clip (`--animation all`) hold each pose 12 frames, 8 between: a fix on one
+    frame of a pose faded across the pose itself and, at the default ease of 10, into the poses either side. A
+    new key on a held pose now holds its whole turn over the pose and eases over the frames between poses; one
+    between poses eases within them; a clip with no poses keeps the ease frames."""
+    labels = np.array(["Cup"] * 12 + [""] * 8 + ["OK"] * 12 + [""] * 8 + ["Peace"] * 12, dtype=object)
+    assert key_span(labels, 25, 10, 10) == (12, 39, (20, 31))  # anywhere in OK: all of OK, eased up to Cup, Peace
+    assert key_span(labels, 20, 3, 3) == (17, 34, (20, 31))  # eased over 3 frames
+    assert key_span(labels, 14, 10, 10) == (12, 19, None)  # between poses: within the frames between
+    assert key_span(np.full(100, "", dtype=object), 50, 10, 5) == (40, 55, None)  # no poses: the ease frames
+    assert key_span(labels, 0, 10, 10) == (0, 19, (0, 11))
+    start, end, hold = key_span(labels, 25, 10, 10)
+    fixes = Corrections().with_turn(INDEX_PIP, 25, turn_about("bend", 30.0), start, end, hold)
+    curve = degrees(fixes, INDEX_PIP, len(labels))
+    np.testing.assert_allclose(curve[20:32], 30.0, atol=1e-9)  # the whole OK fixed alike
+    assert np.all(curve[labels == "Cup"] < 1e-9) and np.all(curve[labels == "Peace"] < 1e-9)
+    assert np.all(np.diff(curve[12:21]) >= 0) and np.all(np.diff(curve[31:40]) <= 0)  # eased between
+    (key,) = fixes.of(INDEX_PIP).keys
+    assert key.hold == (20, 31) and "25 held 20-31 over 12-39" in fixes.describe()
+    again = fixes.with_turn(INDEX_PIP, 25, turn_about("bend", 10.0), 0, 43, None)  # its frames kept
+    np.testing.assert_allclose(degrees(again, INDEX_PIP, len(labels))[20:32], 40.0, atol=1e-6)
+    narrower = fixes.with_range(INDEX_PIP, 25, 22, 28)  # a marked range within the pose: the hold within it
+    assert narrower.of(INDEX_PIP).keys[0].hold == (22, 28)
 
 
 def test_a_second_key_changes_only_its_own_range_and_deleting_it_gives_back_the_first(sample_hands):
@@ -122,7 +147,7 @@ def test_a_corrected_retarget_is_measured_again_and_no_corrections_give_the_meth
 def sample_file(tmp_path) -> tuple[CorrectionsFile, object]:
     fixes = (Corrections().with_turn(INDEX_PIP, 40, turn_about("bend", 30.0), 20, 60)
              .with_turn(INDEX_PIP, 50, turn_about("splay", 10.0), 45, 55)
-             .with_turn(topo.ARTICULATED_NAMES.index("thumb_ip"), 10, turn_about("twist", -20.0), 0, 30))
+             .with_turn(topo.ARTICULATED_NAMES.index("thumb_ip"), 10, turn_about("twist", -20.0), 0, 30, (5, 15)))
     file = CorrectionsFile(fixes, "clip", 100, 30.0, "birch", "iris", "tbs_copy")
     return file, save_corrections(tmp_path / "take.corrections.json", file)
 
@@ -136,6 +161,7 @@ def test_the_sidecar_reads_back_what_was_written_and_sits_beside_its_motion(tmp_
     q[..., 0] = 1.0
     np.testing.assert_allclose(read.corrections.apply(q), file.corrections.apply(q), atol=1e-6)
     assert [c.name for c in read.corrections.joints] == ["thumb_ip", "index_pip"]
+    assert read.corrections.joints[0].keys[0].hold == (5, 15) and read.corrections.joints[1].keys[0].hold is None
     assert sidecar_path(tmp_path / "take.glb") == path
     assert read.mismatch(100) is None and "100 frames" in read.mismatch(90)
 
@@ -155,6 +181,9 @@ def test_the_sidecar_reads_back_what_was_written_and_sits_beside_its_motion(tmp_
     (lambda d: d["joints"][1]["keys"][0].update(rotation_deg=[0, 1, "2"]), "not three finite numbers"),
     (lambda d: d["joints"][1]["keys"][0].update(rotation_deg=[900, 0, 0]), "a turn of 900 deg"),
     (lambda d: d["joints"][1].update(keys=[]), "has no keys"),
+    (lambda d: d["joints"][0]["keys"][0].update(hold=[12, 5]), "hold's first frame is 12, outside 0..10"),
+    (lambda d: d["joints"][0]["keys"][0].update(hold=[5, 31]), "hold's last frame is 31, outside 10..30"),
+    (lambda d: d["joints"][0]["keys"][0].update(hold=5), '"hold" is 5, not [first, last]'),
 ])
 def test_a_hostile_sidecar_is_refused_naming_the_file_and_the_problem(tmp_path, change, problem):
     _, path = sample_file(tmp_path)

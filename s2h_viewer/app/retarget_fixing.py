@@ -1,7 +1,7 @@
 """Fixing a retarget in Compare (the Fix menu): in a retarget shown alone, click a joint and drag its ring to
 turn it about its bend, splay or twist axis at the current frame. Each drag is a key on the joint's offset
-curve (`retarget.corrections`) blended over the marked range (else the ease frames around it), undoable on
-Compare's undo stack; the cell, scores, heatmap and curves follow while the ring is dragged. Every motion
+curve (`retarget.corrections`) blended over the marked range (else held over the pose the frame holds and eased
+over the frames around it: `corrections.key_span`), undoable on Compare's undo stack; the cell, scores, heatmap and curves follow while the ring is dragged. Every motion
 export of the retarget carries its corrections, with a sidecar beside it recording them (`io.corrections`),
 which Fix > Load corrections and ``s2h retarget --corrections`` read back."""
 
@@ -25,7 +25,7 @@ from s2h_viewer.render.compare_scene import ON_TOP_OFFSET
 from s2h_viewer.render.scene import to_view
 from s2h_viewer.retarget.compare_state import ResultKey
 from s2h_viewer.retarget.comparison import MethodResult
-from s2h_viewer.retarget.corrections import AXES, Corrections, describe_keys, turn_about
+from s2h_viewer.retarget.corrections import AXES, Corrections, describe_keys, key_span, turn_about
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.widgets.correction_bar import HINT, CorrectionBar
 from s2h_viewer.widgets.rotation_handle import RotationRing, nearest_on_screen
@@ -68,12 +68,13 @@ class Drag:
     frame: int
     axis: str
     frames: tuple[int, int]  # the key's start and end (a key already at its frame keeps its own)
+    hold: tuple[int, int] | None  # the frames it holds its whole turn over (None: its frame alone)
     sense: float  # +1, or -1 where the view mirrors the hand (a turn on screen is the other way in hand space)
     degrees: float = 0.0
 
     def corrections(self) -> Corrections:
         turn = turn_about(self.axis, self.sense * self.degrees)
-        return self.before.corrections.with_turn(self.joint, self.frame, turn, *self.frames)
+        return self.before.corrections.with_turn(self.joint, self.frame, turn, *self.frames, self.hold)
 
 
 class RetargetFixing(QObject):
@@ -248,18 +249,19 @@ class RetargetFixing(QObject):
             self.mode.choose_joint(int(topo.ARTICULATED_JOINTS[joint]) - 1)  # its heatmap row
         self._place()
 
-    def _key_frames(self, result: MethodResult, frame: int) -> tuple[int, int]:
-        """The range of the key a drag at ``frame`` makes: the key's own if one is there, else the marked range if
-        it holds ``frame``, else the ease frames around it."""
+    def _key_frames(self, result: MethodResult, frame: int) -> tuple[int, int, tuple[int, int] | None]:
+        """The start, end and held frames of the key a drag at ``frame`` makes: the key's own if one is there, else
+        the marked range if it holds ``frame``, else the pose held there and the ease frames around it
+        (`key_span`)."""
         correction = result.corrections.of(self.joint)
         key = correction.key_at(frame) if correction is not None else None
         if key is not None:
-            return key.start, key.end
+            return key.start, key.end, key.hold
         marked = self.mode.timeline.marked
         if marked is not None and frame in marked:
-            return marked.start, marked[-1]
-        last = self.mode.comparison.n_frames - 1
-        return max(0, frame - self.bar.ease_in.value()), min(last, frame + self.bar.ease_out.value())
+            return marked.start, marked[-1], None
+        return key_span(self.mode.comparison.motion.labels, frame, self.bar.ease_in.value(),
+                        self.bar.ease_out.value())
 
     def _begin(self) -> None:
         shown = self._solo()
@@ -269,7 +271,8 @@ class RetargetFixing(QObject):
         key, result = shown
         frame = self.mode.timeline.frame
         sense = float(np.sign(np.linalg.det(result.target.palm_frame)))
-        self._drag = Drag(key, result, self.joint, frame, self.bar.axis, self._key_frames(result, frame), sense)
+        start, end, hold = self._key_frames(result, frame)
+        self._drag = Drag(key, result, self.joint, frame, self.bar.axis, (start, end), hold, sense)
 
     def _turn(self, degrees: float) -> None:
         if self._drag is not None:
@@ -284,8 +287,10 @@ class RetargetFixing(QObject):
             self.mode.show_result(drag.key, self.mode.corrected(drag.before, drag.corrections()))
             turn = drag.sense * drag.degrees
             way = {"bend": (" (curls it in)", " (opens it out)")}.get(drag.axis, ("", ""))[turn < 0]
+            held = "" if drag.hold is None else (f"held over the {self.mode.comparison.motion.labels[drag.frame]} "
+                                                 f"pose, frames {drag.hold[0]}-{drag.hold[1]}, ")
             self.bar.say(f"{topo.joint_label(topo.ARTICULATED_NAMES[drag.joint])}: {drag.axis} {turn:+.0f} deg{way} "
-                         f"at frame {drag.frame} (blended over frames {drag.frames[0]}-{drag.frames[1]})")
+                         f"at frame {drag.frame} ({held}blended over frames {drag.frames[0]}-{drag.frames[1]})")
 
     def _end(self) -> None:
         drag, self._drag = self._drag, None

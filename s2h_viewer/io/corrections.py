@@ -11,8 +11,9 @@ Schema (version 1)::
 
 Beside a motion export of part of the clip, ``"part": [first, last]`` says which frames the motion file holds (the
 keys keep the clip's frame numbers: the sidecar applies to the clip's retarget, as ``s2h retarget`` makes it).
-A key: its frame, the frames it eases in from and out to (``start <= frame <= end``), and its turn as a rotation
-vector in degrees in the joint's TBS frame (its components about twist, bend, splay). A file is hostile until
+A key: its frame, the frames it eases in from and out to (``start <= frame <= end``), where it holds a pose over
+several frames ``"hold": [first, last]`` (``start <= first <= frame <= last <= end``; the whole turn on all of them),
+and its turn as a rotation vector in degrees in the joint's TBS frame (its components about twist, bend, splay). A file is hostile until
 checked: every count, name, frame and number is."""
 
 from __future__ import annotations
@@ -68,6 +69,7 @@ def save_corrections(path: str | Path, file: CorrectionsFile) -> Path:
         **({} if file.part is None else {"part": list(file.part)}),
         "joints": [{"joint": c.name,
                     "keys": [{"frame": k.frame, "start": k.start, "end": k.end,
+                              **({} if k.hold is None else {"hold": list(k.hold)}),
                               "rotation_deg": [round(math.degrees(v), 6) for v in k.rotvec]} for k in c.keys]}
                    for c in file.corrections.joints]}
     with atomic_path(path) as tmp:
@@ -155,6 +157,12 @@ def _parse(path: Path, document) -> CorrectionsFile:
             frame = _integer(path, key.get("frame"), f"{what} frame", 0, frames - 1)
             start = _integer(path, key.get("start"), f"{what} start", 0, frame)
             end = _integer(path, key.get("end"), f"{what} end", frame, frames - 1)
+            hold = key.get("hold")
+            if hold is not None:
+                if not isinstance(hold, list) or len(hold) != 2:
+                    raise _fail(path, f'{what}: "hold" is {hold!r}, not [first, last]')
+                hold = (_integer(path, hold[0], f"{what} hold's first frame", start, frame),
+                        _integer(path, hold[1], f"{what} hold's last frame", frame, end))
             if parsed and frame <= parsed[-1].frame:
                 raise _fail(path, f"{what}: frame {frame} does not follow frame {parsed[-1].frame}")
             rotation = key.get("rotation_deg")
@@ -163,7 +171,7 @@ def _parse(path: Path, document) -> CorrectionsFile:
                 raise _fail(path, f"{what}: rotation_deg is {rotation!r}, not three finite numbers")
             if math.hypot(*rotation) > MAX_DEGREES:
                 raise _fail(path, f"{what}: a turn of {math.hypot(*rotation):.0f} deg (at most {MAX_DEGREES:.0f})")
-            parsed.append(OffsetKey(frame, tuple(math.radians(v) for v in rotation), start, end))
+            parsed.append(OffsetKey(frame, tuple(math.radians(v) for v in rotation), start, end, hold))
         corrections.append(JointCorrection(topo.ARTICULATED_NAMES.index(name), tuple(parsed)))
     part = document.get("part")
     if part is not None:

@@ -3,8 +3,9 @@ with ease in and out, applied on top of a method's motion (the fix a person make
 
 An offset turns a joint in its own TBS frame (``q' = q * offset``), so its children follow and a turn about
 the joint's twist, bend or splay axis stays one. Each key is a bump: none at its range's start, easing in to
-its turn at its frame, easing out to none at its range's end (smoothsteps, flat at both ends: a corrected
-finger starts and stops moving gently); a frame no key's range holds is the method's own. Keys whose ranges
+its turn at its frame (or over the frames it holds: a pose held over a run of frames is fixed on all of them),
+easing out to none at its range's end (smoothsteps, flat at both ends: a corrected finger starts and stops moving
+gently); a frame no key's range holds is the method's own. Keys whose ranges
 overlap compose, in the order of their frames, so a second key changes only its own range and deleting one
 gives back exactly what was there without it. Pure numpy / scipy: the viewer, its motion exports and
 ``s2h retarget --corrections`` apply the same curves."""
@@ -19,6 +20,7 @@ from scipy.spatial.transform import Rotation
 
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.motion import Motion
+from s2h_viewer.wording import plural
 
 #: the axes a joint can be turned about, in its TBS frame's column order (x twist, y bend, z splay)
 AXES: tuple[str, ...] = ("twist", "bend", "splay")
@@ -32,24 +34,32 @@ def smoothstep(s: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class OffsetKey:
-    """One joint's turn at ``frame`` (a rotation vector in its TBS frame, radians), eased in from ``start`` and
-    out to ``end`` (``start <= frame <= end``; no offset from this key at and outside them but on ``frame``)."""
+    """One joint's turn at ``frame`` (a rotation vector in its TBS frame, radians), whole over ``hold`` (first,
+    last; None: ``frame`` alone), eased in from ``start`` and out to ``end`` (``start <= hold <= end``; no offset
+    from this key at and outside them but on its held frames)."""
 
     frame: int
     rotvec: tuple[float, float, float]
     start: int
     end: int
+    hold: tuple[int, int] | None = None
+
+    @property
+    def held(self) -> tuple[int, int]:
+        """The first and last frames it holds its whole turn over."""
+        return self.hold if self.hold is not None else (self.frame, self.frame)
 
     @property
     def rotation(self) -> Rotation:
         return Rotation.from_rotvec(np.asarray(self.rotvec, dtype=np.float64))
 
     def weights(self, frames: np.ndarray) -> np.ndarray:
-        """Its share of its turn at each of ``frames``: 0 outside its range, 1 at its frame, smoothsteps between."""
-        rising = smoothstep((frames - self.start) / max(self.frame - self.start, 1))
-        falling = smoothstep((self.end - frames) / max(self.end - self.frame, 1))
-        weights = np.where(frames <= self.frame, rising, falling)
-        weights[frames == self.frame] = 1.0
+        """Its share of its turn at each of ``frames``: 0 outside its range, 1 on its held frames, smoothsteps
+        between."""
+        first, last = self.held
+        rising = smoothstep((frames - self.start) / max(first - self.start, 1))
+        falling = smoothstep((self.end - frames) / max(self.end - last, 1))
+        weights = np.where(frames < first, rising, np.where(frames > last, falling, 1.0))
         weights[(frames < self.start) | (frames > self.end)] = 0.0
         return weights
 
@@ -107,15 +117,20 @@ class Corrections:
             kept.append(JointCorrection(joint, tuple(sorted(keys, key=lambda k: k.frame))))
         return Corrections(tuple(sorted(kept, key=lambda c: c.joint)))
 
-    def with_turn(self, joint: int, frame: int, turn: Rotation, start: int, end: int) -> "Corrections":
+    def with_turn(self, joint: int, frame: int, turn: Rotation, start: int, end: int,
+                  hold: tuple[int, int] | None = None) -> "Corrections":
         """The joint turned by ``turn`` (in its TBS frame) at ``frame`` on top of its offset there: a new key there
-        eased over ``start`` .. ``end``, or the key already there (its range kept) turned further. Only the
-        frames of that key's range change."""
+        held over ``hold`` and eased over ``start`` .. ``end``, or the key already there (its frames kept) turned
+        further. Only the frames of that key's range change."""
         correction = self.of(joint)
         keys = correction.keys if correction is not None else ()
         old = next((k for k in keys if k.frame == frame), None)
-        start, end = (old.start, old.end) if old is not None else (min(start, frame), max(end, frame))
-        placeholder = OffsetKey(int(frame), (0.0, 0.0, 0.0), int(start), int(end))
+        if old is not None:
+            placeholder = dataclasses.replace(old, rotvec=(0.0, 0.0, 0.0))
+        else:
+            hold = None if hold is None else (min(int(hold[0]), frame), max(int(hold[1]), frame))
+            first, last = hold or (frame, frame)
+            placeholder = OffsetKey(int(frame), (0.0, 0.0, 0.0), int(min(start, first)), int(max(end, last)), hold)
         order = sorted([k for k in keys if k.frame != frame] + [placeholder], key=lambda k: k.frame)
         at = order.index(placeholder)
         after = JointCorrection(joint, tuple(order)).offsets(frame + 1, tuple(order[at + 1:]))[frame]
@@ -137,12 +152,15 @@ class Corrections:
         return self._with(joint, ())
 
     def with_range(self, joint: int, frame: int, start: int, end: int) -> "Corrections":
-        """The joint's key at ``frame`` eased over ``start`` .. ``end`` instead (kept around its frame)."""
+        """The joint's key at ``frame`` eased over ``start`` .. ``end`` instead (kept around its frame; the frames
+        it holds, within them)."""
         correction = self.of(joint)
         key = correction.key_at(frame) if correction is not None else None
         if key is None:
             return self
-        key = dataclasses.replace(key, start=min(start, frame), end=max(end, frame))
+        start, end = min(start, frame), max(end, frame)
+        hold = None if key.hold is None else (max(key.hold[0], start), min(key.hold[1], end))
+        key = dataclasses.replace(key, start=start, end=end, hold=None if hold == (frame, frame) else hold)
         return self._with(joint, tuple(key if k.frame == frame else k for k in correction.keys))
 
     def apply(self, q_tbs: np.ndarray) -> np.ndarray:
@@ -166,9 +184,30 @@ class Corrections:
 
 
 def describe_keys(correction: JointCorrection) -> str:
-    """'keys at 40 over 30-50, 60 over 50-70'."""
-    keys = ", ".join(f"{k.frame} over {k.start}-{k.end}" for k in correction.keys)
-    return f"key{'s' * (len(correction.keys) != 1)} at {keys}"
+    """'keys at 40 over 30-50, 60 held 55-66 over 50-70'."""
+    keys = ", ".join(f"{k.frame}{' held {}-{}'.format(*k.hold) if k.hold else ''} over {k.start}-{k.end}"
+                     for k in correction.keys)
+    return f"{plural('key', len(correction.keys))} at {keys}"
+
+
+def key_span(labels: np.ndarray, frame: int, ease_in: int, ease_out: int) -> tuple[int, int, tuple[int, int] | None]:
+    """The start, end and held frames of a new key at ``frame`` of a clip whose frames are ``labels`` (the pose held
+    at each, "" between; all "" in a clip of none): on a pose held over several frames, the whole pose; between
+    poses, ``frame`` alone. It eases in and out over at most ``ease_in`` / ``ease_out`` frames, never into a pose:
+    a fix on one frame of a held OK would otherwise fade across the OK itself and, at the default ease, into the
+    poses either side of it."""
+    label, last = labels[frame], len(labels) - 1
+    first = held_last = frame
+    while label and first > 0 and labels[first - 1] == label:
+        first -= 1
+    while label and held_last < last and labels[held_last + 1] == label:
+        held_last += 1
+    start, end = first, held_last
+    while start > max(0, first - ease_in) and not labels[start - 1]:
+        start -= 1
+    while end < min(last, held_last + ease_out) and not labels[end + 1]:
+        end += 1
+    return start, end, (first, held_last) if first < held_last else None
 
 
 def corrected_motion(motion: Motion, corrections: Corrections) -> Motion:

@@ -39,7 +39,8 @@ class CorrectionBar(QWidget):
                           (self.ease_out, "eases out over this many frames after it")):
             box.setRange(0, 100_000)
             box.setValue(DEFAULT_EASE)
-            box.setToolTip(f"a new key {text} (unless the marked range holds its frame: then over the range)")
+            box.setToolTip(f"a new key {text} (unless the marked range holds its frame: then over the range); on a "
+                           f"pose the clip holds, the key holds over the pose and eases only between poses")
         buttons = []
         for text, signal, tip in (("Delete key", self.delete_key, "the joint's key at this frame (Shift+K)"),
                                   ("Clear joint", self.clear_joint, "every correction of the joint (Ctrl+Shift+K)")):
