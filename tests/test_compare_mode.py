@@ -440,7 +440,10 @@ def test_png_export_carries_a_caption_of_the_selected_retarget(window, tmp_path)
     window.scores.selectRow(1)  # ASRN -> iris, picked in the scores table
     assert window.heatmap_choice.currentIndex() == 1
     np.testing.assert_allclose(window.heatmap.current, window.comparison.results[1].cell_error[0], equal_nan=True)
+    window.timeline.set_frame(30)
+    assert window.timeline.pose_label.text() == "between poses" and window.timeline.pose_label.isVisible()
     window.timeline.set_frame(7)
+    assert window.timeline.pose_label.text() == "pose: relaxed"  # which pose of the clip this is
     png = window.export_screenshot(str(tmp_path / "compare.png"))
     image = np.asarray(Image.open(png).convert("RGB"))
     assert image.shape[0] == window.view.interactor.height() + BAND
@@ -448,7 +451,7 @@ def test_png_export_carries_a_caption_of_the_selected_retarget(window, tmp_path)
     assert (band < 80).any() and (band > 250).mean() > 0.8  # dark text on white
     from s2h_viewer.app.exports import Shown
     text = Shown.of(window.compare).caption(7)
-    assert "short" in text and "frame 7/" in text and "ASRN -> iris" in text
+    assert "short (relaxed)" in text and "frame 7/" in text and "ASRN -> iris" in text
     bvh = window.export_motion(str(tmp_path / "selected.bvh"))
     assert bvh.read_text().startswith("HIERARCHY")
 
@@ -558,6 +561,7 @@ def test_the_slider_and_readouts_follow_playback_at_their_rate_and_exactly_when_
     qtbot.addWidget(timeline)
     timeline.show()
     timeline.set_clip(2000, 30.0)
+    assert timeline.pose_label.isHidden()  # a clip of no poses names none
     timeline.speed.setCurrentIndex(SPEEDS.index(4.0))
     shown, slider = [], []
     timeline.frame_changed.connect(lambda f: (shown.append(f), slider.append(timeline.slider.value()),

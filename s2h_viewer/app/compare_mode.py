@@ -500,7 +500,7 @@ class CompareMode(QWidget):
         self.heatmap_choice.addItems([label(r) for r in comparison.results])
         self.heatmap_choice.blockSignals(False)
         if new_clip:
-            self.timeline.set_clip(comparison.n_frames, comparison.motion.fps)
+            self.timeline.set_clip(comparison.n_frames, comparison.motion.fps, comparison.motion.labels)
         self.select(self._same_retarget(self.state.selected), turn_page=False)  # the user's page stays
         same = [(k.target, k.method) for k in self.shown_keys()]
         if alone is not None and (alone.target, alone.method) in same:  # a new clip's too

@@ -50,13 +50,14 @@ class Shown:
                    view.framing(), size, view.grab_rgb() if grab else None)
 
     def caption(self, frame: int) -> str:
-        """The picture's line: clip, frame and the selected retarget, or, where the selection is on another page
+        """The picture's line: clip (and the pose it holds there), frame and the selected retarget, or, where the selection is on another page
         of targets than the one exported, the page's targets (the caption names what the picture shows)."""
         motion, n_frames = self.comparison.motion, self.comparison.n_frames
+        clip = motion.name + (f" ({motion.labels[frame]})" if motion.labels[frame] else "")  # the pose held there
         if self.page is not None and not any(r is self.selected for r in self.page.results):
-            return page_caption(motion.name, frame, n_frames, motion.fps,
+            return page_caption(clip, frame, n_frames, motion.fps,
                                 list(dict.fromkeys(r.target.name for r in self.page.results)))
-        return caption_text(motion.name, frame, n_frames, motion.fps,
+        return caption_text(clip, frame, n_frames, motion.fps,
                             METHODS[self.selected.method].label + (" (fixed)" if self.selected.corrections else ""),
                             self.selected.target.name)
 

@@ -1,5 +1,6 @@
 """Playback timeline: play/pause, scrub, step, loop, speed, a readout of the frame (index/last, the frame
-count) and its time (of the clip's length), and the frame rate actually drawn.
+count) and its time (of the clip's length), the pose the clip holds there (a clip of labelled poses or
+gestures: which of the 35 poses is this?), and the frame rate actually drawn.
 
 Playback runs against the clock: each tick shows the frame that real time (times the speed) has
 reached since play started, so a view that draws slower than the clip drops frames instead of
@@ -78,6 +79,9 @@ class Timeline(QWidget):
         self.spin.lineEdit().installEventFilter(self._key_filter)
         self.slider.installEventFilter(self._key_filter)
         self.readout = QLabel()
+        self.pose_label = QLabel()
+        self.pose_label.setToolTip("the pose the clip holds at this frame")
+        self._labels: list[str] = []
         self.loop = QCheckBox("Loop")
         self.loop.setChecked(True)
         self.speed = QComboBox()
@@ -87,7 +91,8 @@ class Timeline(QWidget):
         self.fps_label.setToolTip("frames drawn per second while playing")
         fixed_size(self.fps_label, "888 fps")
         layout = QHBoxLayout(self)
-        for widget in (self.play_button, self.slider, self.spin, self.readout, self.loop, self.speed, self.fps_label):
+        for widget in (self.play_button, self.slider, self.spin, self.readout, self.pose_label, self.loop, self.speed,
+                       self.fps_label):
             layout.addWidget(widget)
         layout.setStretch(1, 1)
         self._timer = QTimer(self)
@@ -114,8 +119,14 @@ class Timeline(QWidget):
     def playing(self) -> bool:
         return self.play_button.isChecked()
 
-    def set_clip(self, n_frames: int, fps: float) -> None:
+    def set_clip(self, n_frames: int, fps: float, labels=None) -> None:
+        """A clip of ``n_frames`` at ``fps``; ``labels``: the pose held at each frame ("" between), if it has any."""
         self.n_frames, self.clip_fps = max(1, n_frames), fps
+        self._labels = [str(label) for label in labels] if labels is not None and any(labels) else []
+        self.pose_label.setVisible(bool(self._labels))
+        if self._labels:
+            fixed_size(self.pose_label, max((self._pose_text(f) for f in range(len(self._labels))),
+                                            key=self.pose_label.fontMetrics().horizontalAdvance))
         for widget in (self.slider, self.spin):
             widget.blockSignals(True)
             widget.setRange(0, self.n_frames - 1)
@@ -210,6 +221,10 @@ class Timeline(QWidget):
     def _readout_text(self, frame: int) -> str:
         return frame_readout(frame, self.n_frames, self.clip_fps)
 
+    def _pose_text(self, frame: int) -> str:
+        label = self._labels[frame] if frame < len(self._labels) else ""
+        return f"pose: {label}" if label else "between poses"
+
     def _set_from_widget(self, frame: int) -> None:
         """The slider or the spin box moved (a person, or `set_frame`): while playing, play on from there."""
         if self.playing:
@@ -232,6 +247,8 @@ class Timeline(QWidget):
                 widget.setValue(self._frame)
                 widget.blockSignals(False)
         self.readout.setText(self._readout_text(self._frame))
+        if self._labels:
+            self.pose_label.setText(self._pose_text(self._frame))
         self.fps_label.setText(f"{self.drawn_rate():.0f} fps" if self.playing else "-- fps")
 
     def due_frame(self, ahead: float = 0.0) -> int | None:
