@@ -40,7 +40,7 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     for target in targets:  # a target may also be a hand file (a real rig, say)
         if target not in hands:
             hands[target] = load_hand_file(target, _rig_options(args))
-    methods = args.methods.split(",")
+    methods = _method_names(args.methods)
     total = len(motions) * len(targets) * len(methods)
     with _progress_bar("evaluate", total, "clip", disable=args.quiet):
         rows = evaluate(motions, hands, targets, methods)
@@ -95,7 +95,7 @@ def _render_comparison(args: argparse.Namespace) -> int:
     names = args.target or ["iris", "laurel"]
     targets = [load_hand_file(t, _rig_options(args)) for t in names]
     _say_hand_notes([(source, args.source or args.motion), *zip(targets, names)])
-    methods = (args.methods or "tbs_copy,asrn").split(",")
+    methods = _method_names(args.methods or "tbs_copy,asrn")
     options = ViewOptions(camera="default" if args.view == "three_quarter" else args.view, skeleton=args.skeleton,
                           contacts=args.contacts)
     with _progress_bar("retarget", len(targets) * len(methods), "retarget", disable=args.quiet):
@@ -181,6 +181,20 @@ def _cmd_train(args: argparse.Namespace) -> int:
         print(f"{args.kind}: step {history[-1]['step']}, loss {history[-1]['loss']:.5f} "
               f"(semantic {history[-1]['semantic']:.5f}) -> {out}")
     return 0
+
+
+def _method_names(text: str) -> list[str]:
+    """The comma-separated method names of ``text``, each checked against the registry (one error line naming
+    what is not a method: the window would drop it silently, the render would fail half way)."""
+    from s2h_viewer.retarget.methods import METHODS
+
+    names = [name.strip() for name in text.split(",") if name.strip()]
+    unknown = [name for name in names if name not in METHODS]
+    if unknown or not names:
+        what = ("names no method" if not names else f"{', '.join(map(repr, unknown))} "
+                + ("is not a retargeting method" if len(unknown) == 1 else "are not retargeting methods"))
+        raise S2HError(f"--methods {text!r}: {what}; available: {', '.join(METHODS)}")
+    return list(dict.fromkeys(names))
 
 
 def _rig_options(args: argparse.Namespace):
@@ -430,7 +444,7 @@ def _cmd_view(args: argparse.Namespace) -> int:
     if args.target:
         setup.targets = [load_hand_file(t, _rig_options(args)) for t in args.target]
     if args.methods:
-        setup.methods = args.methods.split(",")
+        setup.methods, setup.methods_named = _method_names(args.methods), True
     if setup.motion.fit is not None:
         print(f"{args.motion}: {setup.motion.fit.describe()}")
     return run(setup, _rig_options(args))

@@ -222,6 +222,34 @@ def test_playback_speed_and_looping_are_kept_for_the_next_launch(qtbot, sample_h
     assert again.timeline.speed.currentText() == "2x" and not again.timeline.loop.isChecked()
 
 
+def test_methods_named_on_the_command_line_win_over_the_ones_last_ticked(qtbot, sample_hands, tmp_path, capsys):
+    """`s2h view --methods tbs_copy,asrn` opened TBS Copy alone when the window had last closed with it alone: the
+    remembered methods won over the ones named. Named, they are the ones ticked and computed (and remembered);
+    not named, the last ticked; a name that is no method is one error line before any window."""
+    from PySide6.QtCore import QSettings
+
+    from s2h_viewer.app.compare_mode import CompareSetup
+    from s2h_viewer.app.main_window import MainWindow
+    from s2h_viewer.cli import main
+    from s2h_viewer.motions.synthesis import synthesize
+    settings = QSettings(str(tmp_path / "settings.ini"), QSettings.Format.IniFormat)
+    settings.setValue("compare/methods", ["tbs_copy"])  # the last window closed with TBS Copy alone
+    motion = synthesize(["fist"], sample_hands["birch"], seed=4, name="short")
+    windows = {}
+    for named in (True, False):
+        setup = CompareSetup(motion, sample_hands["birch"], [sample_hands["iris"]], ["tbs_copy", "dm"],
+                             methods_named=named)
+        windows[named] = win = MainWindow(setup, settings)
+        qtbot.addWidget(win)
+    ticked = {named: [m for m, action in win.method_actions.items() if action.isChecked()]
+              for named, win in windows.items()}
+    assert windows[True].compare.state.methods == ticked[True] == ["tbs_copy", "dm"]
+    assert windows[False].compare.state.methods == ticked[False] == ["tbs_copy"]
+    assert main(["view", "--methods", "tbs_copy,asrnx"]) == 2
+    err = capsys.readouterr().err
+    assert "'asrnx' is not a retargeting method; available: copy, tbs_copy, dm, asrn" in err and err.count("\n") == 1
+
+
 def test_bracket_keys_jump_between_the_worst_frames_of_the_error_curve(window, qtbot):
     """Issue 25: next/previous worst frame keys (']' and '['), wrapping round the clip, listed in Help."""
     from PySide6.QtCore import Qt

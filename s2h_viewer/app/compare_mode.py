@@ -65,6 +65,8 @@ class CompareSetup:
     source: HandModel
     targets: list[HandModel]
     methods: list[str] = field(default_factory=lambda: ["tbs_copy", "asrn"])
+    #: the methods were named (`s2h view --methods`): they win over the ones ticked when the window last closed
+    methods_named: bool = False
     #: the file the motion was read from and the options it was read with (None: made, not read): opened again
     #: unchanged, it is this clip (`app.opened_clips`); the clip shown at launch was computed again before
     path: Path | None = None

@@ -60,6 +60,7 @@ class MainWindow(QMainWindow):
             self.opened_clips.remember(OpenedClips.key(setup.path, (setup.options, setup.rig_file)), setup.motion,
                                         setup.source)
         self.open_options = open_options or RigOptions()  # `s2h view`'s --side, --fps ...: for every file opened
+        self._methods_named = setup.methods_named  # `s2h view --methods`: over the ones last ticked
         self.setWindowTitle("s2h-viewer[*]")
         self.settings = settings or QSettings("s2h-viewer", "s2h-viewer")
         self.runner = TaskRunner(self, self.error, self.statusBar().showMessage)
@@ -210,7 +211,8 @@ class MainWindow(QMainWindow):
             action.setProperty("help_name", name)  # for Help: their text names the change ("Undo remove iris")
         edit_menu.addActions([undo, redo])
         methods_menu = bar.addMenu("&Methods")
-        chosen = self.settings.value("compare/methods", self.setup.methods)
+        chosen = self.setup.methods if self._methods_named else self.settings.value("compare/methods",
+                                                                                    self.setup.methods)
         chosen = [m for m in (chosen if isinstance(chosen, list) else [chosen]) if m in METHODS] or self.setup.methods
         self.compare.state.methods = chosen
         self.method_actions = {}
