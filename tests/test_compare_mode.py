@@ -451,7 +451,7 @@ def test_png_export_carries_a_caption_of_the_selected_retarget(window, tmp_path)
     assert (band < 80).any() and (band > 250).mean() > 0.8  # dark text on white
     from s2h_viewer.app.exports import Shown
     text = Shown.of(window.compare).caption(7)
-    assert "short (relaxed)" in text and "frame 7/" in text and "ASRN -> iris" in text
+    assert "short, pose relaxed" in text and "frame 7/" in text and "ASRN -> iris" in text
     bvh = window.export_motion(str(tmp_path / "selected.bvh"))
     assert bvh.read_text().startswith("HIERARCHY")
 

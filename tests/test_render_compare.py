@@ -197,6 +197,25 @@ def test_a_line_too_wide_is_elided_to_its_longest_start_that_fits():
         assert text_extent(line[:len(short)] + ELLIPSIS, 11)[0] > width  # a letter more would not fit
 
 
+def test_a_caption_fits_its_pictures_width():
+    """A fresh-eyes user's 926-pixel PNG of a pose of the authored poses read as one clip cut its caption at
+    "RPM_Templat": a caption shrinks to fit (no smaller than 60% of its size), past that its end is elided; a
+    short one keeps its size."""
+    from s2h_viewer.render.caption import add_caption
+    text = ("godot_hand_poses_r (every animation), pose Horns   frame 205/691 (692 frames)  6.83 s / 23.07 s   "
+            "selected: TBS Copy (fixed) -> RPM_Template_Mesh_XR")
+
+    def inked(width: int, line: str = text) -> tuple[int, int]:  # the dark columns' extent and the dark rows'
+        band = add_caption(np.zeros((0, width, 3), np.uint8), line).min(-1) < 100
+        columns, rows = np.flatnonzero(band.any(0)), np.flatnonzero(band.any(1))
+        return int(columns[-1]), int(rows[-1] - rows[0] + 1)
+    wide, narrow, narrowest = inked(1400), inked(926), inked(500)
+    assert 900 < wide[0] < 1400 - 8  # whole at its size
+    assert narrow[0] <= 926 - 8 and narrow[1] < wide[1]  # smaller, whole: it ended past 926 at its size
+    assert narrowest[0] <= 500 - 8 and narrowest[1] >= 0.6 * wide[1] - 1  # no smaller than 60%, elided
+    assert inked(926, "short, pose relaxed   frame 7/137")[1] == wide[1]
+
+
 def test_the_labels_font_shrinks_with_the_cell_down_to_a_minimum():
     from s2h_viewer.render.compare_scene import LABEL_PX, MIN_LABEL_PX, label_font
     sizes = [label_font(side, side)[0] for side in (400, 200, 150, 120, 100, 80, 50)]

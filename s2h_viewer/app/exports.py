@@ -53,7 +53,7 @@ class Shown:
         """The picture's line: clip (and the pose it holds there), frame and the selected retarget, or, where the selection is on another page
         of targets than the one exported, the page's targets (the caption names what the picture shows)."""
         motion, n_frames = self.comparison.motion, self.comparison.n_frames
-        clip = motion.name + (f" ({motion.labels[frame]})" if motion.labels[frame] else "")  # the pose held there
+        clip = motion.name + (f", pose {motion.labels[frame]}" if motion.labels[frame] else "")  # the pose held there
         if self.page is not None and not any(r is self.selected for r in self.page.results):
             return page_caption(clip, frame, n_frames, motion.fps,
                                 list(dict.fromkeys(r.target.name for r in self.page.results)))

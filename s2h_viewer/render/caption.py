@@ -8,6 +8,7 @@ from PIL import Image, ImageDraw, ImageFont
 
 BAND = 28  # pixels
 FONT_PX = 15  # the caption's text in a band of BAND pixels; a taller band's is as much larger
+MIN_FONT_SHARE = 0.6  # the smallest a caption's text is made to fit a narrow picture (9 pixels in a BAND band)
 
 
 def band_within(height: int) -> int:
@@ -18,11 +19,22 @@ def band_within(height: int) -> int:
 
 def add_caption(image: np.ndarray, text: str, band: int = BAND) -> np.ndarray:
     """(H, W, 3) uint8 -> (H + band, W, 3): the image over a white band holding ``text`` in black, sized with
-    the band."""
+    the band, and smaller where it would not fit the width (down to `MIN_FONT_SHARE` of that; past it, its end
+    elided): a long clip and target name ran off a narrow picture's edge."""
     scale = band / BAND
-    strip = Image.new("RGB", (image.shape[1], band), "white")
-    ImageDraw.Draw(strip).text((round(8 * scale), round(6 * scale)), text, fill="black",
-                               font=ImageFont.load_default(size=round(FONT_PX * scale)))
+    width, margin = image.shape[1], round(8 * scale)
+    size = round(FONT_PX * scale)
+    font = ImageFont.load_default(size=size)
+    while font.getlength(text) > width - 2 * margin and size > MIN_FONT_SHARE * FONT_PX * scale:
+        size -= 1
+        font = ImageFont.load_default(size=size)
+    if font.getlength(text) > width - 2 * margin:
+        while text and font.getlength(text + "...") > width - 2 * margin:
+            text = text[:-1]
+        text += "..."
+    strip = Image.new("RGB", (width, band), "white")
+    ImageDraw.Draw(strip).text((margin, round(6 * scale + (FONT_PX * scale - size) / 2)), text, fill="black",
+                               font=font)
     return np.concatenate([np.asarray(image)[..., :3], np.asarray(strip)], 0)
 
 
