@@ -18,7 +18,7 @@ if not os.environ.get("DISPLAY"):
 
 from PySide6.QtCore import QPoint, Qt  # noqa: E402
 from PySide6.QtTest import QTest  # noqa: E402
-from PySide6.QtWidgets import QMessageBox  # noqa: E402
+from PySide6.QtWidgets import QApplication, QMessageBox  # noqa: E402
 from vtkmodules.vtkRenderingCore import vtkCoordinate  # noqa: E402
 
 from compare_window import open_compare_window  # noqa: E402
@@ -412,3 +412,27 @@ def test_escape_lets_go_of_the_joint_a_double_click_out_picks_nothing_and_the_jo
     centre = QPoint(int((x0 + x1) / 2 * view.interactor.width()), int((1 - (y0 + y1) / 2) * view.interactor.height()))
     QTest.mouseDClick(view.interactor, Qt.MouseButton.LeftButton, pos=centre)  # in again: no ring over the hand
     assert view.solo == hand and fixing.joint is None and not fixing.ring.actor.GetVisibility()
+
+
+def test_a_click_on_a_fingers_skin_picks_the_joint_that_turns_it_and_a_click_on_nothing_says_so(window, qtbot):
+    """A fresh-eyes user clicked the thumb's skin between its joints four times and nothing was picked, and no click
+    reached the CMC by the wrist: a click on a finger's skin picks the joint turning that part (its vertex's largest
+    skinning weight; the metacarpal: the CMC), the front finger where they overlap on screen; one on nothing picks
+    nothing, and says where to click. Open hand (frame 10), from the palm, framed."""
+    win, fixing = window, window.compare.fixing
+    QTest.keyClick(win, Qt.Key.Key_1, Qt.KeyboardModifier.ControlModifier)
+    win.timeline.set_frame(10)
+    with qtbot.waitSignal(win.view.drawn):
+        QTest.keyClick(win, Qt.Key.Key_F)
+    result = win.compare.selected_result()
+    positions = to_view(result.target, result.pose.positions[10].numpy().astype(float))
+    bones = (("thumb_cmc", "thumb_mcp"), ("thumb_mcp", "thumb_ip"), ("thumb_ip", "thumb_tip"), ("index_mcp", "index_pip"),
+             ("index_pip", "index_dip"), ("ring_dip", "ring_tip"))
+    for joint, child in bones:
+        a, b = (positions[topo.JOINT_NAMES.index(name)] for name in (joint, child))
+        QTest.mouseClick(win.view.interactor, Qt.MouseButton.LeftButton, pos=on_screen(win, 0.5 * a + 0.5 * b))
+        assert fixing.joint == topo.ARTICULATED_NAMES.index(joint), (joint, fixing.joint)
+        assert fixing.ring.actor.GetVisibility()
+        qtbot.wait(QApplication.doubleClickInterval() + 50)  # two clicks, not a double-click
+    QTest.mouseClick(win.view.interactor, Qt.MouseButton.LeftButton, pos=QPoint(5, win.view.interactor.height() - 5))
+    assert fixing.joint is None and "no finger there" in win.statusBar().currentMessage()

@@ -28,15 +28,18 @@ from s2h_viewer.retarget.comparison import MethodResult
 from s2h_viewer.retarget.corrections import AXES, Corrections, describe_keys, key_span, turn_about
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.widgets.correction_bar import HINT, CorrectionBar
-from s2h_viewer.widgets.rotation_handle import RotationRing, nearest_on_screen
+from s2h_viewer.widgets.rotation_handle import RotationRing, nearest_on_screen, nearest_segment_on_screen
 
 #: while the ring is dragged the whole clip is measured again at most this often (ms)
 LIVE_MS = 40
 #: the ring's radius as a share of the hand's length, and at least this many pixels on screen when placed
 RING_RADIUS, RING_PX = 0.09, 48
 #: the mouse in a retarget shown alone, for Help's list
-MOUSE = (("click a joint of a retarget shown alone", "pick it for fixing (its ring appears)"),
+MOUSE = (("click a joint of a retarget shown alone (or a bone: the joint that turns it)",
+          "pick it for fixing (its ring appears)"),
          ("drag the ring", "turn the joint at this frame: a correction key (Fix menu)"))
+#: a click this near a joint on screen picks it (pixels), else the joint turning the bone nearest the click
+JOINT_PIXELS = 6
 #: each joint a click can pick (tips pick the joint that moves them): (joint index, articulated index)
 PICKABLE = [(int(j), a) for a, j in enumerate(topo.ARTICULATED_JOINTS)] + \
     [(int(t), topo.ARTICULATED_NAMES.index(topo.JOINT_NAMES[t - 1])) for t in topo.TIP_JOINTS]
@@ -129,7 +132,7 @@ class RetargetFixing(QObject):
         if hand is None:
             return
         self.ring = RotationRing(self.mode.view.interactor, self._begin, self._turn, self._end, self._clicked,
-                                 renderer=hand.renderer)
+                                 renderer=hand.renderer, on_ring_click=self._clicked_through)
         self.ring.attach()
         mapper = self.ring.actor.mapper  # drawn over the skin, like the contact overlay
         mapper.SetRelativeCoincidentTopologyPolygonOffsetParameters(0.0, ON_TOP_OFFSET)
@@ -210,15 +213,35 @@ class RetargetFixing(QObject):
 
     # --- the mouse ---
     def _clicked(self, x: int, y: int) -> None:
-        """A click in the cell (VTK display pixels) picks the joint nearest to it on screen, or none."""
+        """A click in the cell (VTK display pixels) picks the joint nearest to it on screen, else the joint turning
+        the part of the skin under it, else the joint turning the bone drawn nearest to it (a click on the thumb's
+        skin between its joints picked nothing, and no click near the wrist reached its CMC: a fresh-eyes user), or
+        none, said."""
         shown = self._solo()
         if shown is None:
             return
         self._before_click = (self.joint, self._picked_on, time.monotonic())
         _, result = shown
         positions = to_view(result.target, result.pose.positions[self.mode.timeline.frame].numpy().astype(np.float64))
-        nearest = nearest_on_screen(self.ring.renderer, positions[[joint for joint, _ in PICKABLE]], x, y)
-        self._picked(None if nearest is None else PICKABLE[nearest][1])
+        nearest = nearest_on_screen(self.ring.renderer, positions[[joint for joint, _ in PICKABLE]], x, y,
+                                    JOINT_PIXELS)
+        if nearest is not None:
+            self._picked(PICKABLE[nearest][1])
+            return
+        joint = self.mode.view.solo_hand().joint_under(x, y)
+        if joint is None:  # off the skin, or a hand with none: the bone drawn nearest, a joint's child the next
+            joint = nearest_segment_on_screen(self.ring.renderer, positions[topo.ARTICULATED_JOINTS],
+                                              positions[topo.ARTICULATED_JOINTS + 1], x, y)
+        if joint is None:
+            self.mode.status("Fix: no finger there: click on a finger (its skin picks the joint that turns it)")
+        self._picked(joint)
+
+    def _clicked_through(self, x: int, y: int) -> None:
+        """A click on the ring that turned nothing: the finger under it, if one is (else the joint stays picked)."""
+        hand = self.mode.view.solo_hand()
+        joint = hand.joint_under(x, y) if hand is not None else None
+        if joint is not None and joint != self.joint:
+            self._picked(joint)
 
     def _double_clicked(self) -> None:
         """A double-click (back to the grid) picks nothing: its first click's pick is undone."""

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pyvista as pv
 import trimesh
-from vtkmodules.vtkRenderingCore import vtkActor2D, vtkMapper, vtkTextProperty, vtkTextRenderer
+from vtkmodules.vtkRenderingCore import vtkActor2D, vtkCellPicker, vtkMapper, vtkTextProperty, vtkTextRenderer
 
 from s2h_viewer.annotate.trust import frame_warning
 from s2h_viewer.hand import topology as topo
@@ -221,6 +221,24 @@ class PosedHand:
         self.border.GetProperty().SetColor(pv.Color(colour).float_rgb)
         self.border.GetProperty().SetLineWidth(2 * width)  # pyvista doubles it: half is clipped at the edge
         self.border.SetVisibility(True)
+
+    def joint_under(self, x: float, y: float) -> int | None:
+        """The articulated joint (`topology.ARTICULATED_NAMES` index) whose bone the skin drawn at display pixel
+        (x, y) moves most (its vertex's largest skinning weight): a click on a finger's skin picks the joint
+        turning that part, the front one where fingers overlap on screen. None off the skin or on the palm."""
+        skin = self.skin
+        if skin is None or not skin.actor.visibility:
+            return None
+        picker = vtkCellPicker()
+        picker.SetTolerance(0.0)
+        picker.PickFromListOn()
+        picker.AddPickList(skin.actor)
+        if not picker.Pick(x, y, 0.0, self.renderer):
+            return None
+        corners = np.asarray(skin.mesh.get_cell(picker.GetCellId()).point_ids)
+        vertex = corners[np.linalg.norm(skin.points[corners] - picker.GetPickPosition(), axis=1).argmin()]
+        column = int(np.argmax(skin.hand.mesh.weights[vertex]))
+        return column - 1 if column > 0 else None  # column 0: the wrist's (the palm)
 
     def set_opacity(self, opacity: float) -> None:
         """See-through below 1; an opaque closed skin skips its back faces (about a third of the drawing)."""

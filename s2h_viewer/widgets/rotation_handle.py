@@ -41,15 +41,31 @@ ROLL_LEAST = 0.5
 PICK_TOLERANCE = 0.008
 
 
-def nearest_on_screen(renderer, points: np.ndarray, x: int, y: int, within: float = PICK_PIXELS) -> int | None:
-    """The index of the view-space point of ``points`` drawn nearest to display pixel (x, y) in ``renderer``, if it
-    is ``within`` pixels; else None (what a click on a joint picks, in Annotate and in a retarget being fixed)."""
+def on_display(renderer, points: np.ndarray) -> np.ndarray:
+    """(N, 2) display pixels where ``renderer`` draws the (N, 3) view-space ``points``."""
     on_screen = []
     for point in points:
         renderer.SetWorldPoint(*point, 1.0)
         renderer.WorldToDisplay()
         on_screen.append(renderer.GetDisplayPoint()[:2])
-    distance = np.linalg.norm(np.asarray(on_screen) - (x, y), axis=1)
+    return np.asarray(on_screen, dtype=np.float64).reshape(-1, 2)
+
+
+def nearest_on_screen(renderer, points: np.ndarray, x: int, y: int, within: float = PICK_PIXELS) -> int | None:
+    """The index of the view-space point of ``points`` drawn nearest to display pixel (x, y) in ``renderer``, if it
+    is ``within`` pixels; else None (what a click on a joint picks, in Annotate and in a retarget being fixed)."""
+    distance = np.linalg.norm(on_display(renderer, points) - (x, y), axis=1)
+    return int(distance.argmin()) if distance.min() <= within else None
+
+
+def nearest_segment_on_screen(renderer, starts: np.ndarray, ends: np.ndarray, x: int, y: int,
+                              within: float = PICK_PIXELS) -> int | None:
+    """The index of the view-space segment ``starts[i]`` - ``ends[i]`` drawn nearest to display pixel (x, y), if it
+    is ``within`` pixels; else None (a click on a finger's bone, between its joints)."""
+    a, b = on_display(renderer, starts), on_display(renderer, ends)
+    along = b - a
+    share = np.clip(((np.array([x, y]) - a) * along).sum(1) / np.maximum((along * along).sum(1), 1e-9), 0.0, 1.0)
+    distance = np.linalg.norm(a + share[:, None] * along - (x, y), axis=1)
     return int(distance.argmin()) if distance.min() <= within else None
 
 
@@ -66,14 +82,17 @@ class Grab:
 class RotationRing(QObject):
     """The ring in ``widget``'s plotter (a `widgets.vtk_widget.PlotterWidget`), in ``renderer`` (default: the
     plotter's current one; a cell of a grid): ``on_begin()``, ``on_turn(degrees since the grab)``, ``on_end()``
-    for a drag, ``on_click(x, y)`` (VTK display pixels) for a click that missed the ring."""
+    for a drag, ``on_click(x, y)`` (VTK display pixels) for a click that missed the ring, ``on_ring_click(x, y)``
+    (if given) for one on the ring that turned nothing (the ring lies over the bones beside its joint)."""
 
     def __init__(self, widget, on_begin: Callable[[], None], on_turn: Callable[[float], None],
-                 on_end: Callable[[], None], on_click: Callable[[int, int], None], renderer=None):
+                 on_end: Callable[[], None], on_click: Callable[[int, int], None], renderer=None,
+                 on_ring_click: Callable[[int, int], None] | None = None):
         super().__init__(widget)
         self.widget, self.plotter = widget, widget.plotter
         self.renderer = renderer if renderer is not None else widget.plotter.renderer
         self.on_begin, self.on_turn, self.on_end, self.on_click = on_begin, on_turn, on_end, on_click
+        self.on_ring_click = on_ring_click
         self.mesh = pv.PolyData()
         self.actor = None
         self.centre = np.zeros(3)
@@ -214,6 +233,8 @@ class RotationRing(QObject):
             self.dragging = False
             self._highlight(self._over_ring(x, y))
             self.on_end()
+            if self.on_ring_click is not None and press is not None and is_click(press, (x, y)):
+                self.on_ring_click(x, y)
             return True
         if press is not None and is_click(press, (x, y)):
             self.on_click(x, y)
