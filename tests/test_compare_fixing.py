@@ -16,7 +16,8 @@ pytest.importorskip("pytestqt")
 if not os.environ.get("DISPLAY"):
     pytest.skip("the Qt viewport needs an X display: `make test` runs the suite under Xvfb", allow_module_level=True)
 
-from PySide6.QtCore import QPoint, Qt  # noqa: E402
+from PySide6.QtCore import QEvent, QPoint, QPointF, Qt  # noqa: E402
+from PySide6.QtGui import QMouseEvent  # noqa: E402
 from PySide6.QtTest import QTest  # noqa: E402
 from PySide6.QtWidgets import QApplication, QMessageBox  # noqa: E402
 from vtkmodules.vtkRenderingCore import vtkCoordinate  # noqa: E402
@@ -106,20 +107,28 @@ def menu_action(win, text: str):
     return next(a for a in win.findChildren(QAction) if a.text() == text)
 
 
-def drag(qtbot, win, degrees: float, halfway=None) -> None:
-    """Drag the picked joint's ring ``degrees`` round; ``halfway()`` runs with the button held half way."""
+def drag(qtbot, win, degrees: float, halfway=None, shift: bool = False) -> None:
+    """Drag the picked joint's ring ``degrees`` round (with Shift held: ``shift``); ``halfway()`` runs with the
+    button held half way."""
     path = ring_path(win, degrees)
     widget = win.view.interactor
+
+    def move(point: QPoint) -> None:
+        if shift:  # QTest moves carry no modifier
+            QApplication.sendEvent(widget, QMouseEvent(QEvent.Type.MouseMove, QPointF(point),
+                                                       QPointF(widget.mapToGlobal(point)), Qt.MouseButton.NoButton,
+                                                       Qt.MouseButton.LeftButton, Qt.KeyboardModifier.ShiftModifier))
+        else:
+            QTest.mouseMove(widget, point)
+        qtbot.wait(15)
     QTest.mousePress(widget, Qt.MouseButton.LeftButton, pos=path[0])
     assert win.compare.fixing.ring.dragging  # the ring took the press, not the camera
     for point in path[1:6]:
-        QTest.mouseMove(widget, point)
-        qtbot.wait(15)
+        move(point)
     if halfway is not None:
         halfway()
     for point in path[6:]:
-        QTest.mouseMove(widget, point)
-        qtbot.wait(15)
+        move(point)
     QTest.mouseRelease(widget, Qt.MouseButton.LeftButton, pos=path[-1])
 
 
@@ -436,3 +445,14 @@ def test_a_click_on_a_fingers_skin_picks_the_joint_that_turns_it_and_a_click_on_
         qtbot.wait(QApplication.doubleClickInterval() + 50)  # two clicks, not a double-click
     QTest.mouseClick(win.view.interactor, Qt.MouseButton.LeftButton, pos=QPoint(5, win.view.interactor.height() - 5))
     assert fixing.joint is None and "no finger there" in win.statusBar().currentMessage()
+
+
+def test_shift_turns_the_ring_a_tenth_as_far_for_fine_fixes(window, qtbot):
+    """A fresh-eyes user's 50-pixel drag turned a thumb 93 deg: with Shift held the ring turns a tenth as far as the
+    pointer goes round it."""
+    win, mode = window, window.compare
+    _, before = joint_frame(win, mode.selected_result())
+    pick_joint(qtbot, win)
+    drag(qtbot, win, 40.0, shift=True)
+    assert turned(before, joint_frame(win)[1]) == pytest.approx(4.0, abs=1.0)
+    assert mode.undo_stack.undoText().startswith("fix index PIP: bend +4")

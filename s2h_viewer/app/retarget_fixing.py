@@ -35,9 +35,10 @@ LIVE_MS = 40
 #: the ring's radius as a share of the hand's length, and at least this many pixels on screen when placed
 RING_RADIUS, RING_PX = 0.09, 48
 #: the mouse in a retarget shown alone, for Help's list
-MOUSE = (("click a joint of a retarget shown alone (or a bone: the joint that turns it)",
+MOUSE = (("click a joint of a retarget shown alone (or a finger's skin: the joint that turns it)",
           "pick it for fixing (its ring appears)"),
-         ("drag the ring", "turn the joint at this frame: a correction key (Fix menu)"))
+         ("drag the ring", "turn the joint at this frame: a correction key (Fix menu)"),
+         ("Shift+drag the ring", "turn it a tenth as far as the pointer goes (fine turns)"))
 #: a click this near a joint on screen picks it (pixels), else the joint turning the bone nearest the click
 JOINT_PIXELS = 6
 #: each joint a click can pick (tips pick the joint that moves them): (joint index, articulated index)

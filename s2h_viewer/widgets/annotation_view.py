@@ -24,7 +24,8 @@ LEGEND = ("TBS frames: twist (along the bone) red, bend green, splay (out of the
 #: the mouse in the annotation view beyond the camera (`vtk_widget.MOUSE`), for Help's list
 MOUSE = (("click a joint (in 3D or the list)", "select it and show its ring about its twist axis"),
          ("drag the ring (it lights up under the pointer) or the dial",
-          "turn the selected joint's frame about its twist axis"))
+          "turn the selected joint's frame about its twist axis"),
+         ("Shift+drag the ring", "turn it a tenth as far as the pointer goes (fine turns)"))
 #: the ring's radius and the arrows' length as shares of the hand's length
 RING_RADIUS = 0.09
 ARROW_LENGTH = 0.12

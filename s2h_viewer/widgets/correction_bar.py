@@ -12,8 +12,8 @@ from s2h_viewer.retarget.corrections import AXES
 
 #: frames a new key eases in over before it and out over after it, unless a marked range holds the frame
 DEFAULT_EASE = 10
-HINT = ("Fix: click a joint, drag its ring (R: next axis, Esc: let go); keys blend over the marked range or the ease "
-        "frames")
+HINT = ("Fix: click a joint, drag its ring (Shift: finer, R: next axis, Esc: let go); keys blend over the marked range "
+        "or the ease frames")
 
 
 class CorrectionBar(QWidget):

@@ -35,6 +35,8 @@ FACING = 0.35
 PRESSES = (QEvent.Type.MouseButtonPress, QEvent.Type.MouseButtonDblClick)
 #: a click this many pixels from a joint on screen, or nearer, picks it (`nearest_on_screen`)
 PICK_PIXELS = 24
+#: with Shift held, a drag turns the ring this share of the pointer's turn (for fine corrections)
+FINE_SHARE = 0.1
 #: an edge-on ring rolls at least this share of its on-screen radius per radian of turn (`_roll_pixels`)
 ROLL_LEAST = 0.5
 #: how near the pointer must be to the ring to grab it (VTK's pick tolerance: a share of the window's diagonal)
@@ -101,6 +103,7 @@ class RotationRing(QObject):
         self.dragging = False
         self._hovered = False
         self._press: tuple[int, int] | None = None
+        self._fine = False  # Shift held on the last move
         self._grab: Grab | None = None
         self._last = 0.0
         self._total = 0.0
@@ -113,6 +116,7 @@ class RotationRing(QObject):
         """The 3D widget's left-button presses, releases and all moves; True keeps one from the camera."""
         kind = event.type()
         if kind == QEvent.Type.MouseMove:
+            self._fine = bool(event.modifiers() & Qt.KeyboardModifier.ShiftModifier)
             handler = self._moved
         elif kind in PRESSES and event.button() == Qt.MouseButton.LeftButton:
             handler = self._pressed
@@ -222,7 +226,8 @@ class RotationRing(QObject):
             return False
         angle = self._angle(x, y)
         if angle is not None:
-            self._total = unwrap_degrees(self._total, self._last, angle)
+            step = unwrap_degrees(0.0, self._last, angle)
+            self._total += FINE_SHARE * step if self._fine else step  # Shift held: a tenth of the pointer's turn
             self._last = angle
             self.on_turn(self._total)
         return True
