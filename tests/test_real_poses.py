@@ -482,3 +482,18 @@ def test_asrn_adds_no_bend_violation_the_source_does_not_make():
     hyper = network.copy()
     hyper[:, 1] = [np.cos(np.radians(-10)), 0.0, np.sin(np.radians(-10)), 0.0]  # the thumb MCP bent back 20 deg
     np.testing.assert_array_equal(bends_within_source_limits(hyper, hyper.copy())[:, 1], hyper[:, 1])
+
+
+def test_a_retargets_violations_read_against_the_sources_own(poses, sample_hands):
+    """A fresh-eyes user read ASRN's 0.578 violations on the authored poses beside the README's 0.000: the poses
+    themselves are authored past the anatomical limits (0.625 of their angles), so every retarget of them is.
+    The scores carry the source's own figure and the table's cell says it."""
+    from s2h_viewer.semantics.anatomy import violation_rate
+    from s2h_viewer.widgets.scores_table import _cell
+    motion, rig = poses
+    scores = score_retarget(rig, motion.q_tbs, sample_hands["iris"],
+                                              retarget(motion, rig, sample_hands["iris"], "tbs_copy").q_tbs)
+    assert scores.source_violation_rate == pytest.approx(violation_rate(motion.q_tbs)) and \
+        scores.source_violation_rate > 0.5
+    text, tip = _cell("violation_rate", scores.as_dict())
+    assert text == f"{scores.violation_rate:.3f}" and f"the source itself: {scores.source_violation_rate:.3f}" in tip

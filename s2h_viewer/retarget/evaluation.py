@@ -27,7 +27,7 @@ from s2h_viewer.semantics.metrics import RetargetScores, score_retarget
 from s2h_viewer.semantics.signature import pose_differences
 
 METRICS = ("mse", "s_palm", "s_finger", "s_finger_paper", "contact_precision", "contact_recall",
-           "palm_contact_recall", "violation_rate",
+           "palm_contact_recall", "violation_rate", "source_violation_rate",
            "jitter", "sideways_deg", "source_sideways_deg", "thumb_follow")
 #: the table's columns, as the paper's Table 1: (header, family the rows are averaged over, metric);
 #: "S_finger (paper)" is the official code's figure (zero diagonal counted), comparable with the paper's

@@ -89,6 +89,9 @@ class RetargetScores:
     #: still) and that angle ("thumb_ip", "thumb_cmc_lift")
     thumb_follow: float = float("nan")
     thumb_follow_at: str = ""
+    #: the source's own violation rate: a clip authored past the limits (the authored poses' 0.625) keeps past
+    #: them on any target, and a retarget's figure reads against it
+    source_violation_rate: float = float("nan")
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -132,7 +135,8 @@ def score_retarget_frames(source_hand: HandModel, source_q: np.ndarray | torch.T
                                 source_sideways_deg=sideways_peak(src_pose.positions.numpy()).degrees,
                                 signature_kept=float(kept.mean()), invented_contacts=int(invented.any(-1).sum()),
                                 invented_at=most_invented(invented),
-                                thumb_follow=follow.get(worst_thumb, float("nan")), thumb_follow_at=worst_thumb)
+                                thumb_follow=follow.get(worst_thumb, float("nan")), thumb_follow_at=worst_thumb,
+                                source_violation_rate=violation_rate(torch.as_tensor(np.asarray(source_q))))
         return scores, frame_error
 
 

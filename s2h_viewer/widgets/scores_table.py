@@ -55,6 +55,10 @@ def _cell(key: str, values: dict) -> tuple[str, str | None]:
         pair, _, frame = values["invented_at"].partition("@")
         return f"{value}", (f"{value} frames with a contact the source does not make; most often {pair}, first at "
                             f"frame {frame}" if value else "no contact the source does not make")
+    if key == "violation_rate":
+        return f"{value:.3f}", (f"{value:.3f} of the (frame, joint) angles more than 5 deg outside the anatomical "
+                                f"limits; the source itself: {values['source_violation_rate']:.3f} (a clip authored "
+                                f"past them stays past them)")
     if key == "sideways_deg":
         joint, _, frame = values["sideways_at"].partition("@")
         return f"{value:.0f}", SidewaysPeak(value, joint, int(frame)).describe() + f" (the source: " \
