@@ -1148,7 +1148,7 @@ def test_a_long_target_name_is_elided_and_every_score_column_stays_in_view(windo
     with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
         window.compare.add_target(dataclasses.replace(sample_hands["laurel"], name=long_name))
     table = window.scores
-    assert table.columnWidth(1) <= NAME_WIDTH and table.item(2, 1).toolTip() == long_name
+    assert table.columnWidth(1) <= NAME_WIDTH and long_name in table.item(2, 1).toolTip()
     last = table.columnCount() - 1
     assert table.columnViewportPosition(last) + table.columnWidth(last) <= table.viewport().width()
 

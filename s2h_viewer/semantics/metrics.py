@@ -80,10 +80,10 @@ class RetargetScores:
     #: one finger is visibly wrong, which the clip-wide S_finger averages away
     signature_kept: float = float("nan")
     #: frames where the retarget makes a contact (any of the 15 pairs) the source does not come near
-    #: (`contacts.touching_and_near`), and the pair invented on most frames with its first frame
-    #: ("thumb-middle@120"; empty if none)
+    #: (`contacts.touching_and_near`), and per pair invented, most frames first: its name, frames and first frame
+    #: (("thumb-middle", 30, 120), ...): a fix that invents a pair on frames already counted shows there
     invented_contacts: int = 0
-    invented_at: str = ""
+    invented_pairs: tuple[tuple[str, int, int], ...] = ()
     #: the least correlation, over the thumb's angles that move in the source (the CMC's two, the MCP's and IP's
     #: bends), of an angle with the source's (`semantics.flexion.thumb_follow`; NaN: the source's thumb stays
     #: still) and that angle ("thumb_ip", "thumb_cmc_lift")
@@ -134,20 +134,17 @@ def score_retarget_frames(source_hand: HandModel, source_q: np.ndarray | torch.T
                                 mse=mse, sideways_deg=peak.degrees, sideways_at=peak.where,
                                 source_sideways_deg=sideways_peak(src_pose.positions.numpy()).degrees,
                                 signature_kept=float(kept.mean()), invented_contacts=int(invented.any(-1).sum()),
-                                invented_at=most_invented(invented),
+                                invented_pairs=invented_by_pair(invented),
                                 thumb_follow=follow.get(worst_thumb, float("nan")), thumb_follow_at=worst_thumb,
                                 source_violation_rate=violation_rate(torch.as_tensor(np.asarray(source_q))))
         return scores, frame_error
 
 
-def most_invented(invented: np.ndarray) -> str:
-    """The pair a (T, 15) invented-contact mask holds on most frames, with its first frame ("thumb-middle@120"),
-    empty where nothing is invented."""
+def invented_by_pair(invented: np.ndarray) -> tuple[tuple[str, int, int], ...]:
+    """Per pair a (T, 15) invented-contact mask holds, most frames first: its name, frames and first frame."""
     counts = invented.sum(0)
-    if not counts.any():
-        return ""
-    pair = int(np.argmax(counts))
-    return f"{'-'.join(CONTACT_PAIRS[pair])}@{int(np.argmax(invented[:, pair]))}"
+    return tuple(("-".join(CONTACT_PAIRS[pair]), int(counts[pair]), int(np.argmax(invented[:, pair])))
+                 for pair in np.argsort(-counts, kind="stable") if counts[pair])
 
 
 def _asm_agreement(src_pose: HandPose, tgt_pose: HandPose) -> tuple[tuple[float, float, float], np.ndarray]:

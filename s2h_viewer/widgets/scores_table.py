@@ -19,6 +19,7 @@ from s2h_viewer.retarget.comparison import Comparison
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.semantics.flexion import SidewaysPeak
 from s2h_viewer.widgets.tooltips import wrapped
+from s2h_viewer.wording import counted
 
 #: (header, score key or None for a name column, header tooltip)
 COLUMNS = (("Method", None, "retargeting method"), ("Target", None, "target hand"),
@@ -40,6 +41,8 @@ COLUMNS = (("Method", None, "retargeting method"), ("Target", None, "target hand
 TARGET_COLUMN = 1
 SHOWN_ROWS, MIN_ROWS = 6, 2  # rows the table asks room for, and keeps in view at least
 NAME_WIDTH = 140  # pixels: widest a name column starts (drag the header edge for more)
+#: invented pairs the Invented cell's tooltip names (most frames first)
+INVENTED_LISTED = 5
 #: why a score is n/a (NaN), per score key
 UNDEFINED = {"sideways_deg": "n/a: no finger curls", "contact_precision": "n/a: the retarget makes no pad contact, so no precision to measure",
              "contact_recall": "n/a: the source makes no pad contact, so no recall to measure",
@@ -52,9 +55,12 @@ def _cell(key: str, values: dict) -> tuple[str, str | None]:
     if isinstance(value, float) and math.isnan(value):
         return "n/a", UNDEFINED.get(key, "n/a")
     if key == "invented_contacts":
-        pair, _, frame = values["invented_at"].partition("@")
-        return f"{value}", (f"{value} frames with a contact the source does not make; most often {pair}, first at "
-                            f"frame {frame}" if value else "no contact the source does not make")
+        pairs = values["invented_pairs"]
+        listed = ", ".join(f"{pair} on {counted(frames, 'frame')} (from {first})"
+                           for pair, frames, first in pairs[:INVENTED_LISTED])
+        more = f", {len(pairs) - INVENTED_LISTED} more" if len(pairs) > INVENTED_LISTED else ""
+        return f"{value}", (f"{counted(value, 'frame')} with a contact the source does not make: {listed}{more}"
+                            if value else "no contact the source does not make")
     if key == "violation_rate":
         return f"{value:.3f}", (f"{value:.3f} of the (frame, joint) angles more than 5 deg outside the anatomical "
                                 f"limits; the source itself: {values['source_violation_rate']:.3f} (a clip authored "
@@ -109,7 +115,7 @@ class ScoresTable(QTableWidget):
         for row, result in enumerate(comparison.results):
             values = result.scores.as_dict()
             warning = frame_warning(result.target)
-            target = (f"! {result.target.name}", wrapped(warning.describe())) if warning else (result.target.name,) * 2
+            target = (f"! {result.target.name}", warning.describe()) if warning else (result.target.name,) * 2
             method = METHODS[result.method].label
             fixes = result.corrections
             cells = [(f"{method} (fixed)", f"{method}, corrected: {fixes.describe()}") if fixes else (method,) * 2,
@@ -118,7 +124,7 @@ class ScoresTable(QTableWidget):
             for col, (text, tip) in enumerate(cells):
                 item = QTableWidgetItem(text)
                 if tip is not None:
-                    item.setToolTip(tip)
+                    item.setToolTip(wrapped(tip))  # a list of invented pairs, a warning: long
                 if warning is not None and col == TARGET_COLUMN:  # frames unsure: the target's cell says so
                     item.setForeground(QColor(BANNER_COLOUR))
                     item.setBackground(QColor(BANNER_BACKGROUND))
