@@ -79,7 +79,7 @@ def _render_comparison(args: argparse.Namespace) -> int:
     from tqdm import tqdm
 
     from s2h_viewer.io.files import load_hand_file
-    from s2h_viewer.render.caption import page_caption
+    from s2h_viewer.render.caption import clip_at, page_caption
     from s2h_viewer.render.compare_scene import ViewOptions, render_comparison
     from s2h_viewer.render.video import VIDEO_SUFFIXES, frame_range
     from s2h_viewer.retarget.comparison import build_comparison
@@ -104,8 +104,8 @@ def _render_comparison(args: argparse.Namespace) -> int:
     with tqdm(total=len(frames), desc="render", unit="frame", file=sys.stderr, disable=args.quiet) as bar:
         path = render_comparison(comparison, args.out, frame=frames.start, frames=frames,
                                  progress=lambda done, total: bar.update(done - bar.n), options=options,
-                                 caption=lambda f: page_caption(motion.name, f, motion.n_frames, motion.fps,
-                                                                [t.name for t in targets]))
+                                 caption=lambda f: page_caption(clip_at(motion.name, motion.labels, f), f,
+                                                                motion.n_frames, motion.fps, [t.name for t in targets]))
     print(f"wrote {path}")
     return 0
 

@@ -201,7 +201,7 @@ def test_a_caption_fits_its_pictures_width():
     """A fresh-eyes user's 926-pixel PNG of a pose of the authored poses read as one clip cut its caption at
     "RPM_Templat": a caption shrinks to fit (no smaller than 60% of its size), past that its end is elided; a
     short one keeps its size."""
-    from s2h_viewer.render.caption import add_caption
+    from s2h_viewer.render.caption import add_caption, clip_at
     text = ("godot_hand_poses_r (every animation), pose Horns   frame 205/691 (692 frames)  6.83 s / 23.07 s   "
             "selected: TBS Copy (fixed) -> RPM_Template_Mesh_XR")
 
@@ -214,6 +214,9 @@ def test_a_caption_fits_its_pictures_width():
     assert narrow[0] <= 926 - 8 and narrow[1] < wide[1]  # smaller, whole: it ended past 926 at its size
     assert narrowest[0] <= 500 - 8 and narrowest[1] >= 0.6 * wide[1] - 1  # no smaller than 60%, elided
     assert inked(926, "short, pose relaxed   frame 7/137")[1] == wide[1]
+    labels = np.array(["", "fist"], dtype=object)  # the pose named where the clip holds one (`s2h render` too)
+    assert (clip_at("short", labels, 1), clip_at("short", labels, 0), clip_at("short", None, 0)) == (
+        "short, pose fist", "short", "short")
 
 
 def test_the_labels_font_shrinks_with_the_cell_down_to_a_minimum():

@@ -18,7 +18,7 @@ from PySide6.QtWidgets import QWidget
 
 from s2h_viewer.app.compare_mode import CompareMode, label
 from s2h_viewer.app.job_progress import JobProgress
-from s2h_viewer.render.caption import add_caption, band_within, caption_text, page_caption
+from s2h_viewer.render.caption import add_caption, band_within, caption_text, clip_at, page_caption
 from s2h_viewer.render.compare_scene import Framing, ViewOptions, render_comparison
 from s2h_viewer.retarget.comparison import Comparison, MethodResult
 from s2h_viewer.retarget.methods import METHODS
@@ -53,7 +53,7 @@ class Shown:
         """The picture's line: clip (and the pose it holds there), frame and the selected retarget, or, where the selection is on another page
         of targets than the one exported, the page's targets (the caption names what the picture shows)."""
         motion, n_frames = self.comparison.motion, self.comparison.n_frames
-        clip = motion.name + (f", pose {motion.labels[frame]}" if motion.labels[frame] else "")  # the pose held there
+        clip = clip_at(motion.name, motion.labels, frame)
         if self.page is not None and not any(r is self.selected for r in self.page.results):
             return page_caption(clip, frame, n_frames, motion.fps,
                                 list(dict.fromkeys(r.target.name for r in self.page.results)))

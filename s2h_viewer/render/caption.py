@@ -44,6 +44,12 @@ def frame_readout(frame: int, n_frames: int, fps: float) -> str:
     return f"{frame}/{n_frames - 1} ({n_frames} frames)  {frame / fps:.2f} s / {n_frames / fps:.2f} s"
 
 
+def clip_at(name: str, labels, frame: int) -> str:
+    """The clip's name, with the pose it holds at ``frame`` where its frames are labelled ("gestures, pose fist")."""
+    label = labels[frame] if labels is not None and frame < len(labels) else ""
+    return f"{name}, pose {label}" if label else name
+
+
 def caption_text(clip: str, frame: int, n_frames: int, fps: float, method: str, target: str) -> str:
     """One line: the clip, the frame as the timeline reads it, the selected retarget."""
     return f"{clip}   frame {frame_readout(frame, n_frames, fps)}   selected: {method} -> {target}"
