@@ -1,6 +1,6 @@
 """A pose's signature, what a viewer reads off a hand at a glance: each finger extended, bent or curled;
 which fingertips the thumb touches, or whether it stands out to the side (a thumbs-up) where it touches
-none; no finger curling sideways. A retarget keeps a pose when its signature matches the source's (issue
+none, or rests on the curled fingers (horns, a V sign: the thumb holds them down); no finger curling sideways. A retarget keeps a pose when its signature matches the source's (issue
 26: scoring authored poses on real rigs)."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import torch
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.kinematics import HandPose, forward_kinematics
 from s2h_viewer.hand.model import HandModel
-from s2h_viewer.semantics.contacts import CONTACT_PAIRS, contact_gaps
+from s2h_viewer.semantics.contacts import CONTACT_PAIRS, contact_gaps, pad_centres
 from s2h_viewer.semantics.flexion import HINGE_JOINTS, flexion_and_sideways, thumb_out
 
 #: a finger's curl (its MCP, PIP and DIP flexion summed, degrees) below which it reads extended, above
@@ -34,6 +34,14 @@ THUMB_PAIRS = tuple(i for i, pair in enumerate(CONTACT_PAIRS) if "thumb" in pair
 #: deg apart at rest, and one held further out than the source's changes no gesture. Read only where the source's
 #: thumb touches no fingertip: a touch says where a thumb is.
 THUMB_OUT_ABOVE, THUMB_IN_BELOW = 35.0, 25.0
+#: the thumb rests on a bent or curled finger where its tip's pad lies within `THUMB_ON` hand lengths of the
+#: finger's first two bones (MCP to PIP to DIP, their axes): the authored horns, V sign and fists hold it 0.08-0.11
+#: from the curled middle or ring, their open poses 0.2 and more. A retarget lets go of it where its thumb lies
+#: further than `THUMB_ON_MARGIN` beyond the source's from every finger the source's rests on (thicker fingers
+#: part axes by a few hundredths): ASRN onto the RPM avatar held it 0.19-0.27 from them in the horns, and a
+#: viewer saw the thumb off the fingers where kept read 1.000. Read only where the source's thumb touches no
+#: fingertip: a touch says where a thumb is.
+THUMB_ON, THUMB_ON_MARGIN = 0.13, 0.08
 
 
 @dataclass(frozen=True)
@@ -46,6 +54,8 @@ class PoseSignature:
     sideways: float
     sideways_joint: str = ""  # the PIP/DIP bending the most sideways ("ring_dip"), "" if none flexes enough
     thumb_out: float = 0.0  # degrees the thumb points out to its side (`semantics.flexion.thumb_out`)
+    #: (4,) hand lengths from the thumb's tip to index..pinky's first two bones (`thumb_rest_distances`)
+    thumb_rest: np.ndarray = None  # type: ignore[assignment]
 
     @property
     def states(self) -> list[str]:
@@ -65,6 +75,32 @@ def finger_curls(positions: np.ndarray) -> np.ndarray:
     return np.degrees(np.arccos(cos)).sum(-1)
 
 
+def thumb_rest_distances(positions: torch.Tensor, hand_length: float) -> torch.Tensor:
+    """(T, 4) hand lengths from the thumb tip's pad centre to each of index..pinky's proximal and middle bones
+    (the nearer of the two segments MCP-PIP, PIP-DIP): where the thumb rests on a curled finger, it is near. With
+    gradients (the contact fit pulls a thumb back onto the fingers)."""
+    tip = pad_centres(positions)[:, 0]
+    out = []
+    for f in range(1, topo.N_FINGERS):
+        mcp = 1 + 4 * f
+        nearest = []
+        for a, b in ((mcp, mcp + 1), (mcp + 1, mcp + 2)):
+            start, along = positions[:, a], positions[:, b] - positions[:, a]
+            share = (((tip - start) * along).sum(1) / (along * along).sum(1).clamp(min=1e-12)).clamp(0.0, 1.0)
+            nearest.append((start + share[:, None] * along - tip).norm(dim=1))
+        out.append(torch.minimum(*nearest))
+    return torch.stack(out, 1) / hand_length
+
+
+def thumb_rest_lost(source_curl: np.ndarray, source_rest: np.ndarray, target_rest: np.ndarray,
+                    source_touches: np.ndarray) -> np.ndarray:
+    """(T,) bool from (T, 4) curls and rest distances: where the source's thumb rests on a bent or curled finger
+    (`THUMB_ON`) touching no fingertip, and the target's lies more than `THUMB_ON_MARGIN` further from each."""
+    resting = (source_rest < THUMB_ON) & (source_curl >= EXTENDED_BELOW)
+    off = (target_rest - source_rest) > THUMB_ON_MARGIN
+    return resting.any(-1) & (off | ~resting).all(-1) & ~np.asarray(source_touches).any(-1)
+
+
 def signatures(hand: HandModel, q_tbs: np.ndarray) -> list[PoseSignature]:
     """The signature of every frame of ``q_tbs`` (T, 15, 4) on ``hand``."""
     with torch.no_grad():
@@ -78,8 +114,9 @@ def signatures(hand: HandModel, q_tbs: np.ndarray) -> list[PoseSignature]:
     none = np.isnan(sideways).all(axis=1)
     which = np.argmax(np.nan_to_num(sideways, nan=-1.0), axis=1)
     worst = np.where(none, np.nan, np.nan_to_num(sideways, nan=-1.0)[np.arange(len(which)), which])
+    rest = thumb_rest_distances(pose.positions, hand.hand_length).numpy()
     return [PoseSignature(curls[t], contacts[t], float(worst[t]), "" if none[t] else HINGE_JOINTS[which[t]][0],
-                          float(out[t])) for t in range(len(positions))]
+                          float(out[t]), rest[t]) for t in range(len(positions))]
 
 
 def differences(source: PoseSignature, target: PoseSignature) -> list[str]:
@@ -93,6 +130,12 @@ def differences(source: PoseSignature, target: PoseSignature) -> list[str]:
             out.append(f"thumb-{topo.FINGERS[f + 1]} contact {'lost' if a else 'invented'}")
     if thumb_out_lost(source.thumb_out, target.thumb_out, source.thumb_contacts.any()):
         out.append(f"thumb not out to its side ({target.thumb_out:.0f} deg, the source: {source.thumb_out:.0f})")
+    if thumb_rest_lost(source.curl[None], source.thumb_rest[None], target.thumb_rest[None],
+                       source.thumb_contacts[None])[0]:
+        fingers = [f for f in range(4) if source.thumb_rest[f] < THUMB_ON and source.curl[f] >= EXTENDED_BELOW]
+        names = ", ".join(topo.FINGERS[f + 1] for f in fingers)
+        out.append(f"thumb off the {names} ({min(target.thumb_rest[f] for f in fingers):.2f} hand lengths from "
+                   f"{'it' if len(fingers) == 1 else 'them'}; the source's: {min(source.thumb_rest[f] for f in fingers):.2f})")
     limit = max(SIDEWAYS_LIMIT, (0.0 if np.isnan(source.sideways) else source.sideways) + 5.0)
     if target.sideways > limit:
         joint = target.sideways_joint.replace("_", " ").replace("pip", "PIP").replace("dip", "DIP")
@@ -131,8 +174,9 @@ def pose_differences(source_hand: HandModel, source_q: np.ndarray, target_hand: 
 
 
 #: bits of `loss_masks`: finger states (index..pinky), thumb-tip touches (index..pinky), sideways, a pad
-#: contact (the metric's 1.5% tolerance) the source does not make, the thumb out to its side or not
-STATE_BITS, TOUCH_BITS, SIDEWAYS_BIT, INVENTED_BIT, THUMB_OUT_BIT = 0, 4, 8, 9, 10
+#: contact (the metric's 1.5% tolerance) the source does not make, the thumb out to its side or not, the thumb
+#: resting on the curled fingers or not
+STATE_BITS, TOUCH_BITS, SIDEWAYS_BIT, INVENTED_BIT, THUMB_OUT_BIT, THUMB_REST_BIT = 0, 4, 8, 9, 10, 11
 
 
 def frame_sideways(positions: np.ndarray) -> np.ndarray:
@@ -143,16 +187,17 @@ def frame_sideways(positions: np.ndarray) -> np.ndarray:
 
 
 def _frame_features(hand: HandModel, pose: HandPose
-                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(T, 4) curls, (T, 4) thumb touches, (T,) `frame_sideways`, (T, 10) pad contacts at the metric's tolerance,
-    (T,) degrees the thumb points out to its side."""
+    (T,) degrees the thumb points out to its side, (T, 4) `thumb_rest_distances`."""
     from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, PAD_PAIRS
     with torch.no_grad():
         gaps = contact_gaps(hand, pose).numpy() / hand.hand_length
         out = np.degrees(thumb_out(pose.positions).numpy())
+        rest = thumb_rest_distances(pose.positions, hand.hand_length).numpy()
     positions = pose.positions.numpy()
     return (finger_curls(positions), gaps[:, list(THUMB_PAIRS)] < THUMB_TOUCH, frame_sideways(positions),
-            gaps[:, PAD_PAIRS] < CONTACT_TOLERANCE, out)
+            gaps[:, PAD_PAIRS] < CONTACT_TOLERANCE, out, rest)
 
 
 def loss_masks(source_hand: HandModel, source_q: np.ndarray, target_hand: HandModel, target_q: np.ndarray
@@ -168,8 +213,8 @@ def loss_masks(source_hand: HandModel, source_q: np.ndarray, target_hand: HandMo
 def pose_loss_masks(source_hand: HandModel, source_pose: HandPose, target_hand: HandModel, target_pose: HandPose
                     ) -> np.ndarray:
     """`loss_masks` from FK already done (float64 poses): scoring a retarget has both."""
-    src_curl, src_touch, src_side, src_pads, src_out = _frame_features(source_hand, source_pose)
-    tgt_curl, tgt_touch, tgt_side, tgt_pads, tgt_out = _frame_features(target_hand, target_pose)
+    src_curl, src_touch, src_side, src_pads, src_out, src_rest = _frame_features(source_hand, source_pose)
+    tgt_curl, tgt_touch, tgt_side, tgt_pads, tgt_out, tgt_rest = _frame_features(target_hand, target_pose)
 
     def states(curl: np.ndarray) -> np.ndarray:
         return np.where(curl < EXTENDED_BELOW, 0, np.where(curl > CURLED_ABOVE, 2, 1))
@@ -180,4 +225,5 @@ def pose_loss_masks(source_hand: HandModel, source_pose: HandPose, target_hand: 
     mask += (tgt_side > np.maximum(SIDEWAYS_LIMIT, src_side + 5.0)) * (1 << SIDEWAYS_BIT)
     mask += (tgt_pads & ~src_pads).any(-1) * (1 << INVENTED_BIT)
     mask += thumb_out_lost(src_out, tgt_out, src_touch.any(-1)) * (1 << THUMB_OUT_BIT)
+    mask += thumb_rest_lost(src_curl, src_rest, tgt_rest, src_touch) * (1 << THUMB_REST_BIT)
     return mask.astype(int)
