@@ -497,3 +497,46 @@ def test_a_retargets_violations_read_against_the_sources_own(poses, sample_hands
         scores.source_violation_rate > 0.5
     text, tip = _cell("violation_rate", scores.as_dict())
     assert text == f"{scores.violation_rate:.3f}" and f"the source itself: {scores.source_violation_rate:.3f}" in tip
+
+
+def test_the_thumb_resting_on_the_curled_fingers_is_part_of_the_signature(poses):
+    """In the authored horns, V sign and fists the thumb holds the curled fingers down (its tip 0.08-0.11 hand
+    lengths from their first two bones); a fresh-eyes user saw ASRN's thumb off them on the RPM avatar where kept
+    read 1.000. The horns with the thumb of the open Default pose lets go of the middle and ring; the horns
+    itself, and the Default pose (its thumb on no curled finger), keep."""
+    from s2h_viewer.semantics.signature import THUMB_ON, THUMB_REST_BIT
+    motion, rig = poses
+    frames = dict(held_poses(motion.labels))
+    horns, default = signatures(rig, motion.q_tbs[[frames["Horns"], frames["Default"]]])
+    assert horns.thumb_rest[1] < THUMB_ON and horns.thumb_rest[2] < THUMB_ON and horns.thumb_rest[0] > THUMB_ON
+    assert default.thumb_rest.min() > THUMB_ON
+    let_go = motion.q_tbs.copy()
+    let_go[:, 0:3] = motion.q_tbs[frames["Default"], 0:3]  # every frame's thumb as in the open pose
+    lost = pose_differences(rig, motion.q_tbs, rig, let_go, motion.labels)
+    assert any(what.startswith("thumb off the middle, ring") for what in lost["Horns"]), lost["Horns"]
+    assert not any(what.startswith("thumb off") for what in lost["Default"])
+    masks = loss_masks(rig, motion.q_tbs, rig, let_go)
+    assert (masks[frames["Horns"]] >> THUMB_REST_BIT) & 1 and not (masks[frames["Default"]] >> THUMB_REST_BIT) & 1
+    assert not ((loss_masks(rig, motion.q_tbs, rig, motion.q_tbs) >> THUMB_REST_BIT) & 1).any()
+
+
+def test_the_contact_fit_brings_the_thumb_back_onto_the_curled_fingers(poses):
+    """ASRN's network lifts the thumb off the curled middle and ring of the authored horns, V sign and fists on every
+    real rig (0.2-0.4 hand lengths from them where the source's rests 0.08-0.13): the fit, whose thumb-rest term
+    brings it back, keeps those poses; without the term it does not."""
+    from s2h_viewer.retarget.asrn.inference import network_retarget
+    from s2h_viewer.retarget.contact_fit import ContactFitConfig
+    from s2h_viewer.semantics.signature import THUMB_REST_BIT
+    motion, rig = poses
+    target = load_hand_file(ROOT / "assets/hands/real/RPM_Template_Mesh_XR.glb", RigOptions(side="right"))
+    network = network_retarget("asrn", motion.q_tbs, rig, target)
+    let_go = {}
+    for weight in (0.0, ContactFitConfig().thumb_rest_weight):
+        fitted = fit_contacts(motion.q_tbs, rig, target, network.copy(), ContactFitConfig(thumb_rest_weight=weight))
+        lost = pose_differences(rig, motion.q_tbs, target, fitted, motion.labels)
+        let_go[weight] = sorted(name for name, what in lost.items() if any(w.startswith("thumb off") for w in what))
+        scores = score_retarget(rig, motion.q_tbs, target, fitted)
+        assert scores.contact_precision >= 0.95 and scores.contact_recall >= 0.95, scores
+    assert {"Horns", "Peace", "Sign 2"} <= set(let_go[0.0]) and not let_go[ContactFitConfig().thumb_rest_weight], let_go
+    masks = loss_masks(rig, motion.q_tbs, target, retarget(motion, rig, target, "asrn").q_tbs)
+    assert not ((masks >> THUMB_REST_BIT) & 1).any()  # ASRN, its guard and all

@@ -16,7 +16,9 @@ stepped at a share of the others' rate, its swing across the palm slowest, so a 
 to a touch before the metacarpal leaves the path the source's takes), a curl term (no finger's curl moved further from the
 source's than the signature's margin allows: a bent ring finger curled to meet the thumb is a pose lost), a
 thumb-out term (a thumb the source holds out to its side, a thumbs-up's, brought out as far: on the Meta hand,
-whose rest thumb lies along the fingers, the network held it in front of the palm), and a sideways term: no
+whose rest thumb lies along the fingers, the network held it in front of the palm), a thumb-rest term (a thumb the
+source rests on its curled fingers, the horns' and the V sign's, brought back onto them: the network lifted it off
+on every real rig), and a sideways term: no
 flexed PIP/DIP bent more than `SIDEWAYS_FREE` out of the curl plane (on the Godot hand, opening the ring-pinky
 touch of fists bent the pinky DIP 45 deg sideways without it). The angles are read with the twist within +-90
 deg (`quat_to_tbs_euler_past_lock`): a knuckle of a fist bent past 90 read as twisted 160 deg, and the anatomy
@@ -43,9 +45,10 @@ from s2h_viewer.retarget.threads import torch_threads
 from s2h_viewer.semantics.anatomy import angle_excess, clamp_bend_change
 from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, contact_loss, pad_pair_gaps
 from s2h_viewer.semantics.flexion import hinge_flexion_and_alignment, thumb_out
-from s2h_viewer.semantics.signature import (CURL_CHAINS, CURL_MARGIN, SIDEWAYS_FLEXION, SIDEWAYS_LIMIT,
-                                            THUMB_OUT_ABOVE, THUMB_PAIRS, THUMB_TOUCH, frame_sideways,
-                                            thumb_out_lost)
+from s2h_viewer.semantics.signature import (CURL_CHAINS, CURL_MARGIN, EXTENDED_BELOW, SIDEWAYS_FLEXION,
+                                            SIDEWAYS_LIMIT, THUMB_ON, THUMB_ON_MARGIN, THUMB_OUT_ABOVE, THUMB_PAIRS,
+                                            THUMB_TOUCH, finger_curls, frame_sideways, thumb_out_lost,
+                                            thumb_rest_distances, thumb_rest_lost)
 
 #: the thumb-to-fingertip pairs, as indices into the pad pairs (the thumb's come first in both)
 _THUMB = list(THUMB_PAIRS)
@@ -78,6 +81,7 @@ class ContactFitConfig:
     thumb_cmc_bend_rate: float = 0.1
     curl_weight: float = 1e3  # no finger's curl moved further from the source's than `CURL_FREE` (`_curl_excess`)
     thumb_out_weight: float = 1e3  # the thumb out to its side as the source's (`_thumb_out_allowed`)
+    thumb_rest_weight: float = 1e3  # the thumb back on the curled fingers the source's rests on (`_thumb_rest_miss`)
     reach: int = 4  # frames either side of a disagreement over which the correction fades in and out
     batch_frames: int = 4096  # frames optimised at once (memory of one batch)
 
@@ -138,6 +142,14 @@ def _thumb_out_allowed(source_out: torch.Tensor, start_out: torch.Tensor, source
     return torch.where(free, torch.full_like(allowed, float("inf")), allowed), lost
 
 
+def _thumb_resting(source: SourceFrames, source_gaps: torch.Tensor) -> torch.Tensor:
+    """(F, 4) bool: the fingers the source's thumb rests on (`semantics.signature.THUMB_ON`, bent or curled), where
+    it touches no fingertip: the fit keeps the target's thumb within half the signature's margin of them (ASRN lifted
+    it 0.2-0.4 hand lengths off the authored horns' and V sign's curled fingers on every real rig)."""
+    resting = (source.thumb_rest < THUMB_ON) & (source.curls >= float(np.radians(EXTENDED_BELOW)))
+    return resting & ~_thumb_at_tips(source_gaps).any(-1, keepdim=True)
+
+
 def _pose_pad_gaps(hand: HandModel, positions: torch.Tensor) -> torch.Tensor:
     """(T, 10) fingertip-pad gaps of a posed hand in units of its length (what the fit compares)."""
     return pad_pair_gaps(hand, positions) / hand.hand_length
@@ -166,14 +178,17 @@ def disagreement(source_hand: HandModel, source_q: np.ndarray, target_hand: Hand
 def _shape_lost(source_hand: HandModel, source_q: np.ndarray, target_hand: HandModel, target_q: np.ndarray,
                 source_touches: np.ndarray) -> np.ndarray:
     """(T,) bool: the target's worst flexed PIP/DIP bends sideways past `SIDEWAYS_LIMIT` and past the source's + 5,
-    or its thumb is not out to its side where the source's is and touches no fingertip (the signature's rules,
-    `semantics.signature`)."""
+    or its thumb is not out to its side where the source's is, or off the curled fingers the source's rests on, and
+    touches no fingertip (the signature's rules, `semantics.signature`)."""
     with torch.no_grad():
         positions = [joint_positions(hand, torch.as_tensor(q, dtype=torch.float64))
                      for hand, q in ((source_hand, source_q), (target_hand, target_q))]
+        rest = [thumb_rest_distances(p, hand.hand_length).numpy() for p, hand in zip(positions, (source_hand,
+                                                                                                target_hand))]
     sideways = [frame_sideways(p.numpy()) for p in positions]
     out = [np.degrees(thumb_out(p).numpy()) for p in positions]
-    return (sideways[1] > np.maximum(SIDEWAYS_LIMIT, sideways[0] + 5.0)) | thumb_out_lost(*out, source_touches)
+    return ((sideways[1] > np.maximum(SIDEWAYS_LIMIT, sideways[0] + 5.0)) | thumb_out_lost(*out, source_touches)
+            | thumb_rest_lost(finger_curls(positions[0].numpy()), *rest, source_touches[:, None]))
 
 
 def gaps_disagree(source_gaps: np.ndarray, target_gaps: np.ndarray) -> np.ndarray:
@@ -221,7 +236,8 @@ def fit_contacts(source_q: np.ndarray, source_hand: HandModel, target_hand: Hand
         with torch.no_grad():
             positions = joint_positions(source_hand, torch.as_tensor(source_q[idx], dtype=torch.float32))
             # read as the target's
-            return SourceFrames(_pose_pad_gaps(source_hand, positions), pose_curls(positions), thumb_out(positions))
+            return SourceFrames(_pose_pad_gaps(source_hand, positions), pose_curls(positions), thumb_out(positions),
+                                thumb_rest_distances(positions, source_hand.hand_length))
     return _fit_frames(out, frames, source_at, target_hand, config)
 
 
@@ -238,21 +254,22 @@ def fit_contacts_to_gaps(source_gaps: np.ndarray, hand: HandModel, q_tbs: np.nda
 
 @dataclass(frozen=True)
 class SourceFrames:
-    """What the fit matches on some frames of the source: (F, 10) pad gaps in hand lengths, (F, 4) finger curls
-    and (F,) how far the thumb points out to its side (radians; None where not known, as of a tracked hand's
-    gaps)."""
+    """What the fit matches on some frames of the source: (F, 10) pad gaps in hand lengths, (F, 4) finger curls,
+    (F,) how far the thumb points out to its side (radians) and (F, 4) how far its tip lies from each finger's first
+    two bones (hand lengths; None where not known, as of a tracked hand's gaps)."""
 
     gaps: torch.Tensor
     curls: torch.Tensor | None = None
     thumb_out: torch.Tensor | None = None
+    thumb_rest: torch.Tensor | None = None  # (F, 4) `semantics.signature.thumb_rest_distances`
 
 
 def _fit_frames(out: np.ndarray, disagree: np.ndarray, source_at, hand: HandModel, config: ContactFitConfig
                 ) -> np.ndarray:
     """The fit of `fit_contacts` on the runs around the ``disagree`` frames; ``source_at(frames)``: the source's
     `SourceFrames` there. Frames whose touches still disagree after it, where the fingers could not reach a thumb
-    held near its path, are fitted again with the thumb pulled and stepped like any joint (the VRM robot's pad
-    recall: 0.28 with the first pass alone)."""
+    held near its path, or whose thumb is still off the curled fingers, are fitted again with the thumb pulled and
+    stepped like any joint (the VRM robot's pad recall: 0.28 with the first pass alone)."""
     with stage(0.0, 0.8):
         left = _fit_pass(out, disagree, source_at, hand, config)
     if (config.thumb_prior_weight, config.thumb_lift_weight) != (1.0, 1.0) and left.any():
@@ -275,8 +292,20 @@ def _fit_pass(out: np.ndarray, disagree: np.ndarray, source_at, hand: HandModel,
         source = source_at(frames)
         with stage(i / len(batches), (i + 1) / len(batches)), torch_threads(1):
             out[frames] = _fit_runs(out[frames], source, [b - a for a, b in batch], hand, config)
-        left[frames] = gaps_disagree(source.gaps.numpy(), pad_gaps(hand, out[frames])) & disagree[frames]
+        left[frames] = (gaps_disagree(source.gaps.numpy(), pad_gaps(hand, out[frames]))
+                        | _thumb_rest_left(source, hand, out[frames])) & disagree[frames]
     return left
+
+
+def _thumb_rest_left(source: SourceFrames, hand: HandModel, q: np.ndarray) -> np.ndarray:
+    """(F,) bool: frames whose thumb is still off the curled fingers the source's rests on (none where the source
+    frames do not say where its thumb is)."""
+    if source.thumb_rest is None:
+        return np.zeros(len(q), dtype=bool)
+    with torch.no_grad():
+        rest = thumb_rest_distances(joint_positions(hand, torch.as_tensor(q, dtype=torch.float32)), hand.hand_length)
+    return thumb_rest_lost(np.degrees(source.curls.numpy()), source.thumb_rest.numpy(), rest.numpy(),
+                           _thumb_at_tips(source.gaps).numpy())
 
 
 def _batches(runs: list[tuple[int, int]], batch_frames: int) -> list[list[tuple[int, int]]]:
@@ -310,6 +339,8 @@ def _fit_runs(q: np.ndarray, source_frames: SourceFrames, lengths: list[int], ha
         if source_frames.thumb_out is not None:
             out_allowed, out_lost = _thumb_out_allowed(source_frames.thumb_out, thumb_out(start_positions), source)
             rate[out_lost, 0] = 1.0  # a thumb to bring out to its side turns at its metacarpal: not slowed
+        if source_frames.thumb_rest is not None:
+            resting = _thumb_resting(source_frames, source)
     # each run's correction sits between two zero frames: second differences across them tie its ends
     # to zero, and no difference spans two runs
     offsets = np.cumsum([0] + [n + 2 for n in lengths[:-1]])
@@ -343,6 +374,10 @@ def _fit_runs(q: np.ndarray, source_frames: SourceFrames, lengths: list[int], ha
         if source_frames.thumb_out is not None:
             miss = torch.relu(source_frames.thumb_out - thumb_out(positions) - out_allowed)
             loss = loss + config.thumb_out_weight * miss.square().mean()
+        if source_frames.thumb_rest is not None:
+            miss = torch.relu(thumb_rest_distances(positions, hand.hand_length) - source_frames.thumb_rest
+                              - 0.75 * THUMB_ON_MARGIN)
+            loss = loss + config.thumb_rest_weight * (miss * resting).square().sum(-1).mean()
         optimiser.zero_grad()
         loss.backward()
         optimiser.step()
