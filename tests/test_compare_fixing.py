@@ -17,7 +17,7 @@ if not os.environ.get("DISPLAY"):
     pytest.skip("the Qt viewport needs an X display: `make test` runs the suite under Xvfb", allow_module_level=True)
 
 from PySide6.QtCore import QEvent, QPoint, QPointF, Qt  # noqa: E402
-from PySide6.QtGui import QMouseEvent  # noqa: E402
+from PySide6.QtGui import QColor, QMouseEvent  # noqa: E402
 from PySide6.QtTest import QTest  # noqa: E402
 from PySide6.QtWidgets import QApplication, QMessageBox  # noqa: E402
 from vtkmodules.vtkRenderingCore import vtkCoordinate  # noqa: E402
@@ -456,3 +456,21 @@ def test_shift_turns_the_ring_a_tenth_as_far_for_fine_fixes(window, qtbot):
     drag(qtbot, win, 40.0, shift=True)
     assert turned(before, joint_frame(win)[1]) == pytest.approx(4.0, abs=1.0)
     assert mode.undo_stack.undoText().startswith("fix index PIP: bend +4")
+
+
+def test_a_picture_exported_as_the_view_leaves_the_fixing_ring_out(window, qtbot, tmp_path):
+    """A fresh-eyes user's PNG of a fixed pose carried the orange ring: the ring is the fixer's, not the picture's.
+    It is hidden for the grab and shown again after."""
+    from PIL import Image
+
+    from s2h_viewer.widgets.rotation_handle import RING_COLOUR
+    win = window
+    pick_joint(qtbot, win)
+    ring = np.array(QColor(RING_COLOUR).getRgb()[:3])
+
+    def ring_pixels(rgb: np.ndarray) -> int:
+        return int((np.abs(rgb[..., :3].astype(int) - ring).max(-1) < 12).sum())
+    assert ring_pixels(win.view.grab_rgb()) > 50  # on screen
+    png = win.export_screenshot(str(tmp_path / "fixed.png"))
+    assert ring_pixels(np.asarray(Image.open(png).convert("RGB"))) == 0
+    assert win.compare.fixing.ring.actor.GetVisibility() and ring_pixels(win.view.grab_rgb()) > 50

@@ -46,8 +46,12 @@ class Shown:
     def of(cls, mode: CompareMode, grab: bool = False) -> "Shown":
         view = mode.view
         size = (view.interactor.width(), view.interactor.height()) if view.interactor is not None else (1400, 900)
+        image = None
+        if grab:
+            with mode.fixing.ring_hidden():  # the fixer's ring is no part of the picture
+                image = view.grab_rgb()
         return cls(mode.comparison, view.comparison, mode.selected_result(), mode.timeline.frame, view.options,
-                   view.framing(), size, view.grab_rgb() if grab else None)
+                   view.framing(), size, image)
 
     def caption(self, frame: int) -> str:
         """The picture's line: clip (and the pose it holds there), frame and the selected retarget, or, where the selection is on another page

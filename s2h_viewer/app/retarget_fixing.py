@@ -8,7 +8,8 @@ which Fix > Load corrections and ``s2h retarget --corrections`` read back."""
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -164,6 +165,19 @@ class RetargetFixing(QObject):
         if playing and self._drag is not None:
             self.mode.timeline.set_playing(False)
             self.mode.status("Fix: playback waits for the drag to end")
+
+    @contextmanager
+    def ring_hidden(self) -> Iterator[None]:
+        """The ring hidden meanwhile (an exported picture of the view: the ring is the fixer's, not the picture's)."""
+        visible = self.ring is not None and bool(self.ring.actor.GetVisibility())
+        if visible:
+            self.ring.set_visible(False)
+        try:
+            yield
+        finally:
+            if visible:
+                self.ring.set_visible(True)
+                self.mode.view.interactor.update()
 
     def _place(self, *_) -> None:
         """The ring about the picked joint's axis as the retarget poses it at the current frame (hidden without a
