@@ -474,3 +474,23 @@ def test_a_picture_exported_as_the_view_leaves_the_fixing_ring_out(window, qtbot
     png = win.export_screenshot(str(tmp_path / "fixed.png"))
     assert ring_pixels(np.asarray(Image.open(png).convert("RGB"))) == 0
     assert win.compare.fixing.ring.actor.GetVisibility() and ring_pixels(win.view.grab_rgb()) > 50
+
+
+def test_a_clip_of_poses_says_which_poses_a_retarget_loses(window, qtbot):
+    """Kept is a share of frames: a fresh-eyes user had to find by eye which of 35 poses a retarget lost. On a clip
+    of poses the cell counts the poses kept and the Kept cell's tooltip names each one lost and what it loses (TBS
+    Copy onto iris: the OK's thumb-index contact); both follow a fix at once."""
+    from s2h_viewer.widgets.scores_table import COLUMNS, poses_tip
+    from s2h_viewer.widgets.tooltips import wrapped
+    win, mode = window, window.compare
+    result = mode.selected_result()
+    assert result.poses_held == 4  # relaxed, fist, ok, v_sign
+    kept = result.poses_held - len(result.poses_lost)
+    assert f"({kept}/4 poses)" in win.view.solo_hand().label.text
+    column = next(c for c, (_, key, _) in enumerate(COLUMNS) if key == "signature_kept")
+    assert f"{kept} of 4 poses kept; lost: ok: thumb-index contact lost" in mode.scores.item(0, column).toolTip()
+    pick_joint(qtbot, win)
+    drag(qtbot, win, 40.0)
+    fixed = mode.selected_result()
+    assert fixed.poses_held == 4 and mode.scores.item(0, column).toolTip() == wrapped(poses_tip(fixed))
+    assert f"({fixed.poses_held - len(fixed.poses_lost)}/4 poses)" in win.view.solo_hand().label.text

@@ -20,6 +20,7 @@ from s2h_viewer.retarget.methods import METHODS, retarget
 from s2h_viewer.retarget.progress import report, stage
 from s2h_viewer.semantics.asm import semantic_matrix
 from s2h_viewer.semantics.metrics import RetargetScores, per_joint_cosine, score_retarget
+from s2h_viewer.semantics.signature import pose_differences
 
 
 @dataclass
@@ -33,6 +34,10 @@ class MethodResult:
     cell_error: np.ndarray  # (T, 20, 29) 1 - cosine per ASM cell, NaN where masked
     scores: RetargetScores
     corrections: Corrections = field(default_factory=Corrections)  # applied to ``motion`` (and all above)
+    #: per pose the clip holds (`semantics.signature.held_poses`) that the retarget loses, what it loses, in words
+    #: ("Horns": ["thumb off the middle, ring (...)"]); empty for a clip of no poses or one that keeps them all
+    poses_lost: dict[str, list[str]] = field(default_factory=dict)
+    poses_held: int = 0  # how many poses the clip holds
     base: "MethodResult | None" = None  # the method's own retarget, before the corrections (None: this is it)
 
     @property
@@ -92,7 +97,9 @@ def _measured(motion: Motion, source: HandModel, source_asm: torch.Tensor, targe
         pose = forward_kinematics(target, moved.q_tbs)
         cell_error = 1.0 - per_joint_cosine(source_asm, semantic_matrix(pose)).numpy()
     scores = score_retarget(source, motion.q_tbs, target, moved.q_tbs)
-    return MethodResult(method, target, moved, pose, cell_error, scores)
+    poses = pose_differences(source, motion.q_tbs, target, moved.q_tbs, motion.labels) if motion.labels.any() else {}
+    return MethodResult(method, target, moved, pose, cell_error, scores,
+                        poses_lost={name: what for name, what in poses.items() if what}, poses_held=len(poses))
 
 
 def corrected_result(result: MethodResult, corrections: Corrections, motion: Motion, source: HandModel,

@@ -41,8 +41,8 @@ COLUMNS = (("Method", None, "retargeting method"), ("Target", None, "target hand
 TARGET_COLUMN = 1
 SHOWN_ROWS, MIN_ROWS = 6, 2  # rows the table asks room for, and keeps in view at least
 NAME_WIDTH = 140  # pixels: widest a name column starts (drag the header edge for more)
-#: invented pairs the Invented cell's tooltip names (most frames first)
-INVENTED_LISTED = 5
+#: invented pairs the Invented cell's tooltip names (most frames first), and poses lost the Kept cell's names
+INVENTED_LISTED, POSES_LISTED = 5, 8
 #: why a score is n/a (NaN), per score key
 UNDEFINED = {"sideways_deg": "n/a: no finger curls", "contact_precision": "n/a: the retarget makes no pad contact, so no precision to measure",
              "contact_recall": "n/a: the source makes no pad contact, so no recall to measure",
@@ -70,6 +70,15 @@ def _cell(key: str, values: dict) -> tuple[str, str | None]:
         return f"{value:.0f}", SidewaysPeak(value, joint, int(frame)).describe() + f" (the source: " \
             f"{values['source_sideways_deg']:.0f})"
     return f"{value:.3f}", None
+
+
+def poses_tip(result) -> str:
+    """The Kept cell's tooltip on a clip of poses: how many the retarget keeps, and what each one lost loses."""
+    lost = result.poses_lost
+    kept = f"{result.poses_held - len(lost)} of {counted(result.poses_held, 'pose')} kept"
+    listed = "; ".join(f"{name}: {', '.join(what)}" for name, what in list(lost.items())[:POSES_LISTED])
+    more = f"; {len(lost) - POSES_LISTED} more" if len(lost) > POSES_LISTED else ""
+    return f"{kept}" + (f"; lost: {listed}{more}" if lost else " (every one)")
 
 
 class ScoresTable(QTableWidget):
@@ -121,6 +130,9 @@ class ScoresTable(QTableWidget):
             cells = [(f"{method} (fixed)", f"{method}, corrected: {fixes.describe()}") if fixes else (method,) * 2,
                      target]
             cells += [_cell(key, values) for _, key, _ in COLUMNS[2:]]
+            if result.poses_held:  # a clip of poses: which the retarget loses, and how
+                kept_column = next(c for c, (_, key, _) in enumerate(COLUMNS) if key == "signature_kept")
+                cells[kept_column] = (cells[kept_column][0], poses_tip(result))
             for col, (text, tip) in enumerate(cells):
                 item = QTableWidgetItem(text)
                 if tip is not None:
