@@ -488,7 +488,7 @@ def test_a_clip_of_poses_says_which_poses_a_retarget_loses(window, qtbot):
     kept = result.poses_held - len(result.poses_lost)
     assert f"({kept}/4 poses)" in win.view.solo_hand().label.text
     column = next(c for c, (_, key, _) in enumerate(COLUMNS) if key == "signature_kept")
-    assert f"{kept} of 4 poses kept; lost: ok: thumb-index contact lost" in mode.scores.item(0, column).toolTip()
+    assert f"{kept} of 4 poses kept; lost:<br>ok: thumb-index contact lost" in mode.scores.item(0, column).toolTip()
     pick_joint(qtbot, win)
     drag(qtbot, win, 40.0)
     fixed = mode.selected_result()

@@ -76,9 +76,9 @@ def poses_tip(result) -> str:
     """The Kept cell's tooltip on a clip of poses: how many the retarget keeps, and what each one lost loses."""
     lost = result.poses_lost
     kept = f"{result.poses_held - len(lost)} of {counted(result.poses_held, 'pose')} kept"
-    listed = "; ".join(f"{name}: {', '.join(what)}" for name, what in list(lost.items())[:POSES_LISTED])
-    more = f"; {len(lost) - POSES_LISTED} more" if len(lost) > POSES_LISTED else ""
-    return f"{kept}" + (f"; lost: {listed}{more}" if lost else " (every one)")
+    listed = "".join(f"\n{name}: {', '.join(what)}" for name, what in list(lost.items())[:POSES_LISTED])
+    more = f"\n... and {len(lost) - POSES_LISTED} more" if len(lost) > POSES_LISTED else ""
+    return f"{kept}" + (f"; lost:{listed}{more}" if lost else " (every one)")
 
 
 class ScoresTable(QTableWidget):

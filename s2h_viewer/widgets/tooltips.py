@@ -7,5 +7,5 @@ from html import escape
 
 
 def wrapped(text: str) -> str:
-    """``text`` as a tooltip Qt wraps (a rich-text paragraph, its characters escaped)."""
-    return f"<p>{escape(text)}</p>"
+    """``text`` as a tooltip Qt wraps (a rich-text paragraph, its characters escaped, a new line where it has one)."""
+    return f"<p>{escape(text).replace(chr(10), '<br>')}</p>"
