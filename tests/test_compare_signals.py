@@ -205,6 +205,24 @@ def test_the_table_counts_invented_contacts_and_the_frames_that_keep_the_signatu
                                                  for pair, frames, _ in scores.invented_pairs[:5])
 
 
+def test_a_sideways_bend_past_the_limit_is_red_in_the_table(window):
+    """A fresh-eyes user read TBS Copy's 52 deg sideways on the Meta hand in black beside ASRN's 23: a figure past
+    the limit (and past the source's own + 5) is drawn red, as over the error curve."""
+    from PySide6.QtGui import QColor
+
+    from s2h_viewer.widgets.scores_table import COLUMNS, SIDEWAYS_RED
+    table = window.compare.scores
+    column = next(c for c, (_, key, _) in enumerate(COLUMNS) if key == "sideways_deg")
+    comparison = window.comparison
+    bent = dataclasses.replace(comparison.results[0], scores=dataclasses.replace(
+        comparison.results[0].scores, sideways_deg=52.0, source_sideways_deg=38.0))
+    within = dataclasses.replace(bent, scores=dataclasses.replace(bent.scores, sideways_deg=42.0))  # the source's + 4
+    table.show_comparison(dataclasses.replace(comparison, results=[bent, within]))
+    assert bent.scores.sideways_broken and not within.scores.sideways_broken
+    assert table.item(0, column).foreground().color() == QColor(SIDEWAYS_RED)
+    assert table.item(1, column).foreground().color() != QColor(SIDEWAYS_RED)
+
+
 def test_a_visibly_wrong_pinky_drops_the_kept_score_where_s_finger_hardly_moves(human_female, sample_hands):
     """The issue's case: the human-female pinky's frames some 20-30 deg off (the solver's before it fell back to
     the rig's bone axes) scored S_finger 0.971 while every method bent that pinky sideways in a fist."""

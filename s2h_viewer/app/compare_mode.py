@@ -42,11 +42,11 @@ from s2h_viewer.retarget.comparison import Comparison, MethodResult, corrected_r
 from s2h_viewer.retarget.corrections import Corrections
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.semantics.flexion import SidewaysPeak, bend_angles
-from s2h_viewer.semantics.signature import SIDEWAYS_LIMIT, frame_sideways
+from s2h_viewer.semantics.signature import frame_sideways
 from s2h_viewer.widgets.asm_heatmap import AsmHeatmap, spaced
 from s2h_viewer.widgets.compare_view import CompareView
 from s2h_viewer.widgets.error_curve import ErrorCurve
-from s2h_viewer.widgets.scores_table import ScoresTable
+from s2h_viewer.widgets.scores_table import SIDEWAYS_RED, ScoresTable
 from s2h_viewer.widgets.timeline import Timeline
 
 PROGRESS_STEPS = 1000
@@ -92,8 +92,7 @@ def sideways_text(name: str, scores) -> str:
     joint, _, frame = scores.sideways_at.partition("@")
     peak = SidewaysPeak(scores.sideways_deg, joint, int(frame)).describe()
     text = html.escape(f"{name}: worst sideways flexion: {peak} (the source: {scores.source_sideways_deg:.0f})")
-    broken = scores.sideways_deg > max(SIDEWAYS_LIMIT, np.nan_to_num(scores.source_sideways_deg) + 5.0)
-    return f"<span style='color:#c62828'>{text}</span>" if broken else text
+    return f"<span style='color:{SIDEWAYS_RED}'>{text}</span>" if scores.sideways_broken else text
 
 
 def selected_notes(result: MethodResult, sideways: bool) -> str:

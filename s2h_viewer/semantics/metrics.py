@@ -16,7 +16,7 @@ from s2h_viewer.semantics.asm import semantic_matrix
 from s2h_viewer.semantics.contacts import (CONTACT_PAIRS, PAD_PAIRS, PALM_PAIRS, contact_precision_recall,
                                            detect_contacts, touching_and_near)
 from s2h_viewer.semantics.flexion import sideways_peak, thumb_follow
-from s2h_viewer.semantics.signature import pose_loss_masks
+from s2h_viewer.semantics.signature import SIDEWAYS_LIMIT, pose_loss_masks
 from s2h_viewer.semantics.similarity import masked_cosine
 
 #: frames whose ASMs are built at once when a whole clip is scored ((4096, 20, 29, 3) float64: 57 MiB)
@@ -95,6 +95,11 @@ class RetargetScores:
 
     def as_dict(self) -> dict:
         return asdict(self)
+
+    @property
+    def sideways_broken(self) -> bool:
+        """Its worst sideways bend past the signature's limit and past the source's own + 5 (drawn red)."""
+        return bool(self.sideways_deg > max(SIDEWAYS_LIMIT, np.nan_to_num(self.source_sideways_deg) + 5.0))
 
 
 def score_retarget(source_hand: HandModel, source_q: np.ndarray | torch.Tensor, target_hand: HandModel,

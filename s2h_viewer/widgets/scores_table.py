@@ -41,6 +41,8 @@ COLUMNS = (("Method", None, "retargeting method"), ("Target", None, "target hand
 TARGET_COLUMN = 1
 SHOWN_ROWS, MIN_ROWS = 6, 2  # rows the table asks room for, and keeps in view at least
 NAME_WIDTH = 140  # pixels: widest a name column starts (drag the header edge for more)
+#: a sideways bend past the limit, in the table and over the error curve
+SIDEWAYS_RED = "#c62828"
 #: invented pairs the Invented cell's tooltip names (most frames first), and poses lost the Kept cell's names
 INVENTED_LISTED, POSES_LISTED = 5, 8
 #: why a score is n/a (NaN), per score key
@@ -137,6 +139,8 @@ class ScoresTable(QTableWidget):
                 item = QTableWidgetItem(text)
                 if tip is not None:
                     item.setToolTip(wrapped(tip))  # a list of invented pairs, a warning: long
+                if COLUMNS[col][1] == "sideways_deg" and result.scores.sideways_broken:  # a finger bent sideways
+                    item.setForeground(QColor(SIDEWAYS_RED))
                 if warning is not None and col == TARGET_COLUMN:  # frames unsure: the target's cell says so
                     item.setForeground(QColor(BANNER_COLOUR))
                     item.setBackground(QColor(BANNER_BACKGROUND))
