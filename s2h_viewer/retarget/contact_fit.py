@@ -45,10 +45,10 @@ from s2h_viewer.retarget.threads import torch_threads
 from s2h_viewer.semantics.anatomy import angle_excess, clamp_bend_change
 from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, contact_loss, pad_pair_gaps
 from s2h_viewer.semantics.flexion import hinge_flexion_and_alignment, thumb_out
-from s2h_viewer.semantics.signature import (CURL_CHAINS, CURL_MARGIN, EXTENDED_BELOW, SIDEWAYS_FLEXION,
-                                            SIDEWAYS_LIMIT, THUMB_ON, THUMB_ON_MARGIN, THUMB_OUT_ABOVE, THUMB_PAIRS,
-                                            THUMB_TOUCH, finger_curls, frame_sideways, thumb_out_lost,
-                                            thumb_rest_distances, thumb_rest_lost)
+from s2h_viewer.semantics.signature import (CURL_CHAINS, CURL_MARGIN, SIDEWAYS_FLEXION, SIDEWAYS_LIMIT,
+                                            THUMB_ON_MARGIN, THUMB_OUT_ABOVE, THUMB_PAIRS, THUMB_TOUCH, finger_curls,
+                                            frame_sideways, thumb_out_lost, thumb_rest_distances, thumb_rest_lost,
+                                            thumb_resting)
 
 #: the thumb-to-fingertip pairs, as indices into the pad pairs (the thumb's come first in both)
 _THUMB = list(THUMB_PAIRS)
@@ -81,7 +81,7 @@ class ContactFitConfig:
     thumb_cmc_bend_rate: float = 0.1
     curl_weight: float = 1e3  # no finger's curl moved further from the source's than `CURL_FREE` (`_curl_excess`)
     thumb_out_weight: float = 1e3  # the thumb out to its side as the source's (`_thumb_out_allowed`)
-    thumb_rest_weight: float = 1e3  # the thumb back on the curled fingers the source's rests on (`_thumb_rest_miss`)
+    thumb_rest_weight: float = 1e3  # the thumb back on the curled fingers the source's rests on (`_thumb_resting`)
     reach: int = 4  # frames either side of a disagreement over which the correction fades in and out
     batch_frames: int = 4096  # frames optimised at once (memory of one batch)
 
@@ -146,8 +146,8 @@ def _thumb_resting(source: SourceFrames, source_gaps: torch.Tensor) -> torch.Ten
     """(F, 4) bool: the fingers the source's thumb rests on (`semantics.signature.THUMB_ON`, bent or curled), where
     it touches no fingertip: the fit keeps the target's thumb within half the signature's margin of them (ASRN lifted
     it 0.2-0.4 hand lengths off the authored horns' and V sign's curled fingers on every real rig)."""
-    resting = (source.thumb_rest < THUMB_ON) & (source.curls >= float(np.radians(EXTENDED_BELOW)))
-    return resting & ~_thumb_at_tips(source_gaps).any(-1, keepdim=True)
+    return torch.as_tensor(thumb_resting(np.degrees(source.curls.numpy()), source.thumb_rest.numpy(),
+                                         _thumb_at_tips(source_gaps).numpy()))
 
 
 def _pose_pad_gaps(hand: HandModel, positions: torch.Tensor) -> torch.Tensor:
@@ -292,19 +292,22 @@ def _fit_pass(out: np.ndarray, disagree: np.ndarray, source_at, hand: HandModel,
         source = source_at(frames)
         with stage(i / len(batches), (i + 1) / len(batches)), torch_threads(1):
             out[frames] = _fit_runs(out[frames], source, [b - a for a, b in batch], hand, config)
-        left[frames] = (gaps_disagree(source.gaps.numpy(), pad_gaps(hand, out[frames]))
-                        | _thumb_rest_left(source, hand, out[frames])) & disagree[frames]
+        with torch.no_grad():
+            positions = joint_positions(hand, torch.as_tensor(out[frames], dtype=torch.float32))
+            gaps = _pose_pad_gaps(hand, positions).numpy()
+        left[frames] = (gaps_disagree(source.gaps.numpy(), gaps) | _thumb_rest_left(source, hand, positions)
+                        ) & disagree[frames]
     return left
 
 
-def _thumb_rest_left(source: SourceFrames, hand: HandModel, q: np.ndarray) -> np.ndarray:
-    """(F,) bool: frames whose thumb is still off the curled fingers the source's rests on (none where the source
-    frames do not say where its thumb is)."""
+def _thumb_rest_left(source: SourceFrames, hand: HandModel, positions: torch.Tensor) -> np.ndarray:
+    """(F,) bool: frames whose thumb (``positions``, (F, 21, 3)) is still off the curled fingers the source's rests
+    on (none where the source frames do not say where its thumb is)."""
     if source.thumb_rest is None:
-        return np.zeros(len(q), dtype=bool)
+        return np.zeros(len(positions), dtype=bool)
     with torch.no_grad():
-        rest = thumb_rest_distances(joint_positions(hand, torch.as_tensor(q, dtype=torch.float32)), hand.hand_length)
-    return thumb_rest_lost(np.degrees(source.curls.numpy()), source.thumb_rest.numpy(), rest.numpy(),
+        rest = thumb_rest_distances(positions, hand.hand_length).numpy()
+    return thumb_rest_lost(np.degrees(source.curls.numpy()), source.thumb_rest.numpy(), rest,
                            _thumb_at_tips(source.gaps).numpy())
 
 

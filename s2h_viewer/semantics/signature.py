@@ -1,7 +1,7 @@
 """A pose's signature, what a viewer reads off a hand at a glance: each finger extended, bent or curled;
 which fingertips the thumb touches, or whether it stands out to the side (a thumbs-up) where it touches
-none, or rests on the curled fingers (horns, a V sign: the thumb holds them down); no finger curling sideways. A retarget keeps a pose when its signature matches the source's (issue
-26: scoring authored poses on real rigs)."""
+none, or rests on the curled fingers (horns, a V sign: the thumb holds them down); no finger curling sideways.
+A retarget keeps a pose when its signature matches the source's (issue 26: scoring authored poses on real rigs)."""
 
 from __future__ import annotations
 
@@ -92,13 +92,19 @@ def thumb_rest_distances(positions: torch.Tensor, hand_length: float) -> torch.T
     return torch.stack(out, 1) / hand_length
 
 
+def thumb_resting(curl: np.ndarray, rest: np.ndarray, touches: np.ndarray) -> np.ndarray:
+    """(T, 4) bool from (T, 4) curls (degrees), rest distances and thumb-tip touches: the bent or curled fingers
+    the thumb rests on (`THUMB_ON`), on frames where it touches no fingertip."""
+    return (rest < THUMB_ON) & (curl >= EXTENDED_BELOW) & ~np.asarray(touches).any(-1, keepdims=True)
+
+
 def thumb_rest_lost(source_curl: np.ndarray, source_rest: np.ndarray, target_rest: np.ndarray,
                     source_touches: np.ndarray) -> np.ndarray:
     """(T,) bool from (T, 4) curls and rest distances: where the source's thumb rests on a bent or curled finger
-    (`THUMB_ON`) touching no fingertip, and the target's lies more than `THUMB_ON_MARGIN` further from each."""
-    resting = (source_rest < THUMB_ON) & (source_curl >= EXTENDED_BELOW)
+    (`thumb_resting`), and the target's lies more than `THUMB_ON_MARGIN` further from each."""
+    resting = thumb_resting(source_curl, source_rest, source_touches)
     off = (target_rest - source_rest) > THUMB_ON_MARGIN
-    return resting.any(-1) & (off | ~resting).all(-1) & ~np.asarray(source_touches).any(-1)
+    return resting.any(-1) & (off | ~resting).all(-1)
 
 
 def signatures(hand: HandModel, q_tbs: np.ndarray) -> list[PoseSignature]:
@@ -132,10 +138,12 @@ def differences(source: PoseSignature, target: PoseSignature) -> list[str]:
         out.append(f"thumb not out to its side ({target.thumb_out:.0f} deg, the source: {source.thumb_out:.0f})")
     if thumb_rest_lost(source.curl[None], source.thumb_rest[None], target.thumb_rest[None],
                        source.thumb_contacts[None])[0]:
-        fingers = [f for f in range(4) if source.thumb_rest[f] < THUMB_ON and source.curl[f] >= EXTENDED_BELOW]
+        fingers = np.flatnonzero(thumb_resting(source.curl[None], source.thumb_rest[None],
+                                               source.thumb_contacts[None])[0])
         names = ", ".join(topo.FINGERS[f + 1] for f in fingers)
-        out.append(f"thumb off the {names} ({min(target.thumb_rest[f] for f in fingers):.2f} hand lengths from "
-                   f"{'it' if len(fingers) == 1 else 'them'}; the source's: {min(source.thumb_rest[f] for f in fingers):.2f})")
+        them = "it" if len(fingers) == 1 else "them"
+        out.append(f"thumb off the {names} ({target.thumb_rest[fingers].min():.2f} hand lengths from {them}; the "
+                   f"source's: {source.thumb_rest[fingers].min():.2f})")
     limit = max(SIDEWAYS_LIMIT, (0.0 if np.isnan(source.sideways) else source.sideways) + 5.0)
     if target.sideways > limit:
         joint = target.sideways_joint.replace("_", " ").replace("pip", "PIP").replace("dip", "DIP")
