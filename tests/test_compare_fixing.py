@@ -435,8 +435,8 @@ def test_a_click_on_a_fingers_skin_picks_the_joint_that_turns_it_and_a_click_on_
         QTest.keyClick(win, Qt.Key.Key_F)
     result = win.compare.selected_result()
     positions = to_view(result.target, result.pose.positions[10].numpy().astype(float))
-    bones = (("thumb_cmc", "thumb_mcp"), ("thumb_mcp", "thumb_ip"), ("thumb_ip", "thumb_tip"), ("index_mcp", "index_pip"),
-             ("index_pip", "index_dip"), ("ring_dip", "ring_tip"))
+    bones = (("thumb_cmc", "thumb_mcp"), ("thumb_mcp", "thumb_ip"), ("thumb_ip", "thumb_tip"),
+             ("index_mcp", "index_pip"), ("index_pip", "index_dip"), ("ring_dip", "ring_tip"))
     for joint, child in bones:
         a, b = (positions[topo.JOINT_NAMES.index(name)] for name in (joint, child))
         QTest.mouseClick(win.view.interactor, Qt.MouseButton.LeftButton, pos=on_screen(win, 0.5 * a + 0.5 * b))

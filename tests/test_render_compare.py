@@ -41,7 +41,8 @@ def test_a_target_with_no_skin_says_its_bones_are_drawn(sample_hands):
     from s2h_viewer.retarget.comparison import build_comparison
     motion = synthesize(["ok"], sample_hands["birch"], seed=1, name="ok")
     bones = dataclasses.replace(sample_hands["laurel"], name="bones", mesh=None)
-    skinned, bare = build_comparison(motion, sample_hands["birch"], [sample_hands["laurel"], bones], ["tbs_copy"]).results
+    comparison = build_comparison(motion, sample_hands["birch"], [sample_hands["laurel"], bones], ["tbs_copy"])
+    skinned, bare = comparison.results
     assert result_label(bare).endswith(", no skin: bones") and "no skin" not in result_label(skinned)
 
 

@@ -54,8 +54,9 @@ class Shown:
                    view.framing(), size, image)
 
     def caption(self, frame: int) -> str:
-        """The picture's line: clip (and the pose it holds there), frame and the selected retarget, or, where the selection is on another page
-        of targets than the one exported, the page's targets (the caption names what the picture shows)."""
+        """The picture's line: clip (and the pose it holds there), frame and the selected retarget, or, where the
+        selection is on another page of targets than the one exported, the page's targets (the caption names what the
+        picture shows)."""
         motion, n_frames = self.comparison.motion, self.comparison.n_frames
         clip = clip_at(motion.name, motion.labels, frame)
         if self.page is not None and not any(r is self.selected for r in self.page.results):

@@ -1,9 +1,10 @@
 """Fixing a retarget in Compare (the Fix menu): in a retarget shown alone, click a joint and drag its ring to
 turn it about its bend, splay or twist axis at the current frame. Each drag is a key on the joint's offset
 curve (`retarget.corrections`) blended over the marked range (else held over the pose the frame holds and eased
-over the frames around it: `corrections.key_span`), undoable on Compare's undo stack; the cell, scores, heatmap and curves follow while the ring is dragged. Every motion
-export of the retarget carries its corrections, with a sidecar beside it recording them (`io.corrections`),
-which Fix > Load corrections and ``s2h retarget --corrections`` read back."""
+over the frames around it: `corrections.key_span`), undoable on Compare's undo stack; the cell, scores, heatmap
+and curves follow while the ring is dragged. Every motion export of the retarget carries its corrections, with a
+sidecar beside it recording them (`io.corrections`), which Fix > Load corrections and ``s2h retarget
+--corrections`` read back."""
 
 from __future__ import annotations
 
@@ -40,7 +41,7 @@ MOUSE = (("click a joint of a retarget shown alone (or a finger's skin: the join
           "pick it for fixing (its ring appears)"),
          ("drag the ring", "turn the joint at this frame: a correction key (Fix menu)"),
          ("Shift+drag the ring", "turn it a tenth as far as the pointer goes (fine turns)"))
-#: a click this near a joint on screen picks it (pixels), else the joint turning the bone nearest the click
+#: a click this near a joint on screen picks it (pixels), else the joint turning the skin or bone under it
 JOINT_PIXELS = 6
 #: each joint a click can pick (tips pick the joint that moves them): (joint index, articulated index)
 PICKABLE = [(int(j), a) for a, j in enumerate(topo.ARTICULATED_JOINTS)] + \

@@ -13,8 +13,8 @@ Beside a motion export of part of the clip, ``"part": [first, last]`` says which
 keys keep the clip's frame numbers: the sidecar applies to the clip's retarget, as ``s2h retarget`` makes it).
 A key: its frame, the frames it eases in from and out to (``start <= frame <= end``), where it holds a pose over
 several frames ``"hold": [first, last]`` (``start <= first <= frame <= last <= end``; the whole turn on all of them),
-and its turn as a rotation vector in degrees in the joint's TBS frame (its components about twist, bend, splay). A file is hostile until
-checked: every count, name, frame and number is."""
+and its turn as a rotation vector in degrees in the joint's TBS frame (its components about twist, bend, splay).
+A file is hostile until checked: every count, name, frame and number is."""
 
 from __future__ import annotations
 

@@ -24,11 +24,6 @@ RING_COLOUR = "#e8a317"
 ACTIVE_COLOUR = "#ffe34d"
 #: a press and release this many pixels apart or fewer are a click, not a camera drag
 CLICK_PIXELS = 4
-
-
-def is_click(pressed: tuple[int, int], released: tuple[int, int]) -> bool:
-    """A press at ``pressed`` released at ``released`` (pixels) is a click, not a drag (`CLICK_PIXELS`)."""
-    return max(abs(released[0] - pressed[0]), abs(released[1] - pressed[1])) <= CLICK_PIXELS
 #: the ring follows the pointer on its plane while the view ray meets the plane at this cosine or more
 #: (about 70 deg off face-on); nearer edge-on it rolls under the pointer instead
 FACING = 0.35
@@ -41,6 +36,11 @@ FINE_SHARE = 0.1
 ROLL_LEAST = 0.5
 #: how near the pointer must be to the ring to grab it (VTK's pick tolerance: a share of the window's diagonal)
 PICK_TOLERANCE = 0.008
+
+
+def is_click(pressed: tuple[int, int], released: tuple[int, int]) -> bool:
+    """A press at ``pressed`` released at ``released`` (pixels) is a click, not a drag (`CLICK_PIXELS`)."""
+    return max(abs(released[0] - pressed[0]), abs(released[1] - pressed[1])) <= CLICK_PIXELS
 
 
 def on_display(renderer, points: np.ndarray) -> np.ndarray:

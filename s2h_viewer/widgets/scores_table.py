@@ -39,6 +39,8 @@ COLUMNS = (("Method", None, "retargeting method"), ("Target", None, "target hand
                                                "come near (within 3% of the hand; drawn blue by the contact "
                                                "overlay)"))
 TARGET_COLUMN = 1
+KEPT_COLUMN, SIDEWAYS_COLUMN = (next(c for c, (_, key, _) in enumerate(COLUMNS) if key == name)
+                                for name in ("signature_kept", "sideways_deg"))
 SHOWN_ROWS, MIN_ROWS = 6, 2  # rows the table asks room for, and keeps in view at least
 NAME_WIDTH = 140  # pixels: widest a name column starts (drag the header edge for more)
 #: a sideways bend past the limit, in the table and over the error curve
@@ -133,13 +135,12 @@ class ScoresTable(QTableWidget):
                      target]
             cells += [_cell(key, values) for _, key, _ in COLUMNS[2:]]
             if result.poses_held:  # a clip of poses: which the retarget loses, and how
-                kept_column = next(c for c, (_, key, _) in enumerate(COLUMNS) if key == "signature_kept")
-                cells[kept_column] = (cells[kept_column][0], poses_tip(result))
+                cells[KEPT_COLUMN] = (cells[KEPT_COLUMN][0], poses_tip(result))
             for col, (text, tip) in enumerate(cells):
                 item = QTableWidgetItem(text)
                 if tip is not None:
                     item.setToolTip(wrapped(tip))  # a list of invented pairs, a warning: long
-                if COLUMNS[col][1] == "sideways_deg" and result.scores.sideways_broken:  # a finger bent sideways
+                if col == SIDEWAYS_COLUMN and result.scores.sideways_broken:  # a finger bent sideways
                     item.setForeground(QColor(SIDEWAYS_RED))
                 if warning is not None and col == TARGET_COLUMN:  # frames unsure: the target's cell says so
                     item.setForeground(QColor(BANNER_COLOUR))
