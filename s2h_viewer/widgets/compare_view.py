@@ -294,7 +294,11 @@ class CompareView(QWidget):
         """Change the camera preset, overlays or opacity (``ViewOptions`` fields) and redraw."""
         self.options = dataclasses.replace(self.options, **changes)
         if self.interactor is not None:  # the camera moves for a preset only, not for an overlay
+            framed = "camera" in changes and self._grid_camera is not None
             apply_options(self.plotter, self._hands, self.options, camera="camera" in changes)
+            if framed:  # a hand framed alone (F) stays framed, seen from the preset's side
+                self._grid_camera = None  # the grid comes back seen from there too
+                self.frame_hand()
             self._show_ghost()
             self.show_frame(self.frame)
 
