@@ -494,3 +494,55 @@ def test_a_clip_of_poses_says_which_poses_a_retarget_loses(window, qtbot):
     fixed = mode.selected_result()
     assert fixed.poses_held == 4 and mode.scores.item(0, column).toolTip() == wrapped(poses_tip(fixed))
     assert f"({fixed.poses_held - len(fixed.poses_lost)}/4 poses)" in win.view.solo_hand().label.text
+
+
+def test_a_camera_preset_keeps_a_hand_framed_alone_framed(window, qtbot):
+    """A fresh-eyes user framed a hand alone (F) to fix it, then turned to the palm (Ctrl+1): the preset threw the
+    camera back to the whole grid's, the hand a third as large. A preset turns a framed hand to its side, framed."""
+    win = window
+    result = win.compare.selected_result()
+    joints = to_view(result.target, result.pose.positions[FRAME].numpy().astype(float))
+    widget = win.view.interactor
+
+    def span() -> float:
+        """The joints' extent on screen, of the widget's smaller side."""
+        points = np.array([[p.x(), p.y()] for p in (on_screen(win, j) for j in joints)], dtype=float)
+        return float(np.ptp(points, axis=0).max()) / min(widget.width(), widget.height())
+    unframed = span()
+    QTest.keyClick(win, Qt.Key.Key_F)
+    framed = span()
+    assert framed > 1.5 * unframed
+    direction = np.subtract(win.view.plotter.camera.position, win.view.plotter.camera.focal_point)
+    QTest.keyClick(win, Qt.Key.Key_1, Qt.KeyboardModifier.ControlModifier)  # the palm
+    turned_to = np.subtract(win.view.plotter.camera.position, win.view.plotter.camera.focal_point)
+    cosine = np.dot(direction, turned_to) / np.linalg.norm(direction) / np.linalg.norm(turned_to)
+    assert cosine < 0.5  # seen from another side...
+    turned_span = span()
+    QTest.keyClick(win, Qt.Key.Key_F)  # framed from there: as large as the preset left it
+    assert turned_span == pytest.approx(span(), rel=0.05)
+    QTest.keyClick(win, Qt.Key.Key_M, Qt.KeyboardModifier.ControlModifier)  # the grid: the palm preset's, whole
+    preset = win.view.plotter.camera.position
+    QTest.keyClick(win, Qt.Key.Key_1, Qt.KeyboardModifier.ControlModifier)
+    assert np.allclose(win.view.plotter.camera.position, preset)
+
+
+def test_a_motion_exports_message_fits_the_status_bar_naming_its_files(window, qtbot, tmp_path):
+    """A fresh-eyes user's motion export said "wrote /home/.../clip.glb and its corrections ..." past the window's
+    edge: the sidecars it wrote were cut off. Too long for the bar, it names the files, then the folder elided."""
+    win = window
+    pick_joint(qtbot, win)
+    drag(qtbot, win, 30.0)
+    folder = tmp_path.joinpath(*["a_long_folder_name_of_a_library"] * 6)
+    folder.mkdir(parents=True)
+    win.resize(1000, win.height())  # the smallest window
+    qtbot.waitUntil(lambda: win.statusBar().width() <= 1000)
+    assert win.export_motion(str(folder / "on_iris.glb"))
+    message, bar = win.statusBar().currentMessage(), win.statusBar()
+    assert message.startswith("wrote on_iris.glb and its TBS frames on_iris.right.tbs.json and its corrections "
+                              "on_iris.corrections.json in /")
+    assert "..." in message or "\u2026" in message
+    assert bar.fontMetrics().horizontalAdvance(message) < bar.width()
+    win.resize(1600, win.height())  # room for it all: the whole path
+    qtbot.waitUntil(lambda: win.statusBar().width() > 1500)
+    win.export_motion(str(tmp_path / "b.npz"))
+    assert win.statusBar().currentMessage().startswith(f"wrote {tmp_path / 'b.npz'} and its corrections")

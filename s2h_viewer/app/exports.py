@@ -13,7 +13,8 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from PySide6.QtCore import QObject, Signal
+from PySide6.QtCore import QObject, Qt, Signal
+from PySide6.QtGui import QFontMetrics
 from PySide6.QtWidgets import QWidget
 
 from s2h_viewer.app.compare_mode import CompareMode, label
@@ -24,6 +25,19 @@ from s2h_viewer.retarget.comparison import Comparison, MethodResult
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.retarget.progress import Cancelled
 from s2h_viewer.wording import counted
+
+
+def wrote_text(path: Path, what: str, metrics: QFontMetrics, room: int) -> str:
+    """"wrote PATH WHAT" in ``room`` pixels: where it does not fit, the file's name with what came with it, then
+    its folder elided in the middle (a motion's message named three files, and the window's edge cut off all
+    but the first)."""
+    whole = f"wrote {path}{what}"
+    if metrics.horizontalAdvance(whole) <= room:
+        return whole
+    head = f"wrote {Path(path).name}{what} in "
+    folder = metrics.elidedText(str(Path(path).parent), Qt.TextElideMode.ElideMiddle,
+                                max(room - metrics.horizontalAdvance(head), metrics.horizontalAdvance("/...//")))
+    return metrics.elidedText(head + folder, Qt.TextElideMode.ElideRight, room)
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,7 @@ from s2h_viewer.app.batch_browser import BatchBrowser
 from s2h_viewer.app.compare_mode import (ANGLE_CURVE, ASM_CURVE, RESIDUAL_CURVE, SIDEWAYS_CURVE, CompareMode,
                                          CompareSetup, default_setup)
 from s2h_viewer.app.focus import FocusKeeper
-from s2h_viewer.app.job_progress import strip_height
+from s2h_viewer.app.job_progress import JobProgress, strip_height
 from s2h_viewer.app.opened_clips import OpenedClips
 from s2h_viewer.app.tasks import TaskRunner
 from s2h_viewer.errors import S2HError, TooFewBonesError, UnrecognisedRigError, reading
@@ -34,6 +34,7 @@ __all__ = ["CompareSetup", "MainWindow", "default_setup", "run"]
 RECENT_FILES = 8
 MIN_SIZE = (1000, 700)  # the smallest window whose panels all hold (the heatmap whole, two score rows, the curve)
 STATUS_MS_EXPORT = 15_000  # a written or cancelled export says so this long in the status bar
+MESSAGE_MARGIN = 24  # pixels of the status bar a message leaves free: its grip and padding
 #: hand files a target can be (a BVH holds a motion on a skeleton, no mesh to colour: not offered)
 TARGET_HAND_FILTER = "Hands (*.glb *.gltf *.vrm *.fbx *.npz)"
 RIG_FILTER = "Rigs (*.glb *.gltf *.vrm *.fbx)"  # hand files with bones to map
@@ -724,7 +725,9 @@ class MainWindow(QMainWindow):
 
     def _wrote(self, path: Path, what: str = "") -> Path:
         self.settings.setValue("files/export_dir", str(Path(path).resolve().parent))
-        self.statusBar().showMessage(f"wrote {path}{what}", STATUS_MS_EXPORT)
+        bar = self.statusBar()
+        room = bar.width() - sum(w.width() for w in bar.findChildren(JobProgress) if w.isVisible()) - MESSAGE_MARGIN
+        bar.showMessage(exports.wrote_text(path, what, bar.fontMetrics(), room), STATUS_MS_EXPORT)
         return path
 
     def export_screenshot(self, path: str | None = None) -> Path | None:
