@@ -188,9 +188,38 @@ def test_the_cli_on_its_own_local_cluster_and_on_a_scheduler_started_here_give_t
         for row in rows:
             row["output"] = Path(row["output"]).name
     assert local == remote and len(local) == 2
-    assert main(["batch", "--motions", COUNTING, "--targets", "iris", "--out", str(tmp_path / "x"),
-                 "--scheduler", "tcp://127.0.0.1:9", "--quiet"]) == 2  # no scheduler there: one line, exit 2
-    assert "cannot reach a Dask scheduler" in capsys.readouterr().err
+
+def test_an_address_with_no_scheduler_behind_it_is_said_at_once(tmp_path, capsys):
+    """Dask's client retried a closed port for 20 s, waited for ever on a web server (the dashboard's port, say)
+    and asked for 3 EiB on a server's garbage: each is one line at once."""
+    import socketserver
+    import threading
+    from http.server import SimpleHTTPRequestHandler, ThreadingHTTPServer
+
+    class Garbage(socketserver.BaseRequestHandler):
+        def handle(self) -> None:
+            self.request.sendall(b"SSH-2.0-OpenSSH_9.6\r\n")
+    servers = [ThreadingHTTPServer(("127.0.0.1", 0), SimpleHTTPRequestHandler),
+               socketserver.ThreadingTCPServer(("127.0.0.1", 0), Garbage)]
+    for server in servers:
+        threading.Thread(target=server.serve_forever, daemon=True).start()
+    web, garbage = (f"tcp://127.0.0.1:{server.server_address[1]}" for server in servers)
+    said = {}
+    try:
+        for address in ("tcp://127.0.0.1:9", web, garbage, "127.0.0.1"):
+            assert main(["batch", "--motions", COUNTING, "--targets", "iris", "--out", str(tmp_path / "x"),
+                         "--scheduler", address, "--quiet"]) == 2
+            said[address] = capsys.readouterr().err.strip()  # ours, said before the client waits
+    finally:
+        for server in servers:
+            server.shutdown()
+            server.server_close()
+    assert said["tcp://127.0.0.1:9"].endswith("no Dask scheduler there: nothing listens at 127.0.0.1:9")
+    assert "says nothing a scheduler would (its dashboard, a web page?)" in said[web]
+    assert "answers, but not as a scheduler does (its first bytes: b'SSH-2.0-')" in said[garbage]
+    assert "tcp://127.0.0.1:8786" in said["127.0.0.1"]
+    assert all(text.count("\n") == 0 and text.startswith("s2h: error: --scheduler ") for text in said.values())
+    assert not (tmp_path / "x").exists()
 
 
 def _live_processes_in_group(pgid: int) -> list[int]:

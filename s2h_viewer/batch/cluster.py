@@ -12,12 +12,15 @@ from __future__ import annotations
 import logging
 import os
 import signal
+import socket
 import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
 import dask
 from distributed import Client, LocalCluster, as_completed
+from distributed.comm import parse_address
+from distributed.comm.addressing import parse_host_port
 from distributed.scheduler import KilledWorker
 
 from s2h_viewer.batch.plan import BatchUsageError, Task
@@ -25,6 +28,9 @@ from s2h_viewer.batch.task import base_row, run_task
 
 #: worker deaths a task survives before it is reported (so at most 3 attempts)
 ALLOWED_FAILURES = 2
+#: seconds a scheduler address has to accept and say its handshake (`_check_scheduler_address`); a handshake's
+#: first frame is a few hundred bytes, never this many
+SCHEDULER_ANSWER_S, MAX_HANDSHAKE_BYTES = 5.0, 1 << 20
 
 #: the nanny sets MALLOC_TRIM_THRESHOLD_=65536 in its workers, which nearly doubled numpy's CPU on this
 #: kind of work (issue 23): left unset, glibc's own threshold applies. Off-screen pictures render in one
@@ -51,10 +57,12 @@ def batch_client(scheduler: str | None = None, workers: int | None = None) -> It
         with dask.config.set(_CONFIG):
             if scheduler:
                 try:
+                    _check_scheduler_address(scheduler)
                     client = Client(scheduler, timeout="20s")
-                except (OSError, TimeoutError, ValueError) as exc:
-                    raise BatchUsageError(f"--scheduler {scheduler}: cannot reach a Dask scheduler there "
-                                          f"({type(exc).__name__}: {' '.join(str(exc).split())})") from None
+                except (OSError, TimeoutError, ValueError, MemoryError) as exc:
+                    what = f"no Dask scheduler there: {exc}" if isinstance(exc, NotASchedulerError) else \
+                        f"cannot reach a Dask scheduler there ({type(exc).__name__}: {exc})"
+                    raise BatchUsageError(f"--scheduler {scheduler}: {' '.join(what.split())}") from None
                 with client:
                     yield client
                 return
@@ -62,6 +70,48 @@ def batch_client(scheduler: str | None = None, workers: int | None = None) -> It
                 yield client
     finally:
         logger.setLevel(level)
+
+
+class NotASchedulerError(OSError):
+    """A scheduler address that cannot be one (`_check_scheduler_address`), said in the words of its message."""
+
+
+def _check_scheduler_address(scheduler: str) -> None:
+    """Raise at once where a TCP scheduler address cannot be a scheduler's: nothing listens there, no such host, no
+    port number, or what listens says nothing a scheduler would (a web page: the dashboard's port) or garbage.
+    Dask's client retries a refused connection for its whole timeout (a mistyped port kept the user waiting 20 s),
+    waits for ever on a server that does not speak first, and a proxy's bytes read as a frame length made it ask
+    for 3 EiB. A scheduler speaks first: its handshake, an 8-byte frame length then the frames."""
+    protocol, location = parse_address(scheduler)
+    if protocol not in ("tcp", "tls"):
+        return
+    try:
+        host, port = parse_host_port(location)
+    except ValueError:
+        raise NotASchedulerError(f"{location!r} is not host:port" + (
+            "" if ":" in location else f" (a scheduler listens on 8786 by default: tcp://{location}:8786)")) from None
+    try:
+        connection = socket.create_connection((host, port), timeout=SCHEDULER_ANSWER_S)
+    except ConnectionRefusedError:
+        raise NotASchedulerError(f"nothing listens at {host}:{port}") from None
+    except socket.gaierror:
+        raise NotASchedulerError(f"no host named {host}") from None
+    except OSError:  # unreachable or slow to answer: the client's own wait says so
+        return
+    with connection:
+        if protocol == "tls":  # its first bytes are the TLS handshake's, not Dask's
+            return
+        try:
+            head = connection.recv(8, socket.MSG_WAITALL)
+        except OSError:  # timed out: it waits to be spoken to
+            head = b""
+    if len(head) < 8:
+        raise NotASchedulerError(f"what listens at {host}:{port} says nothing a scheduler would (its dashboard, a "
+                                 "web page?); a scheduler's address is the one it prints as 'Scheduler at', "
+                                 "tcp://HOST:8786 by default")
+    if not 0 < int.from_bytes(head, "little") < MAX_HANDSHAKE_BYTES:
+        raise NotASchedulerError(f"what listens at {host}:{port} answers, but not as a scheduler does (its first "
+                                 f"bytes: {head!r})")
 
 
 @contextmanager
