@@ -411,7 +411,7 @@ def _cmd_batch(args: argparse.Namespace) -> int:
     source = str(Path(source).resolve()) if source and Path(source).is_file() else source
     config = BatchConfig(args.motions, args.targets, [m for m in args.methods.split(",") if m], args.out,
                          TaskOptions(format=args.format, side=args.side, render=args.pictures, unit=args.unit,
-                                     source=source),
+                                     source=source, animation=args.animation),
                          scheduler=args.scheduler, workers=args.workers)
     result = run_batch(config, show_progress=False if args.quiet else None)
     ok = sum(r["status"] == "ok" for r in result.rows)
@@ -426,7 +426,8 @@ def _cmd_batch(args: argparse.Namespace) -> int:
         print(f"  failed: {row['motion']} -> {row['target']} ({row['method']}): {row['error']}", file=sys.stderr)
     if len(failed) > 10:
         print(f"  ... and {len(failed) - 10} more (see the summary)", file=sys.stderr)
-    print(f"wrote {result.summary}\nwrote {result.report}")
+    also = f" (and the {counted(result.earlier, 'task')} other batches left in {config.out})" if result.earlier else ""
+    print(f"wrote {result.summary}{also}\nwrote {result.report}")
     return result.exit_code
 
 
@@ -600,6 +601,10 @@ def build_parser() -> argparse.ArgumentParser:
                                      "skeleton-only clip resting in a pose: its row's warning says so)")
     bt.add_argument("--unit", choices=list(UNITS), help="length unit of every rig and motion file (default: the "
                                                         "format's, else guessed from the hand's size)")
+    bt.add_argument("--animation", help="which animation (glTF) or take (FBX) of each motion file of several: name "
+                                        "or index, or `all`: every one in turn, one clip labelled by animation (a "
+                                        "pose library, scored pose by pose) (default: each its own motion, "
+                                        "<file>.<animation>)")
     bt.add_argument("--quiet", action="store_true", help="no progress bar")
     bt.set_defaults(func=_cmd_batch)
 

@@ -281,3 +281,58 @@ def test_a_rig_recognised_with_low_confidence_is_flagged_in_its_row(tmp_path):
     page = (tmp_path / "report.html")
     from s2h_viewer.batch.report import write_report
     assert low["warning"] in write_report([low, good], page).read_text().replace("&#x27;", "'").replace("&quot;", '"')
+
+
+POSES = str(ASSETS_DIR / "motions" / "real" / "godot_hand_poses_r.gltf")
+
+
+def test_each_animation_of_a_file_is_a_motion_of_its_own_and_all_reads_them_as_one_clip_of_poses(tmp_path):
+    """A user's batch on the 35-pose file retargeted its first animation alone and said nothing: each animation
+    (take) is its own motion, named by it; --animation all reads every one as one clip, scored pose by pose."""
+    from s2h_viewer.batch.task import POSES_APART, run_task
+    from s2h_viewer.io.files import RigOptions
+
+    tasks = plan_batch([POSES, GESTURES], ["iris"], ["tbs_copy"], tmp_path / "each",
+                       TaskOptions(format="npz", render=False))
+    names = [t.motion.name for t in tasks]
+    assert len(tasks) == 36 and names[0] == "godot_hand_poses_r.Cup" and "godot_hand_poses_r.Sign_4" in names
+    assert names[-1] == "gestures" and len(set(names)) == 36 and len({t.key for t in tasks}) == 36
+    horns = tasks[names.index("godot_hand_poses_r.Horns")]
+    row = run_task(horns)
+    motion, rig = load_motion_file(POSES, options=RigOptions(animation="Horns"))
+    assert row["status"] == "ok" and row["animation"] == str(horns.motion.animation) and row["frames"] == motion.n_frames
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        written = load_motion(horns.output)
+        assert np.allclose(written.q_tbs, retarget(motion, rig, load_hand_file("iris"), "tbs_copy").q_tbs, atol=1e-6)
+    finally:
+        torch.set_num_threads(threads)
+    (whole,) = plan_batch([POSES], ["iris"], ["tbs_copy"], tmp_path / "all",
+                          TaskOptions(format="npz", render=False, animation="all"))
+    row = run_task(whole)
+    kept, held = (int(n) for n in row["poses_kept"].split("/"))
+    assert row["status"] == "ok" and held == 35 and kept == 35 - len(row["poses_lost"].split(POSES_APART)) * bool(
+        row["poses_lost"])
+    assert 0 < row["kept"] <= 1 and row["frames"] > 35 * 2
+    (one,) = plan_batch([POSES], ["iris"], ["tbs_copy"], tmp_path / "one", TaskOptions(animation="Peace"))
+    assert one.motion.name == "godot_hand_poses_r" and one.motion.animation == "Peace"
+
+
+def test_a_second_batch_into_a_folder_lists_the_first_ones_rows_too(cluster, tmp_path):
+    """A user ran one batch per source rig into one folder: the second's summary listed its own row alone, and the
+    first's results, still on disk, were nowhere. The summary and the report list both."""
+    out = tmp_path / "out"
+    options = TaskOptions(format="npz", render=False)
+    first = run_batch(BatchConfig([COUNTING], ["iris"], ["tbs_copy"], str(out), options,
+                                  scheduler=cluster.scheduler_address), show_progress=False)
+    second = run_batch(BatchConfig([GESTURES], ["iris"], ["tbs_copy"], str(out), options,
+                                   scheduler=cluster.scheduler_address), show_progress=False)
+    assert first.earlier == 0 and second.earlier == 1 and len(second.rows) == 1
+    rows = read_summary(out / "summary.csv")
+    assert sorted(r["motion"] for r in rows) == ["counting", "gestures"] and all(r["status"] == "ok" for r in rows)
+    assert 0 < rows[0]["kept"] <= 1
+    (out / "counting" / "iris" / "tbs_copy.npz").unlink()  # a result removed by hand is no longer listed
+    run_batch(BatchConfig([GESTURES], ["iris"], ["tbs_copy"], str(out), options,
+                          scheduler=cluster.scheduler_address), show_progress=False)
+    assert [r["motion"] for r in read_summary(out / "summary.csv")] == ["gestures"]

@@ -46,8 +46,8 @@ def test_a_double_clicked_row_is_shown_in_compare_at_its_worst_frame(qtbot, samp
     table = win.batch_browser.table
     qtbot.waitExposed(table)
     rows = table.rows
-    assert [r["status"] for r in rows] == ["failed", "failed", "ok", "ok"]  # worst first: failures, then S_finger
-    assert rows[2]["s_finger"] <= rows[3]["s_finger"]
+    assert [r["status"] for r in rows] == ["failed", "failed", "ok", "ok"]  # worst first: failures, then kept
+    assert (rows[2]["kept"], rows[2]["s_finger"]) <= (rows[3]["kept"], rows[3]["s_finger"])
 
     shown = []
     monkeypatch.setattr(QMessageBox, "critical", lambda *args: shown.append(args[2]))
@@ -72,3 +72,29 @@ def test_a_double_clicked_row_is_shown_in_compare_at_its_worst_frame(qtbot, samp
     assert selected.target.name == "laurel" and win.compare.state.motion.name == "counting"
     assert win.timeline.frame == wanted["worst_frame"]
     assert "dm" in win.compare.state.methods and len(shown) == 1
+
+
+def test_a_row_of_one_animation_of_a_file_shows_that_animation(qtbot, sample_hands, tmp_path):
+    """A batch takes each animation of a file as its own motion: its row opens that animation, not the file's
+    first."""
+    from s2h_viewer.io.files import load_hand_file
+    from s2h_viewer.io.gltf import save_gltf_motion
+    from s2h_viewer.motions.synthesis import synthesize
+    from s2h_viewer.retarget import retarget
+
+    hand = load_hand_file(ASSETS_DIR / "hands" / "real" / "godot_hand_r.gltf")
+    birch = sample_hands["birch"]
+    clips = [retarget(synthesize(gestures, birch, seed=1, name=name), birch, hand, "tbs_copy")
+             for name, gestures in (("grip", ["fist"]), ("sign", ["v_sign", "ok"]))]
+    one = save_gltf_motion(tmp_path / "one.glb", clips[0], hand)
+    two = save_gltf_motion(tmp_path / "two.glb", clips[1], load_hand_file(one))  # grip, then sign
+    tasks = plan_batch([str(two)], ["laurel"], ["tbs_copy"], tmp_path / "out", TaskOptions(format="npz",
+                                                                                          render=False))
+    assert [t.motion.name for t in tasks] == ["two.grip", "two.sign"]
+    summary = write_summary([run_task(t) for t in tasks], tmp_path / "out" / "summary.csv")
+    win = open_compare_window(qtbot, sample_hands, tmp_path)
+    table = win.batch_browser.open(str(summary))
+    row = next(r for r in table.rows if r["motion"] == "two.sign")
+    with qtbot.waitSignal(win.comparison_ready, timeout=120_000):
+        win.batch_browser.show_row(row)
+    assert win.compare.state.motion.name == "sign" and win.compare.state.motion.n_frames == clips[1].n_frames

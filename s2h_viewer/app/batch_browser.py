@@ -25,7 +25,7 @@ class BatchBrowser(QObject):
         self.dock.setAllowedAreas(Qt.DockWidgetArea.BottomDockWidgetArea | Qt.DockWidgetArea.RightDockWidgetArea)
         window.addDockWidget(Qt.DockWidgetArea.BottomDockWidgetArea, self.dock)
         self.dock.hide()
-        self._motion_path: str | None = None
+        self._motion_read: tuple[str, str, str] | None = None  # (file, animation, source rig) of the clip shown
         self._motion = None
         self._pending: tuple[HandModel, str, int] | None = None  # (target, method, frame) to select when shown
         window.comparison_ready.connect(self._select_pending)
@@ -64,8 +64,9 @@ class BatchBrowser(QObject):
             return
         compare = self.window.compare
         try:
-            if self._motion_path != row["motion_path"] or compare.state.motion is not self._motion:
-                motion, source = self._read_motion(row["motion_path"])
+            read = (row["motion_path"], row.get("animation") or "", row.get("source_path") or "")
+            if self._motion_read != read or compare.state.motion is not self._motion:
+                motion, source = self._read_motion(*read)
             else:
                 motion = None
             target = self._target(row["target_path"], compare.state.targets)
@@ -75,7 +76,7 @@ class BatchBrowser(QObject):
         frame = int(row["worst_frame"]) if str(row.get("worst_frame", "")).isdigit() else 0
         self._pending = (target, row["method"], frame)
         if motion is not None:
-            self._motion_path, self._motion = row["motion_path"], motion
+            self._motion_read, self._motion = read, motion
             compare.load(motion, source)
         if all(t is not target for t in compare.state.targets):
             compare.add_target(target)
@@ -84,10 +85,13 @@ class BatchBrowser(QObject):
         if not compare.state.missing():
             self._select_pending()
 
-    def _read_motion(self, path: str):
-        from s2h_viewer.io.files import load_motion_file
+    def _read_motion(self, path: str, animation: str, source: str):
+        """The row's clip read as the batch read it: its animation of the file, on the batch's --source rig."""
+        from s2h_viewer.io.files import RigOptions, load_hand_file, load_motion_file
         from s2h_viewer.samples import load_sample_hand
-        motion, rig = load_motion_file(path)
+        performer = load_hand_file(source) if source else None
+        motion, rig = load_motion_file(path, performer, RigOptions(
+            animation=int(animation) if animation.isdigit() else animation or None))
         return motion, rig or load_sample_hand(motion.hand_name)
 
     def _target(self, path: str, targets: list[HandModel]) -> HandModel:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import glob
 import hashlib
 import json
+import re
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 
@@ -29,10 +30,13 @@ class BatchUsageError(S2HError):
 
 @dataclass(frozen=True)
 class Input:
-    """A motion or target of the batch: its file (or a shipped sample hand's name) and the name it goes by."""
+    """A motion or target of the batch: its file (or a shipped sample hand's name) and the name it goes by; for a
+    motion file of several animations (takes), which it reads (`io.files.RigOptions.animation`: an index, a name,
+    or every one in turn as one clip), None for a file of one clip."""
 
     path: str
     name: str
+    animation: str | int | None = None
 
     def fingerprint(self) -> list:
         """Size and modification time of the file and of its sidecars (TBS frames, joint map: they change how it
@@ -51,6 +55,9 @@ class TaskOptions:
     render: bool = True  # the worst frame's picture
     unit: str | None = None  # every rig's length unit (None: the format's, else guessed)
     source: str | None = None  # the hand file of the rig the motions were made for, where their files lack it
+    #: which animation (take) of each motion file of several: a name or index, `all` (every one in turn as one
+    #: clip: a pose library), None: each its own motion
+    animation: str | None = None
 
 
 @dataclass(frozen=True)
@@ -81,7 +88,8 @@ class Task:
     def key(self) -> str:
         """What the task's result depends on: inputs (as files are now), method and options."""
         what = [self.motion.path, self.motion.fingerprint(), self.target.path, self.target.fingerprint(),
-                self.method, asdict(self.options)]
+                self.method, asdict(self.options)] + ([self.motion.animation] if self.motion.animation is not None
+                                                      else [])
         return hashlib.sha256(json.dumps(what, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
     def finished_row(self) -> dict | None:
@@ -154,6 +162,33 @@ def _named(items: list[Path | str]) -> list[Input]:
     return inputs
 
 
+#: characters of an animation's name kept in the name of its folder (others become "_")
+_SAFE = re.compile(r"[^A-Za-z0-9._-]+")
+
+
+def _animations(motion: Input, wanted: str | None) -> list[Input]:
+    """The motions a file gives: with ``wanted`` (a name, an index, `all`), the file read that way; else each
+    animation (take) of a file of several its own motion, named ``<file>.<animation>``. A file whose animations
+    cannot be listed (damaged) stays one motion: its tasks fail with the reader's error."""
+    from s2h_viewer.io.files import ANIMATED_SUFFIXES, list_animations
+
+    if Path(motion.path).suffix.lower() not in ANIMATED_SUFFIXES:
+        return [motion]
+    if wanted is not None:
+        return [Input(motion.path, motion.name, int(wanted) if wanted.isdigit() else wanted)]
+    try:
+        names = list_animations(motion.path)
+    except S2HError:
+        return [motion]
+    if len(names) < 2:
+        return [motion]
+    named: dict[str, int] = {}
+    for index, name in enumerate(names):
+        base = f"{motion.name}.{_SAFE.sub('_', name.split(' (')[0]).strip('_.') or index}"
+        named[base if base not in named else f"{base}_{index}"] = index
+    return [Input(motion.path, name, index) for name, index in named.items()]
+
+
 def plan_batch(motions: list[str], targets: list[str], methods: list[str], out_dir: str | Path,
                options: TaskOptions = TaskOptions(), known_methods: tuple[str, ...] = ()) -> list[Task]:
     """The batch's tasks, motion-major; a `BatchUsageError` for what no task could run."""
@@ -162,7 +197,8 @@ def plan_batch(motions: list[str], targets: list[str], methods: list[str], out_d
     unknown = [m for m in methods if known_methods and m not in known_methods]
     if unknown or not methods:
         raise BatchUsageError(f"unknown method {', '.join(unknown) or '(none)'}; available: {', '.join(known_methods)}")
-    motion_inputs = _named(_files(motions, MOTION_SUFFIXES, "motion", allow_names=False))
+    motion_inputs = [one for motion in _named(_files(motions, MOTION_SUFFIXES, "motion", allow_names=False))
+                     for one in _animations(motion, options.animation)]
     target_inputs = _named(_files(targets, HAND_SUFFIXES, "hand", allow_names=True))
     out = str(Path(out_dir))
     return [Task(m, t, method, out, options) for m in motion_inputs for t in target_inputs for method in methods]

@@ -11,12 +11,13 @@ import os
 from pathlib import Path
 
 from s2h_viewer.batch.summary import ordered
+from s2h_viewer.batch.task import POSES_APART
 from s2h_viewer.io.atomic import atomic_path
 from s2h_viewer.semantics.flexion import SidewaysPeak
 from s2h_viewer.wording import counted
 
 _NAMES = (("motion", "motion"), ("target", "target"), ("method", "method"), ("status", "status"))
-_SCORES = (("s_finger", "S_finger"), ("s_palm", "S_palm"), ("contact_p", "contact P"), ("contact_r", "contact R"),
+_SCORES = (("kept", "kept"), ("s_finger", "S_finger"), ("s_palm", "S_palm"), ("contact_p", "contact P"), ("contact_r", "contact R"),
            ("violations", "violations"), ("sideways_deg", "sideways deg"), ("worst_frame", "worst frame"),
            ("frames", "frames"), ("seconds", "seconds"))
 
@@ -34,10 +35,12 @@ th.sorted-asc::after { content: " \\25B2"; } th.sorted-desc::after { content: " 
 td.num { text-align: right; font-variant-numeric: tabular-nums; }
 tr.failed td { background: #fde7ea; }
 tr.not-run td { background: #f3f3f3; color: #777; }
-td.error { color: #b00020; max-width: 22em; }
-td.note { max-width: 16em; }
+td.error, td.note { min-width: 14em; max-width: 24em; }
+td:nth-child(-n+2) { min-width: 7em; max-width: 11em; overflow-wrap: anywhere; }  /* motion, target: long names wrap */
+td.error { color: #b00020; }
+details ul { margin: .2em 0; padding-left: 1.2em; color: #222; } summary { cursor: pointer; }
 .failures { color: #b00020; margin: .4em 0; } .failures ul { margin: .2em 0; } .failures .tasks { color: #555; }
-img { height: 150px; display: block; }
+img { height: 120px; display: block; }
 """
 
 _SCRIPT = """
@@ -79,7 +82,10 @@ def _value(row: dict, key: str) -> tuple[str, str]:
     if isinstance(value, float):
         if math.isnan(value):
             return "n/a", ""
-        return (f"{value:.1f}" if key in ("sideways_deg", "seconds") else f"{value:.3f}"), repr(value)
+        text = f"{value:.1f}" if key in ("sideways_deg", "seconds") else f"{value:.3f}"
+        if key == "kept" and row.get("poses_kept"):
+            text += f" ({row['poses_kept']} poses)"
+        return text, repr(value)
     return str(value), str(value)
 
 
@@ -95,6 +101,18 @@ def _failure_groups(rows: list[dict]) -> str:
     items = "".join(f"<li>{html.escape(error)} <span class=tasks>({counted(count, 'task')})</span></li>"
                     for error, count in sorted(groups.items(), key=lambda g: -g[1]))
     return f'<div class="failures"><b>Failures</b><ul>{items}</ul></div>'
+
+
+def _poses_lost(row: dict) -> str:
+    """The poses a retarget of a clip of poses lost, folded under how many ("" if it lost none): 20 lost poses
+    written out had made the note column a page tall."""
+    if not row.get("poses_lost"):
+        return ""
+    lost = str(row["poses_lost"]).split(POSES_APART)
+    held = str(row.get("poses_kept", "")).partition("/")[2]
+    items = "".join(f"<li>{html.escape(pose)}</li>" for pose in lost)
+    return (f'<details><summary>{len(lost)}{f" of {held}" if held else ""} poses lost</summary>'
+            f"<ul>{items}</ul></details>")
 
 
 def _sideways_note(row: dict) -> str:
@@ -118,6 +136,7 @@ def write_report(rows: list[dict], path: str | Path, title: str = "s2h batch") -
     failed = sum(r.get("status") == "failed" for r in rows)
     not_run = sum(r.get("status") == "not run" for r in rows)
     ok = len(rows) - failed - not_run
+    warned = sum(r.get("status") == "ok" and bool(r.get("warning")) for r in rows)
     head = "".join(f'<th data-col="{i}">{html.escape(label)}</th>' for i, (_, label) in enumerate(_NAMES))
     head += '<th>error / note</th><th>worst frame: source | retarget</th>'
     head += "".join(f'<th data-col="{len(_NAMES) + 1 + i}">{html.escape(label)}</th>'
@@ -127,6 +146,7 @@ def write_report(rows: list[dict], path: str | Path, title: str = "s2h batch") -
     for row in rows:
         cells = [_cell(row, key, numeric=False) for key, _ in _NAMES]
         note = "<br>".join(html.escape(n) for n in (row.get("error"), row.get("warning"), _sideways_note(row)) if n)
+        note += _poses_lost(row)
         cells.append(f'<td class="{"error" if row.get("error") or row.get("warning") else "note"}">{note}</td>')
         picture = row.get("picture") or ""
         cells.append(f'<td><a href="{html.escape(_relative(picture, folder))}"><img loading="lazy" alt="frame '
@@ -139,17 +159,18 @@ def write_report(rows: list[dict], path: str | Path, title: str = "s2h batch") -
                  for k, label in (("output", "output"), ("motion_path", "motion"), ("target_path", "target"))
                  if row.get(k) and (k == "output" or Path(row[k]).is_file())]
         cells.append(f"<td>{'<br>'.join(links)}</td>")
-        text = " ".join(str(row.get(k, "")) for k in ("motion", "target", "method", "status", "error")).lower()
+        text = " ".join(str(row.get(k, "")) for k in ("motion", "target", "method", "status", "error", "warning",
+                                                          "poses_lost")).lower()
         css = {"failed": ' class="failed"', "not run": ' class="not-run"'}.get(row.get("status"), "")
         lines.append(f'<tr{css} data-text="{html.escape(text)}">{"".join(cells)}</tr>')
     page = f"""<!doctype html>
 <html lang="en"><head><meta charset="utf-8"><title>{html.escape(title)}</title><style>{_STYLE}</style></head>
 <body>
 <h1>{html.escape(title)}</h1>
-<div class="counts"><span>{len(rows)} tasks</span><span>{ok} ok</span>
+<div class="counts"><span>{len(rows)} tasks</span><span>{ok} ok{f" ({warned} with a warning)" if warned else ""}</span>
 <span class="{'failed-count' if failed else ''}">{failed} failed</span>{f'<span>{not_run} not run (interrupted: run the batch again)</span>' if not_run else ''}</div>
 {_failure_groups(rows)}
-<input id="filter" type="search" placeholder="filter: words of motion, target, method, status or error">
+<input id="filter" type="search" placeholder="filter: words of motion, target, method, status, error, warning or pose">
 <table id="rows"><thead><tr>{head}</tr></thead><tbody>
 {chr(10).join(lines)}
 </tbody></table>

@@ -1,5 +1,6 @@
 """`s2h batch`: plan, skip what an earlier run finished, run the rest on the cluster with a progress bar
-(done / failed / running, ETA), then write ``summary.csv`` and ``report.html``.
+(done / failed / running, ETA), then write ``summary.csv`` and ``report.html``: this batch's rows, then those
+other batches left in the folder.
 
 Exit status: 0 when every task is ok, 1 when some failed (the summary says which), 2 for a usage error
 (raised as `BatchUsageError` before anything runs), 130 after Ctrl+C (the cluster stopped, the finished
@@ -9,6 +10,7 @@ temporary files of interrupted writes are removed).
 
 from __future__ import annotations
 
+import json
 import os
 import sys
 import time
@@ -46,6 +48,7 @@ class BatchResult:
     interrupted: bool = False
     failed: list[dict] = field(default_factory=list)  # status failed (tasks an interrupt left are "not run")
     startup_seconds: float = 0.0  # planning, the cluster's start and its workers' imports, before the first task
+    earlier: int = 0  # rows of other batches into the same folder, listed in its summary after this batch's
 
     @property
     def exit_code(self) -> int:
@@ -109,10 +112,30 @@ def run_batch(config: BatchConfig, show_progress: bool | None = None) -> BatchRe
                     "status": "not run", "error": "the batch was interrupted (Ctrl+C) first; run it again to finish"}
     ordered_rows = [rows[i] for i in range(len(tasks))]
     out = Path(config.out)
-    summary = write_summary(ordered_rows, out / "summary.csv")
-    report = write_report(ordered_rows, out / "report.html", title=f"s2h batch: {out.resolve().name}")
+    earlier = earlier_rows(out, {task.row_file.resolve() for task in tasks})
+    summary = write_summary(ordered_rows + earlier, out / "summary.csv")
+    report = write_report(ordered_rows + earlier, out / "report.html", title=f"s2h batch: {out.resolve().name}")
     return BatchResult(ordered_rows, skipped, time.perf_counter() - start, summary, report, interrupted,
-                       [r for r in ordered_rows if r["status"] == "failed"], started_at[0] - start)
+                       [r for r in ordered_rows if r["status"] == "failed"], started_at[0] - start, len(earlier))
+
+
+def earlier_rows(out: Path, planned: set[Path]) -> list[dict]:
+    """The rows other batches left in ``out`` (other motions, targets or methods), ok with their output still
+    there or failed: a second batch into a folder rewrote its summary with its own rows alone, and the first's
+    results, still on disk, were listed nowhere."""
+    found = []
+    for row_file in sorted(out.glob("*/*/*.row.json")):
+        if row_file.resolve() in planned:
+            continue
+        try:
+            row = json.loads(row_file.read_text())
+        except (OSError, ValueError):
+            continue
+        if not isinstance(row, dict) or not all(isinstance(row.get(k), str) for k in ("motion", "target", "method")):
+            continue
+        if row.get("status") == "failed" or (row.get("status") == "ok" and Path(str(row.get("output"))).is_file()):
+            found.append(row)
+    return found
 
 
 def _remove_partial_files(task: Task) -> None:

@@ -14,11 +14,12 @@ from pathlib import Path
 from s2h_viewer.errors import InputFileError, reading, require_readable_file
 from s2h_viewer.io.atomic import atomic_path
 
-COLUMNS = ("motion", "target", "method", "status", "error", "warning", "frames", "seconds", "s_palm", "s_finger",
+COLUMNS = ("motion", "target", "method", "status", "error", "warning", "frames", "seconds", "kept", "poses_kept",
+           "poses_lost", "s_palm", "s_finger",
            "contact_p", "contact_r", "palm_r", "violations", "sideways_deg", "sideways_at", "worst_frame",
-           "worst_error", "output", "picture", "motion_path", "target_path")
+           "worst_error", "output", "picture", "motion_path", "target_path", "animation", "source_path")
 COUNTS = ("frames", "worst_frame")
-SCORES = ("s_palm", "s_finger", "contact_p", "contact_r", "palm_r", "violations", "sideways_deg", "worst_error")
+SCORES = ("kept", "s_palm", "s_finger", "contact_p", "contact_r", "palm_r", "violations", "sideways_deg", "worst_error")
 
 
 def _cell(value) -> str:

@@ -11,11 +11,12 @@ import json
 import time
 import traceback
 from collections import OrderedDict
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
-from s2h_viewer.batch.plan import Task
+from s2h_viewer.batch.plan import Input, Task
 from s2h_viewer.errors import S2HError
 from s2h_viewer.io.atomic import atomic_path
 
@@ -37,21 +38,30 @@ def _cached(key: tuple, load):
 
 def _load_motion(task: Task):
     """The motion and the hand it is performed on (the batch's --source rig, else its own rig, else its sample
-    hand)."""
-    from s2h_viewer.io.files import load_hand_file, load_motion_file
+    hand). A glTF file's animations are read together, once: each task of one read the whole file again (its
+    JSON parsed 6 s a time for the 35 poses), and so did its rig."""
+    from s2h_viewer.io.files import ANIMATED_SUFFIXES, GLTF_FAMILY, load_hand_file, load_motion_file
+    from s2h_viewer.io.gltf import load_every_gltf_animation
     from s2h_viewer.samples import sample_performer
 
-    source = task.options.source
+    path, animation, options = task.motion.path, task.motion.animation, _rig_options(task)
+    suffix = Path(path).suffix.lower()
+    source = task.options.source or (path if suffix in ANIMATED_SUFFIXES else None)  # else: no rig in the file
+    performer = None if source is None else _cached(
+        ("hand", source, repr(Input(source, "").fingerprint()), task.options.side, task.options.unit),
+        lambda: load_hand_file(source, options))
+    fingerprint = repr(task.motion.fingerprint())
+    if isinstance(animation, int) and suffix in GLTF_FAMILY:
+        every = _cached(("animations", path, fingerprint, task.options.side, task.options.unit, source),
+                        lambda: load_every_gltf_animation(path, performer))
+        if animation < len(every):
+            return every[animation], performer
 
     def load():
-        performer = None if source is None else _cached(
-            ("hand", source, task.options.side, task.options.unit),
-            lambda: load_hand_file(source, _rig_options(task)))
-        motion, rig = load_motion_file(task.motion.path, performer, _rig_options(task))
-        return motion, rig or sample_performer(motion, task.motion.path)
+        motion, rig = load_motion_file(path, performer, replace(options, animation=animation))
+        return motion, rig or sample_performer(motion, path)
 
-    return _cached(("motion", task.motion.path, repr(task.motion.fingerprint()), task.options.side,
-                    task.options.unit, source), load)
+    return _cached(("motion", path, animation, fingerprint, task.options.side, task.options.unit, source), load)
 
 
 def _load_target(task: Task):
@@ -69,7 +79,9 @@ def _rig_options(task: Task):
 
 def base_row(task: Task) -> dict:
     return {"motion": task.motion.name, "target": task.target.name, "method": task.method, "key": task.key,
-            "motion_path": task.motion.path, "target_path": task.target.path, "output": "", "picture": ""}
+            "motion_path": task.motion.path, "target_path": task.target.path, "output": "", "picture": "",
+            "animation": "" if task.motion.animation is None else str(task.motion.animation),
+            "source_path": task.options.source or ""}
 
 
 def run_task(task: Task) -> dict:
@@ -96,15 +108,21 @@ def _retarget_and_write(task: Task) -> dict:
     from s2h_viewer.io.files import save_motion_file
     from s2h_viewer.retarget import retarget
     from s2h_viewer.semantics.metrics import score_retarget_frames
+    from s2h_viewer.semantics.signature import pose_differences
 
     motion, source = _load_motion(task)
     target = _load_target(task)
     warning = rig_warning(source, "source") or rig_warning(target, "target")
     moved = retarget(motion, source, target, task.method)
     scores, frame_error = score_retarget_frames(source, motion.q_tbs, target, moved.q_tbs)
+    poses = pose_differences(source, motion.q_tbs, target, moved.q_tbs, motion.labels)  # {} for a clip of no poses
+    lost = {name: what for name, what in poses.items() if what}
     worst = int(np.argmax(frame_error)) if len(frame_error) else 0
     save_motion_file(task.output, moved, target)
-    row = {"frames": motion.n_frames, "s_palm": scores.s_palm, "s_finger": scores.s_finger,
+    row = {"frames": motion.n_frames, "kept": scores.signature_kept,
+           "poses_kept": f"{len(poses) - len(lost)}/{len(poses)}" if poses else "",
+           "poses_lost": POSES_APART.join(f"{name}: {', '.join(what)}" for name, what in lost.items()),
+           "s_palm": scores.s_palm, "s_finger": scores.s_finger,
            "contact_p": scores.contact_precision, "contact_r": scores.contact_recall,
            "palm_r": scores.palm_contact_recall, "violations": scores.violation_rate,
            "sideways_deg": scores.sideways_deg, "sideways_at": scores.sideways_at,
@@ -115,6 +133,9 @@ def _retarget_and_write(task: Task) -> dict:
         row["picture"] = str(task.picture)
     return row
 
+
+#: between the poses of a row's ``poses_lost`` (what each lost is said with "; " and ", ")
+POSES_APART = " | "
 
 #: a rig recognised with less confidence than this is flagged in the task's row (its hand may be misread)
 LOW_RIG_CONFIDENCE = 0.5

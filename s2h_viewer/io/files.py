@@ -22,6 +22,7 @@ from s2h_viewer.hand.rig_mapping import load_user_mapping, sides_named
 HAND_SUFFIXES = (".npz", ".glb", ".gltf", ".vrm", ".fbx", ".bvh")
 MOTION_SUFFIXES = (".npz", ".bvh", ".glb", ".gltf", ".vrm", ".fbx", ".json", ".npy")
 GLTF_FAMILY = (".glb", ".gltf", ".vrm")  # a .vrm is a GLB with a VRM extension
+ANIMATED_SUFFIXES = (*GLTF_FAMILY, ".fbx")  # motion files of animations (takes), any number of them
 EXPORT_SUFFIXES = (".npz", ".bvh", ".glb", ".fbx")
 #: ``RigOptions.animation`` for every animation of a file in turn, as one clip labelled by animation
 ALL_ANIMATIONS = "all"

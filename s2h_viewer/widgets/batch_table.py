@@ -1,4 +1,4 @@
-"""A batch's ``summary.csv`` as a table, worst first (failures, then the lowest S_finger); double-click (or
+"""A batch's ``summary.csv`` as a table, worst first (failures, then the least kept); double-click (or
 Enter on) a row to look at that clip, target and method in the compare grid. Sortable by any column."""
 
 from __future__ import annotations
@@ -10,19 +10,26 @@ from PySide6.QtCore import Qt, Signal
 from PySide6.QtGui import QColor, QKeySequence, QShortcut
 from PySide6.QtWidgets import QHeaderView, QLabel, QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget
 
+from s2h_viewer.batch.task import POSES_APART
+
 #: (header, row key, decimals or None for text)
 COLUMNS = (("Motion", "motion", None), ("Target", "target", None), ("Method", "method", None),
-           ("Status", "status", None), ("S_finger", "s_finger", 3), ("S_palm", "s_palm", 3),
+           ("Status", "status", None), ("Kept", "kept", 3), ("S_finger", "s_finger", 3), ("S_palm", "s_palm", 3),
            ("Contact P", "contact_p", 3), ("Contact R", "contact_r", 3), ("Violations", "violations", 3),
            ("Sideways\n(deg)", "sideways_deg", 1), ("Worst\nframe", "worst_frame", None), ("Error or warning", "error", None))
 FAILED_COLOUR = QColor("#fde7ea")
+KEPT_TIP = ("the share of frames whose signature is kept: each finger extended, bent or curled as in the source, "
+            "the thumb's touches, no finger bending sideways")
 
 
 def worst_first(rows: list[dict]) -> list[dict]:
-    """Failures first, then by S_finger from the lowest (a row with no score after those with one)."""
+    """Failures first, then by the share of frames whose signature is kept from the lowest, then by S_finger (a
+    row with no score after those with one): S_finger averages one wrong finger away, and a batch ranked by it
+    put a retarget keeping 0.60 below one keeping 0.68."""
     def key(row: dict) -> tuple:
-        score = row.get("s_finger", math.nan)
-        return {"failed": 0, "not run": 1}.get(row.get("status"), 2), math.isnan(score), score
+        kept, score = row.get("kept", math.nan), row.get("s_finger", math.nan)
+        return ({"failed": 0, "not run": 1}.get(row.get("status"), 2), math.isnan(kept), kept, math.isnan(score),
+                score)
     return sorted(rows, key=key)
 
 
@@ -64,7 +71,13 @@ class BatchTable(QWidget):
                 if decimals is not None:
                     number = None if math.isnan(value) else float(value)
                     empty = "n/a" if row.get("status") == "ok" else ""  # a failed task measured nothing
-                    item = _Item(empty if number is None else f"{number:.{decimals}f}", number)
+                    text = empty if number is None else f"{number:.{decimals}f}"
+                    if key == "kept" and row.get("poses_kept"):
+                        text += f" ({row['poses_kept']} poses)"
+                    item = _Item(text, number)
+                    if key == "kept" and number is not None:
+                        item.setToolTip(KEPT_TIP + ("\n\nposes lost:\n" + str(row["poses_lost"]).replace(POSES_APART, "\n")
+                                                    if row.get("poses_lost") else ""))
                     item.setTextAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
                 else:
                     text = str(value)
@@ -88,7 +101,7 @@ class BatchTable(QWidget):
             self.table.selectRow(0)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(4, 2, 4, 4)
-        layout.addWidget(QLabel("Worst first (failures, then the lowest S_finger); click a heading to sort, "
+        layout.addWidget(QLabel("Worst first (failures, then the least kept); click a heading to sort, "
                                 "double-click a row (or Enter) to show it in Compare at its worst frame."))
         layout.addWidget(self.table)
 
