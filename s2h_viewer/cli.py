@@ -417,10 +417,13 @@ def _cmd_batch(args: argparse.Namespace) -> int:
     ok = sum(r["status"] == "ok" for r in result.rows)
     not_run = sum(r["status"] == "not run" for r in result.rows)
     warned = sum(bool(r.get("warning")) for r in result.rows if r["status"] == "ok")
-    print(f"{len(result.rows)} tasks: {ok} ok" + (f" ({warned} with a warning)" if warned else "")
+    print(f"{counted(len(result.rows), 'task')}: {ok} ok" + (f" ({warned} with a warning)" if warned else "")
           + f", {len(result.failed)} failed" + (f", {not_run} not run" if not_run else "")
           + (f" ({result.skipped} finished by an earlier run)" if result.skipped else "")
           + f", {result.seconds:.1f} s" + (" (interrupted: run it again to finish)" if result.interrupted else ""))
+    if result.rigs:
+        names = ", ".join(Path(rig).name for rig in result.rigs[:5]) + (", ..." if len(result.rigs) > 5 else "")
+        print(f"left out {counted(len(result.rigs), 'file')} of the motion folders with no animation (rigs?): {names}")
     failed = result.failed
     for row in failed[:10]:
         print(f"  failed: {row['motion']} -> {row['target']} ({row['method']}): {row['error']}", file=sys.stderr)

@@ -336,3 +336,35 @@ def test_a_second_batch_into_a_folder_lists_the_first_ones_rows_too(cluster, tmp
     run_batch(BatchConfig([GESTURES], ["iris"], ["tbs_copy"], str(out), options,
                           scheduler=cluster.scheduler_address), show_progress=False)
     assert [r["motion"] for r in read_summary(out / "summary.csv")] == ["gestures"]
+
+
+def test_a_rig_in_a_folder_of_clips_is_left_out_and_a_row_is_strict_json(tmp_path):
+    """A folder of clips held the rig they were made on: its tasks failed "has no animations". Left out of a
+    searched folder (named on its own, it still fails, saying why); a row's unmeasured score is null, not NaN."""
+    import json
+    import shutil
+
+    from s2h_viewer.batch.summary import row_json
+    from s2h_viewer.batch.task import run_task
+
+    folder = tmp_path / "library"
+    folder.mkdir()
+    rig = ASSETS_DIR / "motions" / "real" / "godot_hand_r_posed_rig.gltf"
+    shutil.copy(rig, folder)
+    shutil.copy(COUNTING, folder)
+    left_out: list[str] = []
+    tasks = plan_batch([str(folder)], ["iris"], ["tbs_copy"], tmp_path / "out",
+                       TaskOptions(format="npz", render=False), skipped=left_out)
+    assert [t.motion.name for t in tasks] == ["counting"] and [Path(p).name for p in left_out] == [rig.name]
+    row = run_task(tasks[0]) | {"contact_p": float("nan")}  # as a clip of no contacts scores it
+    tasks[0].row_file.write_text(row_json(row))
+    written = tasks[0].row_file.read_text()
+    assert "NaN" not in written and json.loads(written)["contact_p"] is None
+    back = tasks[0].finished_row()
+    assert np.isnan(back["contact_p"]) and back["s_finger"] == row["s_finger"]  # read back as scored
+    (alone,) = plan_batch([str(folder / rig.name)], ["iris"], ["tbs_copy"], tmp_path / "out", TaskOptions())
+    assert "has no animations" in run_task(alone)["error"]
+    (tmp_path / "rigs").mkdir()
+    shutil.copy(rig, tmp_path / "rigs")
+    with pytest.raises(BatchUsageError, match="no motion files with animations"):
+        plan_batch([str(tmp_path / "rigs")], ["iris"], ["tbs_copy"], tmp_path / "x")

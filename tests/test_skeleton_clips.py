@@ -126,7 +126,7 @@ def test_a_batch_row_says_a_posed_rest_and_its_source_rig_fixes_it(tmp_path):
                              TaskOptions(format="npz", render=False, source=source)))
     own, on_rig = row(None), row(str(META))
     assert own["status"] == on_rig["status"] == "ok"
-    assert "source its skeleton has no mesh and rests in a pose" in own["warning"] and on_rig["warning"] == ""
+    assert "source: its skeleton has no mesh and rests in a pose" in own["warning"] and on_rig["warning"] == ""
     assert on_rig["contact_r"] == 1.0 and own["s_finger"] < on_rig["s_finger"]
     wrong = row(str(GODOT_R))
     assert wrong["status"] == "failed" and "has no bones Wrist_R" in wrong["error"]

@@ -96,11 +96,9 @@ class Task:
         """The row of an earlier run of this very task (same key: same inputs, method and options) if it
         finished: ok with its output there, or failed on its input files (the same files fail the same way;
         a worker's death or an interruption is tried again). Else None."""
-        try:
-            row = json.loads(self.row_file.read_text())
-        except (OSError, ValueError):
-            return None
-        if not isinstance(row, dict) or row.get("key") != self.key:
+        from s2h_viewer.batch.summary import read_row_json
+        row = read_row_json(self.row_file)
+        if row is None or row.get("key") != self.key:
             return None
         if row.get("status") == "ok":
             return row if self.output.exists() else None
@@ -166,10 +164,11 @@ def _named(items: list[Path | str]) -> list[Input]:
 _SAFE = re.compile(r"[^A-Za-z0-9._-]+")
 
 
-def _animations(motion: Input, wanted: str | None) -> list[Input]:
+def _animations(motion: Input, wanted: str | None, searched: bool) -> list[Input]:
     """The motions a file gives: with ``wanted`` (a name, an index, `all`), the file read that way; else each
     animation (take) of a file of several its own motion, named ``<file>.<animation>``. A file whose animations
-    cannot be listed (damaged) stays one motion: its tasks fail with the reader's error."""
+    cannot be listed (damaged) stays one motion: its tasks fail with the reader's error. A file of none found in a
+    ``searched`` folder gives none (a rig beside the clips made on it); one named on its own fails its tasks."""
     from s2h_viewer.io.files import ANIMATED_SUFFIXES, list_animations
 
     if Path(motion.path).suffix.lower() not in ANIMATED_SUFFIXES:
@@ -180,6 +179,8 @@ def _animations(motion: Input, wanted: str | None) -> list[Input]:
         names = list_animations(motion.path)
     except S2HError:
         return [motion]
+    if not names and searched:
+        return []
     if len(names) < 2:
         return [motion]
     named: dict[str, int] = {}
@@ -190,15 +191,25 @@ def _animations(motion: Input, wanted: str | None) -> list[Input]:
 
 
 def plan_batch(motions: list[str], targets: list[str], methods: list[str], out_dir: str | Path,
-               options: TaskOptions = TaskOptions(), known_methods: tuple[str, ...] = ()) -> list[Task]:
-    """The batch's tasks, motion-major; a `BatchUsageError` for what no task could run."""
+               options: TaskOptions = TaskOptions(), known_methods: tuple[str, ...] = (),
+               skipped: list[str] | None = None) -> list[Task]:
+    """The batch's tasks, motion-major; a `BatchUsageError` for what no task could run. ``skipped`` gets the
+    files of the motion folders that hold no animation (rigs: a folder of clips often holds the rig they were
+    made on, and its 8 tasks failed "has no animations")."""
     if options.format not in FORMATS:
         raise BatchUsageError(f"--format {options.format}: use one of {', '.join(FORMATS)}")
     unknown = [m for m in methods if known_methods and m not in known_methods]
     if unknown or not methods:
         raise BatchUsageError(f"unknown method {', '.join(unknown) or '(none)'}; available: {', '.join(known_methods)}")
-    motion_inputs = [one for motion in _named(_files(motions, MOTION_SUFFIXES, "motion", allow_names=False))
-                     for one in _animations(motion, options.animation)]
+    named = {Path(p).resolve() for p in motions if Path(p).is_file()}
+    motion_inputs = []
+    for motion in _named(_files(motions, MOTION_SUFFIXES, "motion", allow_names=False)):
+        found = _animations(motion, options.animation, Path(motion.path).resolve() not in named)
+        if not found and skipped is not None:
+            skipped.append(motion.path)
+        motion_inputs += found
+    if not motion_inputs:
+        raise BatchUsageError(f"{' '.join(motions)}: no motion files with animations (only rigs)")
     target_inputs = _named(_files(targets, HAND_SUFFIXES, "hand", allow_names=True))
     out = str(Path(out_dir))
     return [Task(m, t, method, out, options) for m in motion_inputs for t in target_inputs for method in methods]

@@ -10,7 +10,6 @@ temporary files of interrupted writes are removed).
 
 from __future__ import annotations
 
-import json
 import os
 import sys
 import time
@@ -21,7 +20,7 @@ from tqdm import tqdm
 
 from s2h_viewer.batch.plan import Task, TaskOptions, plan_batch
 from s2h_viewer.batch.report import write_report
-from s2h_viewer.batch.summary import write_summary
+from s2h_viewer.batch.summary import read_row_json, write_summary
 from s2h_viewer.batch.task import base_row
 from s2h_viewer.io.annotation import SIDES, sidecar_path
 from s2h_viewer.io.atomic import remove_stale_temps
@@ -49,6 +48,7 @@ class BatchResult:
     failed: list[dict] = field(default_factory=list)  # status failed (tasks an interrupt left are "not run")
     startup_seconds: float = 0.0  # planning, the cluster's start and its workers' imports, before the first task
     earlier: int = 0  # rows of other batches into the same folder, listed in its summary after this batch's
+    rigs: list[str] = field(default_factory=list)  # files of the motion folders with no animation, left out
 
     @property
     def exit_code(self) -> int:
@@ -60,7 +60,9 @@ def run_batch(config: BatchConfig, show_progress: bool | None = None) -> BatchRe
     from s2h_viewer.retarget import METHODS  # registers every method, to check the names before any work
 
     start = time.perf_counter()
-    tasks = plan_batch(config.motions, config.targets, config.methods, config.out, config.options, tuple(METHODS))
+    rigs: list[str] = []
+    tasks = plan_batch(config.motions, config.targets, config.methods, config.out, config.options, tuple(METHODS),
+                       rigs)
     rows: dict[int, dict] = {}
     for i, task in enumerate(tasks):
         earlier = task.finished_row()
@@ -72,7 +74,8 @@ def run_batch(config: BatchConfig, show_progress: bool | None = None) -> BatchRe
     interrupted = False
     with tqdm(total=len(tasks), initial=skipped, desc="batch", unit="task", file=sys.stderr,
               disable=(not sys.stderr.isatty()) if show_progress is None else not show_progress) as bar:
-        counts = {"ok": sum(r["status"] == "ok" for r in rows.values()), "failed": 0, "running": 0}
+        counts = {"ok": sum(r["status"] == "ok" for r in rows.values()),  # those done before count as the summary
+                  "failed": sum(r["status"] == "failed" for r in rows.values()), "running": 0}  # does: both
         workers, started_at = [0], [start]
 
         def show() -> None:
@@ -116,7 +119,8 @@ def run_batch(config: BatchConfig, show_progress: bool | None = None) -> BatchRe
     summary = write_summary(ordered_rows + earlier, out / "summary.csv")
     report = write_report(ordered_rows + earlier, out / "report.html", title=f"s2h batch: {out.resolve().name}")
     return BatchResult(ordered_rows, skipped, time.perf_counter() - start, summary, report, interrupted,
-                       [r for r in ordered_rows if r["status"] == "failed"], started_at[0] - start, len(earlier))
+                       [r for r in ordered_rows if r["status"] == "failed"], started_at[0] - start, len(earlier),
+                       rigs)
 
 
 def earlier_rows(out: Path, planned: set[Path]) -> list[dict]:
@@ -127,11 +131,8 @@ def earlier_rows(out: Path, planned: set[Path]) -> list[dict]:
     for row_file in sorted(out.glob("*/*/*.row.json")):
         if row_file.resolve() in planned:
             continue
-        try:
-            row = json.loads(row_file.read_text())
-        except (OSError, ValueError):
-            continue
-        if not isinstance(row, dict) or not all(isinstance(row.get(k), str) for k in ("motion", "target", "method")):
+        row = read_row_json(row_file)
+        if row is None or not all(isinstance(row.get(k), str) for k in ("motion", "target", "method")):
             continue
         if row.get("status") == "failed" or (row.get("status") == "ok" and Path(str(row.get("output"))).is_file()):
             found.append(row)

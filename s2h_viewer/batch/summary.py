@@ -8,6 +8,7 @@ empty, not "nan".
 from __future__ import annotations
 
 import csv
+import json
 import math
 from pathlib import Path
 
@@ -20,6 +21,23 @@ COLUMNS = ("motion", "target", "method", "status", "error", "warning", "frames",
            "worst_error", "output", "picture", "motion_path", "target_path", "animation", "source_path")
 COUNTS = ("frames", "worst_frame")
 SCORES = ("kept", "s_palm", "s_finger", "contact_p", "contact_r", "palm_r", "violations", "sideways_deg", "worst_error")
+
+
+def row_json(row: dict) -> str:
+    """A task's row as strict JSON (a score with nothing to measure as null: a bare NaN is not JSON)."""
+    return json.dumps({k: None if isinstance(v, float) and math.isnan(v) else v for k, v in row.items()}, indent=1,
+                      allow_nan=False)
+
+
+def read_row_json(path: Path) -> dict | None:
+    """A row written by `row_json` (its null scores NaN again, as scored), None if unreadable or not a row."""
+    try:
+        row = json.loads(Path(path).read_text())
+    except (OSError, ValueError):
+        return None
+    if not isinstance(row, dict):
+        return None
+    return row | {k: math.nan for k in SCORES if k in row and row[k] is None}
 
 
 def _cell(value) -> str:

@@ -7,7 +7,6 @@ a file that cannot be read, or any other failure, becomes a failed row with its 
 
 from __future__ import annotations
 
-import json
 import time
 import traceback
 from collections import OrderedDict
@@ -17,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from s2h_viewer.batch.plan import Input, Task
+from s2h_viewer.batch.summary import row_json
 from s2h_viewer.errors import S2HError
 from s2h_viewer.io.atomic import atomic_path
 
@@ -100,7 +100,7 @@ def run_task(task: Task) -> dict:
         row["traceback"] = traceback.format_exc()
     row["seconds"] = round(time.perf_counter() - start, 3)
     with atomic_path(task.row_file) as tmp:
-        tmp.write_text(json.dumps(row, indent=1))
+        tmp.write_text(row_json(row))
     return row
 
 
@@ -145,7 +145,7 @@ def rig_warning(hand, role: str) -> str:
     """A line for the row when ``hand``'s bones were recognised with low confidence, or its skeleton rests in a
     pose (`semantics.rest_pose`), else ""."""
     if hand.meta.get("rest_note"):
-        return f"{role} {hand.meta['rest_note']}; give the hand file of the rig it was made for: s2h batch --source"
+        return f"{role}: {hand.meta['rest_note']}; give the hand file of the rig it was made for: s2h batch --source"
     confidence = hand.meta.get("rig_confidence")
     if confidence is None or confidence >= LOW_RIG_CONFIDENCE:
         return ""
@@ -157,16 +157,10 @@ def rig_warning(hand, role: str) -> str:
 def _render_worst(task: Task, source, motion, target, moved, frame: int) -> None:
     """The worst frame, source beside retarget, off screen."""
     from s2h_viewer.render.offscreen import render_hands
+    from s2h_viewer.retarget.methods import METHODS
 
+    bones = [" (no skin: its bones)" if hand.mesh is None else "" for hand in (source, target)]
     render_hands([source, target], [motion.q_tbs[frame], moved.q_tbs[frame]], task.picture,
-                 labels=[f"source, frame {frame}", f"{task.method}, frame {frame}"],
+                 labels=[f"source, frame {frame}{bones[0]}", f"{METHODS[task.method].label} -> {task.target.name}"
+                                                              f"{bones[1]}"],
                  columns=2, view="palm", cell_size=(300, 320))
-
-
-def read_row(task: Task) -> dict | None:
-    """The row an earlier run wrote for ``task`` (whatever its status), None when there is none."""
-    try:
-        row = json.loads(Path(task.row_file).read_text())
-    except (OSError, ValueError):
-        return None
-    return row if isinstance(row, dict) else None
