@@ -154,13 +154,17 @@ def rig_warning(hand, role: str) -> str:
             f"check with `s2h rig {hand.source}` or give a joint map")
 
 
+#: characters of a target's name the worst frame's picture holds in its 300-pixel cell
+PICTURE_NAME = 22
+
+
 def _render_worst(task: Task, source, motion, target, moved, frame: int) -> None:
     """The worst frame, source beside retarget, off screen."""
     from s2h_viewer.render.offscreen import render_hands
     from s2h_viewer.retarget.methods import METHODS
 
-    bones = [" (no skin: its bones)" if hand.mesh is None else "" for hand in (source, target)]
+    bones = ["\n(no skin: its bones)" if hand.mesh is None else "" for hand in (source, target)]
+    name = task.target.name if len(task.target.name) <= PICTURE_NAME else task.target.name[:PICTURE_NAME - 3] + "..."
     render_hands([source, target], [motion.q_tbs[frame], moved.q_tbs[frame]], task.picture,
-                 labels=[f"source, frame {frame}{bones[0]}", f"{METHODS[task.method].label} -> {task.target.name}"
-                                                              f"{bones[1]}"],
+                 labels=[f"source, frame {frame}{bones[0]}", f"{METHODS[task.method].label} ->\n{name}{bones[1]}"],
                  columns=2, view="palm", cell_size=(300, 320))
