@@ -148,7 +148,9 @@ def test_a_ring_drag_in_solo_keys_the_joint_live_and_undo_brings_back_the_method
     drag(qtbot, win, 40.0, while_held)
     angle, curve, s_finger, method_cell, said = live[0]
     assert said.startswith("index PIP: bend +") and "deg (curls it in) at frame 40" in said  # which way: said
-    assert "(held over the fist pose, frames 40-66, blended over frames 30-76)" in said
+    assert said.endswith("; held over the fist pose, frames 40-66, blended over frames 30-76")
+    # the scores a user ranks by, the method's then the fix's: a turn off the source says it is worse
+    assert f"S_finger {method.scores.s_finger:.3f} -> {s_finger:.3f} (worse than before: Ctrl+Z undoes it)" in said
     assert abs(angle - 20.0) < 3.0 and s_finger != method.scores.s_finger  # half the turn, live
     assert curve[FRAME] > method.frame_error[FRAME]  # the curve too
     assert method_cell == "TBS Copy (fixed)"
@@ -166,6 +168,8 @@ def test_a_ring_drag_in_solo_keys_the_joint_live_and_undo_brings_back_the_method
     np.testing.assert_allclose(mode.curve.error, fixed.frame_error)  # the curve shows the corrected retarget
     assert fixed.frame_error[FRAME] > method.frame_error[FRAME]  # turned off the source: the error says so
     assert mode.scores.item(0, 0).text() == "TBS Copy (fixed)" and "index PIP" in mode.scores.item(0, 0).toolTip()
+    assert f"S_finger {method.scores.s_finger:.3f} -> {fixed.scores.s_finger:.3f} (worse than the method: Ctrl+Z" \
+        in mode.fixing.bar.readout.toolTip()  # picked still: the joint's line says what its fix did
     hand = win.view.solo_hand()
     assert hand.pose is fixed.pose and "1 fix" in hand.label.text  # the cell draws and says the corrected one
     assert win.heatmap_choice.currentText() == "TBS Copy -> iris (fixed)"

@@ -83,6 +83,15 @@ class Drag:
         return self.before.corrections.with_turn(self.joint, self.frame, turn, *self.frames, self.hold)
 
 
+def score_change(before: MethodResult, after: MethodResult, base: str = "before") -> str:
+    """"kept 0.95 -> 0.90, S_finger 0.928 -> 0.909 (worse than before)": a fix's effect on the scores a user
+    ranks by. A fresh-eyes user's 107-degree turn lowered S_finger and nothing said so."""
+    b, a = before.scores, after.scores
+    worse = a.signature_kept < b.signature_kept - 1e-9 or a.s_finger < b.s_finger - 5e-4
+    return (f"kept {b.signature_kept:.3f} -> {a.signature_kept:.3f}, S_finger {b.s_finger:.3f} -> {a.s_finger:.3f}"
+            + (f" (worse than {base}: Ctrl+Z undoes it)" if worse else ""))
+
+
 class RetargetFixing(QObject):
     """The fixing of Compare mode ``mode``'s retargets: the bar over a retarget shown alone, the ring, the Fix
     menu's actions, the corrections' saving and loading."""
@@ -225,7 +234,8 @@ class RetargetFixing(QObject):
         if correction is None:
             return f"{name}: no corrections; drag its ring to turn it about its {self.bar.axis} axis at this frame"
         return (f"{name}: {describe_keys(correction)}; here "
-                f"{np.degrees(correction.offset_at(self.mode.timeline.frame).magnitude()):.0f} deg off the method's")
+                f"{np.degrees(correction.offset_at(self.mode.timeline.frame).magnitude()):.0f} deg off the method's; "
+                f"{score_change(result.uncorrected, result, 'the method')}")
 
     # --- the mouse ---
     def _clicked(self, x: int, y: int) -> None:
@@ -323,13 +333,15 @@ class RetargetFixing(QObject):
         """The clip measured with the turn so far: the cell, scores and curves show it while dragging."""
         drag = self._drag
         if drag is not None:
-            self.mode.show_result(drag.key, self.mode.corrected(drag.before, drag.corrections()))
+            now = self.mode.corrected(drag.before, drag.corrections())
+            self.mode.show_result(drag.key, now)
             turn = drag.sense * drag.degrees
             way = {"bend": (" (curls it in)", " (opens it out)")}.get(drag.axis, ("", ""))[turn < 0]
             held = "" if drag.hold is None else (f"held over the {self.mode.comparison.motion.labels[drag.frame]} "
                                                  f"pose, frames {drag.hold[0]}-{drag.hold[1]}, ")
             self.bar.say(f"{topo.joint_label(topo.ARTICULATED_NAMES[drag.joint])}: {drag.axis} {turn:+.0f} deg{way} "
-                         f"at frame {drag.frame} ({held}blended over frames {drag.frames[0]}-{drag.frames[1]})")
+                         f"at frame {drag.frame}; {score_change(drag.before, now)}; {held}blended over frames "
+                         f"{drag.frames[0]}-{drag.frames[1]}")
 
     def _end(self) -> None:
         drag, self._drag = self._drag, None
