@@ -98,3 +98,11 @@ def test_a_row_of_one_animation_of_a_file_shows_that_animation(qtbot, sample_han
     with qtbot.waitSignal(win.comparison_ready, timeout=120_000):
         win.batch_browser.show_row(row)
     assert win.compare.state.motion.name == "sign" and win.compare.state.motion.n_frames == clips[1].n_frames
+    offered = []  # File > Export retargeted motion offers the batch's own folder and name, not the working folder
+
+    def look(dialog: QFileDialog) -> None:
+        offered.append(Path(dialog.directory().absolutePath()) / dialog.findChild(QLineEdit, "fileNameEdit").text())
+        dialog.reject()
+    when_shown(QFileDialog, look)
+    assert win.export_motion() is None
+    assert offered == [tmp_path / "out" / "two.sign" / "laurel" / "tbs_copy.npz"]

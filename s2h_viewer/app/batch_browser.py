@@ -28,6 +28,7 @@ class BatchBrowser(QObject):
         self._motion_read: tuple[str, str, str] | None = None  # (file, animation, source rig) of the clip shown
         self._motion = None
         self._pending: tuple[HandModel, str, int] | None = None  # (target, method, frame) to select when shown
+        self._rows: dict[tuple[int, int, str], dict] = {}  # (id of clip, id of target, method) -> its row shown
         window.comparison_ready.connect(self._select_pending)
 
     def open(self, path: str) -> BatchTable | None:
@@ -78,12 +79,18 @@ class BatchBrowser(QObject):
         if motion is not None:
             self._motion_read, self._motion = read, motion
             compare.load(motion, source)
+        self._rows[(id(compare.state.motion), id(target), row["method"])] = row
         if all(t is not target for t in compare.state.targets):
             compare.add_target(target)
         if row["method"] not in compare.state.methods:
             compare.set_methods([*compare.state.methods, row["method"]])
         if not compare.state.missing():
             self._select_pending()
+
+    def row_of(self, motion, result) -> dict | None:
+        """The batch row a retarget of ``motion`` shown from the batch came from (its export goes beside its
+        output), or None."""
+        return self._rows.get((id(motion), id(result.target), result.method))
 
     def _read_motion(self, path: str, animation: str, source: str):
         """The row's clip read as the batch read it: its animation of the file, on the batch's --source rig."""

@@ -808,6 +808,15 @@ class MainWindow(QMainWindow):
         shown = exports.Shown.of(self.compare)
         result = shown.selected
         asked = path is None
+        row = self.batch_browser.row_of(shown.comparison.motion, result)
+        if asked and row is not None and Path(row["output"]).parent.is_dir():  # beside the batch's own output
+            output = Path(row["output"])
+            path = QFileDialog.getSaveFileName(
+                self, f"Export {exports.label(result)}", str(output.with_name(
+                    f"{output.stem}{'_fixed' if result.corrections else ''}{output.suffix}")),
+                "Motion (*.glb *.bvh *.npz *.fbx)")[0]
+            if not path:
+                return None
         path = self._ask_to_save(f"Export {exports.label(result)}",
                                  "Motion (*.glb *.bvh *.npz *.fbx)", path, lambda: shown.name(".glb"))
         if not path:
