@@ -71,7 +71,15 @@ def test_a_double_clicked_row_is_shown_in_compare_at_its_worst_frame(qtbot, samp
     selected = win.compare.selected_result()
     assert selected.target.name == "laurel" and win.compare.state.motion.name == "counting"
     assert win.timeline.frame == wanted["worst_frame"]
-    assert "dm" in win.compare.state.methods and len(shown) == 1
+    assert len(shown) == 1
+    # another clip than the grid's: a comparison of its own, the row's target and method alone (the grid's iris
+    # and its two methods had stayed, computed onto the new clip for nothing)
+    assert [t.name for t in win.compare.state.targets] == ["laurel"] and win.compare.state.methods == ["dm"]
+    ok = next(r for r in range(view.rowCount()) if view.item(r, 2).text() == "tbs_copy"
+              and view.item(r, 3).text() == "ok")
+    with qtbot.waitSignal(win.comparison_ready, timeout=120_000):
+        double_click(ok)  # the same clip: its retarget joins the grid
+    assert win.compare.state.methods == ["tbs_copy", "dm"] and len(win.compare.state.targets) == 1
 
 
 def test_a_row_of_one_animation_of_a_file_shows_that_animation(qtbot, sample_hands, tmp_path):

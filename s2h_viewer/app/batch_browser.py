@@ -1,7 +1,8 @@
 """File > Open batch: a batch's summary as a table (`widgets.batch_table`) in a dock under the grid (drag it
 out to float it, close it with its button), and a row double-clicked there
-shown in Compare: its clip loaded (unless shown already), its target added (unless a target already), its
-method ticked, then that retarget selected at its worst frame once the grid shows it."""
+shown in Compare: a row of another clip as a comparison of its own (that clip, its target and its method alone), a
+row of the clip shown added to the grid (its target, its method ticked), then that retarget selected at its worst
+frame once the grid shows it."""
 
 from __future__ import annotations
 
@@ -75,15 +76,20 @@ class BatchBrowser(QObject):
             self.window.error(str(exc.args[0]) if isinstance(exc, KeyError) and exc.args else str(exc))
             return
         frame = int(row["worst_frame"]) if str(row.get("worst_frame", "")).isdigit() else 0
-        self._pending = (target, row["method"], frame)
-        if motion is not None:
+        if motion is not None:  # another clip: a comparison of its own, this row's target and method alone
+            if not self.window.confirm_corrections(f"opening {row['motion']}"):
+                return
+            self._pending = (target, row["method"], frame)
             self._motion_read, self._motion = read, motion
-            compare.load(motion, source)
-        self._rows[(id(compare.state.motion), id(target), row["method"])] = row
-        if all(t is not target for t in compare.state.targets):
-            compare.add_target(target)
-        if row["method"] not in compare.state.methods:
-            compare.set_methods([*compare.state.methods, row["method"]])
+            self._rows[(id(motion), id(target), row["method"])] = row
+            compare.replace_comparison(motion, source, [target], [row["method"]])
+        else:  # the clip shown: the row's retarget joins the grid, to compare with the others of the clip
+            self._pending = (target, row["method"], frame)
+            self._rows[(id(compare.state.motion), id(target), row["method"])] = row
+            if all(t is not target for t in compare.state.targets):
+                compare.add_target(target)
+            if row["method"] not in compare.state.methods:
+                compare.set_methods([*compare.state.methods, row["method"]])
         if not compare.state.missing():
             self._select_pending()
 

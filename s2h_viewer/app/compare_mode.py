@@ -346,6 +346,15 @@ class CompareMode(QWidget):
         self.timeline.set_playing(False)
         self._sync()
 
+    def replace_comparison(self, motion: Motion, source: HandModel, targets: list[HandModel],
+                           methods: list[str]) -> None:
+        """A comparison of its own: ``motion`` onto ``targets`` with ``methods`` alone (a batch row of another clip:
+        the grid had kept every earlier target and method, and computed retargets nobody asked for). Its undo
+        history starts afresh: the earlier one's commands name targets this one does not have."""
+        self.undo_stack.clear()
+        self.state.targets, self.state.methods = list(targets), [m for m in METHODS if m in methods]
+        self.load(motion, source)
+
     def select(self, key: ResultKey, turn_page: bool = True) -> None:
         """One retarget for the heatmap, the error curve, the scores' highlight and the exports; the grid turns
         to its page unless ``turn_page`` is False."""

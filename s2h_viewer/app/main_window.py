@@ -594,7 +594,7 @@ class MainWindow(QMainWindow):
         for: a skeleton-only clip resting in a pose asks for it)."""
         from s2h_viewer.io.files import load_motion_file
         from s2h_viewer.samples import load_sample_hand
-        if rig_file is None and not self._confirm_corrections(f"opening {Path(path).name}"):
+        if rig_file is None and not self.confirm_corrections(f"opening {Path(path).name}"):
             return
         clip_key = OpenedClips.key(path, (self.open_options, rig_file))  # hashed once, whether read again or not
         opened = self.opened_clips.get(clip_key)
@@ -857,7 +857,7 @@ class MainWindow(QMainWindow):
             self.error(f"{path}: could not write ({exc.strerror or exc})")
             return None
 
-    def _confirm_corrections(self, doing: str) -> bool:
+    def confirm_corrections(self, doing: str) -> bool:
         """Corrections neither exported nor saved: saved (asking where), discarded, or ``doing`` is cancelled."""
         return self.compare.fixing.confirm_discard(doing, lambda result: self.save_corrections(result=result))
 
@@ -960,7 +960,7 @@ class MainWindow(QMainWindow):
             QTimer.singleShot(0, lambda: self.resize(max(self.width(), MIN_SIZE[0]), max(self.height(), MIN_SIZE[1])))
 
     def closeEvent(self, event) -> None:
-        if not self.annotate.confirm_discard("quitting") or not self._confirm_corrections("quitting") or \
+        if not self.annotate.confirm_discard("quitting") or not self.confirm_corrections("quitting") or \
                 not self._confirm_quit_during_export():
             event.ignore()
             return
