@@ -258,8 +258,8 @@ def read_rig_skeleton(path: str | Path):
     suffix = _suffix(path, (*GLTF_FAMILY, ".fbx", ".bvh"), "rig")
     from s2h_viewer.io.rig import RigSkeleton
     if suffix in GLTF_FAMILY:
-        from s2h_viewer.io.gltf import _Document
-        doc = _Document(path)
+        from s2h_viewer.io.gltf import read_document
+        doc = read_document(path)
         return RigSkeleton(doc.names, doc.world, doc.parents)
     if suffix == ".fbx":
         from s2h_viewer.io.fbx import _read
@@ -289,8 +289,8 @@ def recognise_file(path: str | Path, options: RigOptions = RigOptions()):
     from s2h_viewer.io.rig import recognise
     o = options.for_file(path)
     if path.suffix.lower() in GLTF_FAMILY:
-        from s2h_viewer.io.gltf import _Document, _recognise
-        return _recognise(_Document(path), o.side, o.scheme, o.joint_map)
+        from s2h_viewer.io.gltf import _recognise, read_document
+        return _recognise(read_document(path), o.side, o.scheme, o.joint_map)
     if path.suffix.lower() == ".bvh":
         from s2h_viewer.io.bvh import read_bvh, recognise_bvh
         return recognise_bvh(path, read_bvh(path), o.side, o.scheme, o.joint_map)[2]

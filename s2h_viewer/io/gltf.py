@@ -10,6 +10,8 @@
 
 from __future__ import annotations
 
+import functools
+import hashlib
 import json
 import re
 from pathlib import Path
@@ -117,6 +119,28 @@ def _refuse_compressed(path: Path, gltf: pygltflib.GLTF2) -> None:
         raise InputFileError(path, f"its meshes are {kinds} compressed, which s2h does not decode; write it "
                                    f"uncompressed (gltfpack -i FILE -o OUT.glb -noq, or a Blender re-export without "
                                    f"compression) and open that")
+
+
+def read_document(path: str | Path) -> "_Document":
+    """The parsed file, read once while its bytes stay the same (under the name given): one hand and its motions
+    read a file three to five times over (its rig, its animations as the hinges' evidence, each animation), and
+    pygltflib took 6 s a parse for the 35 poses (hashing them takes milliseconds). Readers only: a writer edits
+    its own."""
+    path = require_readable_file(Path(path))
+    try:
+        digest = hashlib.blake2b(path.read_bytes(), digest_size=16)
+        if path.suffix.lower() not in BINARY_SUFFIXES:  # its buffers may be files beside it
+            for beside in sorted(path.parent.glob("*.bin")):
+                stat = beside.stat()
+                digest.update(f"{beside.name} {stat.st_size} {stat.st_mtime_ns}".encode())
+    except OSError:
+        return _Document(path)  # unreadable: its own error
+    return _parsed(str(path), digest.hexdigest())
+
+
+@functools.lru_cache(maxsize=4)
+def _parsed(path: str, digest: str) -> "_Document":
+    return _Document(Path(path))
 
 
 class _Document:
@@ -350,7 +374,7 @@ def load_gltf_hand(path: str | Path, side: str | None = None, scheme: str | None
     metres where the hand is plausible in them, else a guess (`io.units`). The solver's frames are checked
     against the hinges of the file's own animations, or of ``hinges_from``'s (`annotate.hinges`)."""
     with reading(path, "a glTF hand"):
-        doc = _Document(Path(path))
+        doc = read_document(path)
         mapping = _recognise(doc, side, scheme, joint_map)
         skeleton = RigSkeleton(doc.names, doc.world, doc.parents)
         evidence = hinges_from or (doc.path if doc.gltf.animations else None)
@@ -360,7 +384,7 @@ def load_gltf_hand(path: str | Path, side: str | None = None, scheme: str | None
 def list_gltf_animations(path: str | Path) -> list[tuple[str, float]]:
     """(name, duration in seconds) of each animation of the file, in file order."""
     with reading(path, "a glTF file's animations"):
-        doc = _Document(Path(path))
+        doc = read_document(path)
         out = []
         for i, anim in enumerate(doc.gltf.animations or []):
             ends = [float(_rotation_track(doc, anim, c, f"animation {i} channel {k}")[0][-1])
@@ -426,13 +450,13 @@ def load_gltf_motion(path: str | Path, hand: HandModel, animation: str | int | N
     """Animation ``animation`` (name or index; the first by default) of the file, resampled at ``fps``, as
     finger rotations on ``hand`` (a hand loaded from the same rig, or any rig with the same bone names)."""
     with reading(path, "a glTF animation"):
-        return _load_motion(_Document(Path(path)), hand, animation, fps)
+        return _load_motion(read_document(path), hand, animation, fps)
 
 
 def load_every_gltf_animation(path: str | Path, hand: HandModel, fps: float = 30.0) -> list[Motion]:
     """Every animation of the file in file order, as `load_gltf_motion` reads each, the file parsed once."""
     with reading(path, "a glTF animation"):
-        doc = _Document(Path(path))
+        doc = read_document(path)
         return [_load_motion(doc, hand, k, fps) for k in range(len(doc.gltf.animations or []))]
 
 
