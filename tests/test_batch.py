@@ -5,6 +5,7 @@ target, a worker that dies, reruns, the summary, the report."""
 from __future__ import annotations
 
 import csv
+import dataclasses
 import os
 import signal
 import subprocess
@@ -368,3 +369,26 @@ def test_a_rig_in_a_folder_of_clips_is_left_out_and_a_row_is_strict_json(tmp_pat
     shutil.copy(rig, tmp_path / "rigs")
     with pytest.raises(BatchUsageError, match="no motion files with animations"):
         plan_batch([str(tmp_path / "rigs")], ["iris"], ["tbs_copy"], tmp_path / "x")
+
+
+def test_a_clip_with_no_skin_is_read_onto_the_rig_beside_it(tmp_path):
+    """A library folder held the pose library (a skeleton with no mesh) and the rig it was made on: without
+    --source the poses were read onto their bare skeleton (frames from the palm plane), S_finger 0.91 where the
+    rig gives 0.96. A clip whose own rig lacks a mesh, or rests in a pose, is read onto the first rig beside it
+    whose bones it animates, as --source would; the row names it."""
+    import shutil
+
+    from s2h_viewer.batch.task import run_task
+
+    folder = tmp_path / "library"
+    folder.mkdir()
+    for name in ("godot_hand_poses_r.gltf", "godot_hand_r_posed_rig.gltf"):
+        shutil.copy(ASSETS_DIR / "motions" / "real" / name, folder)
+    options = TaskOptions(format="npz", render=False, animation="Horns")
+    (beside,) = plan_batch([str(folder)], ["iris"], ["tbs_copy"], tmp_path / "beside", options)
+    (named,) = plan_batch([str(folder / "godot_hand_poses_r.gltf")], ["iris"], ["tbs_copy"], tmp_path / "named",
+                          dataclasses.replace(options, source=str(folder / "godot_hand_r_posed_rig.gltf")))
+    row, by_source = run_task(beside), run_task(named)
+    assert row["source_path"] == by_source["source_path"] == str(folder / "godot_hand_r_posed_rig.gltf")
+    assert row["s_finger"] == by_source["s_finger"] and row["warning"] == ""
+    np.testing.assert_array_equal(load_motion(beside.output).q_tbs, load_motion(named.output).q_tbs)

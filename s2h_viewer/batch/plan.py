@@ -8,6 +8,7 @@ for the same inputs and options, is finished and skipped by a rerun).
 
 from __future__ import annotations
 
+import dataclasses
 import glob
 import hashlib
 import json
@@ -37,6 +38,9 @@ class Input:
     path: str
     name: str
     animation: str | int | None = None
+    #: rig files beside the motion (glTF/FBX of no animation in its folder): where no --source is given, the
+    #: motion is read onto the first whose bones it animates (the rig the clips were made on)
+    rigs: tuple[str, ...] = ()
 
     def fingerprint(self) -> list:
         """Size and modification time of the file and of its sidecars (TBS frames, joint map: they change how it
@@ -89,7 +93,8 @@ class Task:
         """What the task's result depends on: inputs (as files are now), method and options."""
         what = [self.motion.path, self.motion.fingerprint(), self.target.path, self.target.fingerprint(),
                 self.method, asdict(self.options)] + ([self.motion.animation] if self.motion.animation is not None
-                                                      else [])
+                                                      else []) + [[r, Input(r, "").fingerprint()] for r in
+                                                                  self.motion.rigs]
         return hashlib.sha256(json.dumps(what, sort_keys=True, default=str).encode()).hexdigest()[:16]
 
     def finished_row(self) -> dict | None:
@@ -173,7 +178,7 @@ def _animations(motion: Input, wanted: str | None, searched: bool) -> list[Input
 
     if Path(motion.path).suffix.lower() not in ANIMATED_SUFFIXES:
         return [motion]
-    if wanted is not None:
+    if wanted is not None and not searched:
         return [Input(motion.path, motion.name, int(wanted) if wanted.isdigit() else wanted)]
     try:
         names = list_animations(motion.path)
@@ -181,6 +186,8 @@ def _animations(motion: Input, wanted: str | None, searched: bool) -> list[Input
         return [motion]
     if not names and searched:
         return []
+    if wanted is not None:
+        return [Input(motion.path, motion.name, int(wanted) if wanted.isdigit() else wanted)]
     if len(names) < 2:
         return [motion]
     named: dict[str, int] = {}
@@ -195,21 +202,27 @@ def plan_batch(motions: list[str], targets: list[str], methods: list[str], out_d
                skipped: list[str] | None = None) -> list[Task]:
     """The batch's tasks, motion-major; a `BatchUsageError` for what no task could run. ``skipped`` gets the
     files of the motion folders that hold no animation (rigs: a folder of clips often holds the rig they were
-    made on, and its 8 tasks failed "has no animations")."""
+    made on, and its 8 tasks failed "has no animations"); without a --source, each motion beside such rigs is
+    read onto the first of them whose bones it animates (`Input.rigs`)."""
     if options.format not in FORMATS:
         raise BatchUsageError(f"--format {options.format}: use one of {', '.join(FORMATS)}")
     unknown = [m for m in methods if known_methods and m not in known_methods]
     if unknown or not methods:
         raise BatchUsageError(f"unknown method {', '.join(unknown) or '(none)'}; available: {', '.join(known_methods)}")
     named = {Path(p).resolve() for p in motions if Path(p).is_file()}
-    motion_inputs = []
+    motion_inputs, rigs = [], []
     for motion in _named(_files(motions, MOTION_SUFFIXES, "motion", allow_names=False)):
         found = _animations(motion, options.animation, Path(motion.path).resolve() not in named)
-        if not found and skipped is not None:
-            skipped.append(motion.path)
+        if not found:
+            rigs.append(motion.path)
         motion_inputs += found
     if not motion_inputs:
         raise BatchUsageError(f"{' '.join(motions)}: no motion files with animations (only rigs)")
+    if skipped is not None:
+        skipped += rigs
+    if options.source is None and rigs:
+        motion_inputs = [dataclasses.replace(m, rigs=tuple(r for r in rigs if Path(r).parent == Path(m.path).parent))
+                         for m in motion_inputs]
     target_inputs = _named(_files(targets, HAND_SUFFIXES, "hand", allow_names=True))
     out = str(Path(out_dir))
     return [Task(m, t, method, out, options) for m in motion_inputs for t in target_inputs for method in methods]

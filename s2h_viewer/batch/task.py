@@ -37,21 +37,39 @@ def _cached(key: tuple, load):
 
 
 def _load_motion(task: Task):
-    """The motion and the hand it is performed on (the batch's --source rig, else its own rig, else its sample
-    hand). A glTF file's animations are read together, once: each task of one read the whole file again (its
-    JSON parsed 6 s a time for the 35 poses), and so did its rig."""
-    from s2h_viewer.io.files import ANIMATED_SUFFIXES, GLTF_FAMILY, load_hand_file, load_motion_file
+    """The motion, the hand it is performed on and that hand's file ("": its own): the batch's --source rig, else
+    its own rig where that has a mesh and rests straight, else the first rig beside it whose bones it animates
+    (`plan.Input.rigs`: the pose library's skeleton has no mesh, the pinch's rests in a pose), else its own rig,
+    else its sample hand."""
+    from s2h_viewer.io.files import ANIMATED_SUFFIXES
+
+    if task.options.source is not None or Path(task.motion.path).suffix.lower() not in ANIMATED_SUFFIXES:
+        return (*_read_motion(task, task.options.source), task.options.source or "")
+    own = _read_motion(task, task.motion.path)
+    if own[1].mesh is not None and not own[1].meta.get("rest_note"):
+        return (*own, "")  # a rig of its own that lacks nothing
+    for rig in task.motion.rigs:
+        try:
+            return (*_read_motion(task, rig), rig)
+        except S2HError:  # not its rig (other bones): the next, else its own
+            continue
+    return (*own, "")
+
+
+def _read_motion(task: Task, source: str | None):
+    """The motion read onto the rig file ``source`` (None: its own, or its sample hand's), and that hand. A glTF
+    file's animations are read together, once: each task of one read the whole file again (its JSON parsed 6 s a
+    time for the 35 poses), and so did its rig."""
+    from s2h_viewer.io.files import GLTF_FAMILY, load_hand_file, load_motion_file
     from s2h_viewer.io.gltf import load_every_gltf_animation
     from s2h_viewer.samples import sample_performer
 
     path, animation, options = task.motion.path, task.motion.animation, _rig_options(task)
-    suffix = Path(path).suffix.lower()
-    source = task.options.source or (path if suffix in ANIMATED_SUFFIXES else None)  # else: no rig in the file
     performer = None if source is None else _cached(
         ("hand", source, repr(Input(source, "").fingerprint()), task.options.side, task.options.unit),
         lambda: load_hand_file(source, options))
     fingerprint = repr(task.motion.fingerprint())
-    if isinstance(animation, int) and suffix in GLTF_FAMILY:
+    if isinstance(animation, int) and Path(path).suffix.lower() in GLTF_FAMILY:
         every = _cached(("animations", path, fingerprint, task.options.side, task.options.unit, source),
                         lambda: load_every_gltf_animation(path, performer))
         if animation < len(every):
@@ -110,7 +128,7 @@ def _retarget_and_write(task: Task) -> dict:
     from s2h_viewer.semantics.metrics import score_retarget_frames
     from s2h_viewer.semantics.signature import pose_differences
 
-    motion, source = _load_motion(task)
+    motion, source, source_path = _load_motion(task)
     target = _load_target(task)
     warning = rig_warning(source, "source") or rig_warning(target, "target")
     moved = retarget(motion, source, target, task.method)
@@ -127,7 +145,7 @@ def _retarget_and_write(task: Task) -> dict:
            "palm_r": scores.palm_contact_recall, "violations": scores.violation_rate,
            "sideways_deg": scores.sideways_deg, "sideways_at": scores.sideways_at,
            "worst_frame": worst, "worst_error": float(frame_error[worst]) if len(frame_error) else 0.0,
-           "output": str(task.output), "warning": warning}
+           "output": str(task.output), "warning": warning, "source_path": source_path}
     if task.options.render:
         _render_worst(task, source, motion, target, moved, worst)
         row["picture"] = str(task.picture)
