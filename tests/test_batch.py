@@ -119,6 +119,14 @@ def test_a_batch_on_a_local_cluster_equals_the_in_process_retarget_and_a_rerun_s
     assert list(rows[0]) == list(COLUMNS)
     page = (out / "report.html").read_text()
     assert page.count("<tr") == 5 and "1 failed" not in page and "2 failed" in page
+    # a heading sorts its own column: "S_finger" sorted by kept, each score heading one column off (a user saw it)
+    import re
+    columns = {label: int(n) for n, label in re.findall(r'<th data-col="(\d+)">([^<]+)</th>', page)}
+    last = page.split("<tr")[-1]
+    cells = re.findall(r'<td[^>]*data-sort="([^"]*)"|<td[^>]*>', last)
+    assert float(cells[columns["S_finger"]]) == pytest.approx(rows[-1]["s_finger"], abs=1e-4)  # the summary's 4
+    assert float(cells[columns["kept"]]) == pytest.approx(rows[-1]["kept"], abs=1e-4)  # decimals
+    assert float(cells[columns["kept"]]) != pytest.approx(rows[-1]["s_finger"], abs=1e-4)
     assert 'src="gestures/iris/asrn.worst.png"' in page
 
     row_files = sorted((out / "gestures" / "iris").glob("*.row.json"))

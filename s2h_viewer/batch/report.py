@@ -1,6 +1,6 @@
-"""``report.html``: the batch as one static page a person can skim: failures on top, a table sortable by any
-column (click its head) and filtered by a text box, each row with its worst frame's picture (source beside
-retarget) and links to its files. Links are relative, so the folder can be moved or shared whole.
+"""``report.html``: the batch as one static page a person can skim: failures on top, then the least kept, a table
+sortable by any column (click its head) and filtered by a text box, each row with its worst frame's picture
+(source beside retarget) and links to its files. Links are relative, so the folder can be moved or shared whole.
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import math
 import os
 from pathlib import Path
 
-from s2h_viewer.batch.summary import ordered
+from s2h_viewer.batch.summary import worst_first
 from s2h_viewer.batch.task import POSES_APART
 from s2h_viewer.io.atomic import atomic_path
 from s2h_viewer.semantics.flexion import SidewaysPeak
@@ -132,14 +132,14 @@ def _cell(row: dict, key: str, numeric: bool) -> str:
 def write_report(rows: list[dict], path: str | Path, title: str = "s2h batch") -> Path:
     path = Path(path)
     folder = path.parent
-    rows = ordered(rows)
+    rows = worst_first(rows)
     failed = sum(r.get("status") == "failed" for r in rows)
     not_run = sum(r.get("status") == "not run" for r in rows)
     ok = len(rows) - failed - not_run
     warned = sum(r.get("status") == "ok" and bool(r.get("warning")) for r in rows)
     head = "".join(f'<th data-col="{i}">{html.escape(label)}</th>' for i, (_, label) in enumerate(_NAMES))
-    head += '<th>error / note</th><th>worst frame: source | retarget</th>'
-    head += "".join(f'<th data-col="{len(_NAMES) + 1 + i}">{html.escape(label)}</th>'
+    head += '<th>error / note</th><th>worst frame: source | retarget</th>'  # not sortable: 2 columns
+    head += "".join(f'<th data-col="{len(_NAMES) + 2 + i}">{html.escape(label)}</th>'
                     for i, (_, label) in enumerate(_SCORES))
     head += '<th>files</th>'
     lines = []

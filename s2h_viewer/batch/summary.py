@@ -53,6 +53,19 @@ def ordered(rows: list[dict]) -> list[dict]:
     return sorted(rows, key=lambda r: {"failed": 0, "not run": 1}.get(r.get("status"), 2))
 
 
+def worst_first(rows: list[dict]) -> list[dict]:
+    """Failures first, then tasks not run, then by the share of frames whose signature is kept from the lowest,
+    then by S_finger (a row with no score after those with one): S_finger averages one wrong finger away, and a
+    batch ranked by it put a retarget keeping 0.60 below one keeping 0.68."""
+    def key(row: dict) -> tuple:
+        kept, score = row.get("kept", math.nan), row.get("s_finger", math.nan)
+        kept = math.nan if kept is None else kept
+        score = math.nan if score is None else score
+        return ({"failed": 0, "not run": 1}.get(row.get("status"), 2), math.isnan(kept), kept, math.isnan(score),
+                score)
+    return sorted(rows, key=key)
+
+
 def write_summary(rows: list[dict], path: str | Path) -> Path:
     path = Path(path)
     with atomic_path(path) as tmp, open(tmp, "w", newline="") as f:

@@ -10,6 +10,7 @@ from PySide6.QtCore import Qt, Signal
 from PySide6.QtGui import QColor, QKeySequence, QShortcut
 from PySide6.QtWidgets import QHeaderView, QLabel, QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget
 
+from s2h_viewer.batch.summary import worst_first
 from s2h_viewer.batch.task import POSES_APART
 
 #: (header, row key, decimals or None for text)
@@ -20,17 +21,6 @@ COLUMNS = (("Motion", "motion", None), ("Target", "target", None), ("Method", "m
 FAILED_COLOUR = QColor("#fde7ea")
 KEPT_TIP = ("the share of frames whose signature is kept: each finger extended, bent or curled as in the source, "
             "the thumb's touches, no finger bending sideways")
-
-
-def worst_first(rows: list[dict]) -> list[dict]:
-    """Failures first, then by the share of frames whose signature is kept from the lowest, then by S_finger (a
-    row with no score after those with one): S_finger averages one wrong finger away, and a batch ranked by it
-    put a retarget keeping 0.60 below one keeping 0.68."""
-    def key(row: dict) -> tuple:
-        kept, score = row.get("kept", math.nan), row.get("s_finger", math.nan)
-        return ({"failed": 0, "not run": 1}.get(row.get("status"), 2), math.isnan(kept), kept, math.isnan(score),
-                score)
-    return sorted(rows, key=key)
 
 
 class _Item(QTableWidgetItem):
