@@ -420,10 +420,13 @@ def _cmd_batch(args: argparse.Namespace) -> int:
     print(f"{counted(len(result.rows), 'task')}: {ok} ok" + (f" ({warned} with a warning)" if warned else "")
           + f", {len(result.failed)} failed" + (f", {not_run} not run" if not_run else "")
           + (f" ({result.skipped} finished by an earlier run)" if result.skipped else "")
+          + (f" ({counted(result.redone, 'task')} done again over an earlier run's: made with other inputs or "
+             f"options)" if result.redone else "")
           + f", {result.seconds:.1f} s" + (" (interrupted: run it again to finish)" if result.interrupted else ""))
     if result.rigs:
         names = ", ".join(Path(rig).name for rig in result.rigs[:5]) + (", ..." if len(result.rigs) > 5 else "")
-        print(f"left out {counted(len(result.rigs), 'file')} of the motion folders with no animation (rigs?): {names}")
+        print(f"left out {counted(len(result.rigs), 'file')} of no animation (rigs: clips beside them that lack a "
+              f"skin of their own are read onto them): {names}")
     failed = result.failed
     for row in failed[:10]:
         print(f"  failed: {row['motion']} -> {row['target']} ({row['method']}): {row['error']}", file=sys.stderr)
@@ -600,8 +603,10 @@ def build_parser() -> argparse.ArgumentParser:
     bt.add_argument("--no-pictures", dest="pictures", action="store_false",
                     help="skip the worst frame's picture of each task (faster; the report has none)")
     bt.add_argument("--side", choices=["right", "left"], help="which hand of full-body characters (default: detect)")
-    bt.add_argument("--source", help="hand file of the rig every motion was made for, where their files lack it (a "
-                                     "skeleton-only clip resting in a pose: its row's warning says so)")
+    bt.add_argument("--source", help="hand file of the rig the motions were made for, for those whose files lack "
+                                     "it (a glTF/FBX skeleton with no mesh or resting in a pose, an npz on no "
+                                     "shipped hand); a clip it does not fit (other bones) is read onto a rig of no "
+                                     "animation beside it, else its own (default: those alone)")
     bt.add_argument("--unit", choices=list(UNITS), help="length unit of every rig and motion file (default: the "
                                                         "format's, else guessed from the hand's size)")
     bt.add_argument("--animation", help="which animation (glTF) or take (FBX) of each motion file of several: name "

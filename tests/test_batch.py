@@ -308,8 +308,11 @@ def test_each_animation_of_a_file_is_a_motion_of_its_own_and_all_reads_them_as_o
     assert names[-1] == "gestures" and len(set(names)) == 36 and len({t.key for t in tasks}) == 36
     horns = tasks[names.index("godot_hand_poses_r.Horns")]
     row = run_task(horns)
-    motion, rig = load_motion_file(POSES, options=RigOptions(animation="Horns"))
+    rig_beside = str(Path(POSES).with_name("godot_hand_r_posed_rig.gltf"))  # its skeleton has no mesh: read on it
+    rig = load_hand_file(rig_beside)
+    motion, _ = load_motion_file(POSES, rig, options=RigOptions(animation="Horns"))
     assert row["status"] == "ok" and row["animation"] == str(horns.motion.animation) and row["frames"] == motion.n_frames
+    assert row["source_path"] == rig_beside
     threads = torch.get_num_threads()
     torch.set_num_threads(1)
     try:
@@ -337,7 +340,10 @@ def test_a_second_batch_into_a_folder_lists_the_first_ones_rows_too(cluster, tmp
                                   scheduler=cluster.scheduler_address), show_progress=False)
     second = run_batch(BatchConfig([GESTURES], ["iris"], ["tbs_copy"], str(out), options,
                                    scheduler=cluster.scheduler_address), show_progress=False)
-    assert first.earlier == 0 and second.earlier == 1 and len(second.rows) == 1
+    assert first.earlier == 0 and second.earlier == 1 and len(second.rows) == 1 and second.redone == 0
+    again = run_batch(BatchConfig([COUNTING], ["iris"], ["tbs_copy"], str(out), dataclasses.replace(options,
+                                  side="right"), scheduler=cluster.scheduler_address), show_progress=False)
+    assert again.redone == 1 and again.skipped == 0  # made with other options: done again, and said
     rows = read_summary(out / "summary.csv")
     assert sorted(r["motion"] for r in rows) == ["counting", "gestures"] and all(r["status"] == "ok" for r in rows)
     assert 0 < rows[0]["kept"] <= 1
@@ -400,3 +406,11 @@ def test_a_clip_with_no_skin_is_read_onto_the_rig_beside_it(tmp_path):
     assert row["source_path"] == by_source["source_path"] == str(folder / "godot_hand_r_posed_rig.gltf")
     assert row["s_finger"] == by_source["s_finger"] and row["warning"] == ""
     np.testing.assert_array_equal(load_motion(beside.output).q_tbs, load_motion(named.output).q_tbs)
+    # a clip that lacks nothing is read as it is, whatever --source says: the sample clips re-read on the Meta
+    # hand given as --source (for the pinch beside them) had kept 0.81 where their own hand keeps 0.96
+    (npz,) = plan_batch([COUNTING], ["iris"], ["tbs_copy"], tmp_path / "npz", dataclasses.replace(
+        options, animation=None, source=str(folder / "godot_hand_r_posed_rig.gltf")))
+    (plain,) = plan_batch([COUNTING], ["iris"], ["tbs_copy"], tmp_path / "plain", dataclasses.replace(
+        options, animation=None))
+    row, alone = run_task(npz), run_task(plain)
+    assert row["source_path"] == "" and row["warning"] == "" and row["kept"] == alone["kept"]

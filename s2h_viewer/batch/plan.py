@@ -38,8 +38,8 @@ class Input:
     path: str
     name: str
     animation: str | int | None = None
-    #: rig files beside the motion (glTF/FBX of no animation in its folder): where no --source is given, the
-    #: motion is read onto the first whose bones it animates (the rig the clips were made on)
+    #: rig files beside a glTF/FBX motion (of no animation, in its folder): a motion whose own skeleton lacks a
+    #: mesh or rests in a pose is read onto the first whose bones it animates, after --source (`batch.task`)
     rigs: tuple[str, ...] = ()
 
     def fingerprint(self) -> list:
@@ -197,13 +197,34 @@ def _animations(motion: Input, wanted: str | None, searched: bool) -> list[Input
     return [Input(motion.path, name, index) for name, index in named.items()]
 
 
+def _rigs_beside(motion: Path, known: dict[Path, tuple[str, ...]]) -> tuple[str, ...]:
+    """The rig files (glTF/FBX of no animation) in a glTF/FBX motion's folder, sorted; ``known`` holds the folders
+    searched already (and gets this one): a pose file named on its own was read onto its bare skeleton where the
+    same file found in its folder was read onto the rig beside it."""
+    from s2h_viewer.io.files import ANIMATED_SUFFIXES, list_animations
+
+    if motion.suffix.lower() not in ANIMATED_SUFFIXES:
+        return ()
+    folder = motion.parent
+    if folder not in known:
+        found = []
+        for path in sorted(p for p in folder.iterdir() if p.is_file() and p.suffix.lower() in ANIMATED_SUFFIXES):
+            try:
+                if not list_animations(path):
+                    found.append(str(path.resolve()))
+            except S2HError:
+                continue
+        known[folder] = tuple(found)
+    return known[folder]
+
+
 def plan_batch(motions: list[str], targets: list[str], methods: list[str], out_dir: str | Path,
                options: TaskOptions = TaskOptions(), known_methods: tuple[str, ...] = (),
                skipped: list[str] | None = None) -> list[Task]:
     """The batch's tasks, motion-major; a `BatchUsageError` for what no task could run. ``skipped`` gets the
     files of the motion folders that hold no animation (rigs: a folder of clips often holds the rig they were
-    made on, and its 8 tasks failed "has no animations"); without a --source, each motion beside such rigs is
-    read onto the first of them whose bones it animates (`Input.rigs`)."""
+    made on, and its 8 tasks failed "has no animations"); each glTF/FBX motion knows the rigs beside it
+    (`Input.rigs`)."""
     if options.format not in FORMATS:
         raise BatchUsageError(f"--format {options.format}: use one of {', '.join(FORMATS)}")
     unknown = [m for m in methods if known_methods and m not in known_methods]
@@ -220,9 +241,10 @@ def plan_batch(motions: list[str], targets: list[str], methods: list[str], out_d
         raise BatchUsageError(f"{' '.join(motions)}: no motion files with animations (only rigs)")
     if skipped is not None:
         skipped += rigs
-    if options.source is None and rigs:
-        motion_inputs = [dataclasses.replace(m, rigs=tuple(r for r in rigs if Path(r).parent == Path(m.path).parent))
-                         for m in motion_inputs]
+    beside: dict[Path, tuple[str, ...]] = {}
+    for rig in rigs:
+        beside[Path(rig).parent] = beside.get(Path(rig).parent, ()) + (rig,)
+    motion_inputs = [dataclasses.replace(m, rigs=_rigs_beside(Path(m.path), beside)) for m in motion_inputs]
     target_inputs = _named(_files(targets, HAND_SUFFIXES, "hand", allow_names=True))
     out = str(Path(out_dir))
     return [Task(m, t, method, out, options) for m in motion_inputs for t in target_inputs for method in methods]

@@ -49,6 +49,9 @@ class BatchResult:
     startup_seconds: float = 0.0  # planning, the cluster's start and its workers' imports, before the first task
     earlier: int = 0  # rows of other batches into the same folder, listed in its summary after this batch's
     rigs: list[str] = field(default_factory=list)  # files of the motion folders with no animation, left out
+    #: tasks an earlier run finished ok with other inputs or options (another --source, a changed file), done
+    #: again over its files: a fresh-eyes user's result made with a --source was replaced and nothing said so
+    redone: int = 0
 
     @property
     def exit_code(self) -> int:
@@ -70,6 +73,7 @@ def run_batch(config: BatchConfig, show_progress: bool | None = None) -> BatchRe
             rows[i] = earlier
     skipped = len(rows)
     todo = [i for i in range(len(tasks)) if i not in rows]
+    redone = sum((read_row_json(tasks[i].row_file) or {}).get("status") == "ok" for i in todo)
     index = {(tasks[i].motion.name, tasks[i].target.name, tasks[i].method): i for i in todo}
     interrupted = False
     with tqdm(total=len(tasks), initial=skipped, desc="batch", unit="task", file=sys.stderr,
@@ -120,7 +124,7 @@ def run_batch(config: BatchConfig, show_progress: bool | None = None) -> BatchRe
     report = write_report(ordered_rows + earlier, out / "report.html", title=f"s2h batch: {out.resolve().name}")
     return BatchResult(ordered_rows, skipped, time.perf_counter() - start, summary, report, interrupted,
                        [r for r in ordered_rows if r["status"] == "failed"], started_at[0] - start, len(earlier),
-                       rigs)
+                       rigs, redone)
 
 
 def earlier_rows(out: Path, planned: set[Path]) -> list[dict]:

@@ -37,18 +37,26 @@ def _cached(key: tuple, load):
 
 
 def _load_motion(task: Task):
-    """The motion, the hand it is performed on and that hand's file ("": its own): the batch's --source rig, else
-    its own rig where that has a mesh and rests straight, else the first rig beside it whose bones it animates
-    (`plan.Input.rigs`: the pose library's skeleton has no mesh, the pinch's rests in a pose), else its own rig,
-    else its sample hand."""
+    """The motion, the hand it is performed on and that hand's file ("": its own, or its sample hand). --source is
+    "the rig every motion was made for, where their files lack it": a clip that lacks nothing is read as it is (an
+    npz on its shipped sample hand, a glTF/FBX whose skeleton has a mesh and rests straight); one that lacks its rig
+    is read onto --source, else the first rig beside it (`plan.Input.rigs`) whose bones it animates, else on its
+    own skeleton (its row's warning says why that may be wrong). A fresh-eyes user's --source of the Meta hand
+    re-read the sample clips on it (kept 0.96 -> 0.81) and failed the Godot poses ("has no bones ...")."""
     from s2h_viewer.io.files import ANIMATED_SUFFIXES
 
-    if task.options.source is not None or Path(task.motion.path).suffix.lower() not in ANIMATED_SUFFIXES:
-        return (*_read_motion(task, task.options.source), task.options.source or "")
+    source = task.options.source
+    if Path(task.motion.path).suffix.lower() not in ANIMATED_SUFFIXES:
+        try:
+            return (*_read_motion(task, None), "")
+        except S2HError:  # an npz on no shipped sample hand: performed on --source, if given
+            if source is None:
+                raise
+            return (*_read_motion(task, source), source)
     own = _read_motion(task, task.motion.path)
     if own[1].mesh is not None and not own[1].meta.get("rest_note"):
         return (*own, "")  # a rig of its own that lacks nothing
-    for rig in task.motion.rigs:
+    for rig in ([source] if source else []) + [r for r in task.motion.rigs if r != source]:
         try:
             return (*_read_motion(task, rig), rig)
         except S2HError:  # not its rig (other bones): the next, else its own
@@ -131,6 +139,11 @@ def _retarget_and_write(task: Task) -> dict:
     motion, source, source_path = _load_motion(task)
     target = _load_target(task)
     warning = rig_warning(source, "source") or rig_warning(target, "target")
+    given = task.options.source
+    if given and source_path != given and (source_path or source.mesh is None or source.meta.get("rest_note")):
+        read_on = f"read on {Path(source_path).name}, beside it" if source_path else "read on its own skeleton"
+        warning = "; ".join(w for w in (f"--source {Path(given).name} does not fit it (other bones): {read_on}",
+                                        warning) if w)
     moved = retarget(motion, source, target, task.method)
     scores, frame_error = score_retarget_frames(source, motion.q_tbs, target, moved.q_tbs)
     poses = pose_differences(source, motion.q_tbs, target, moved.q_tbs, motion.labels)  # {} for a clip of no poses
