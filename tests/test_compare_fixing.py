@@ -550,3 +550,21 @@ def test_a_motion_exports_message_fits_the_status_bar_naming_its_files(window, q
     qtbot.waitUntil(lambda: win.statusBar().width() > 1500)
     win.export_motion(str(tmp_path / "b.npz"))
     assert win.statusBar().currentMessage().startswith(f"wrote {tmp_path / 'b.npz'} and its corrections")
+
+
+def test_a_fix_that_bends_a_finger_sideways_reads_as_worse():
+    """A fresh-eyes user's splay of an index PIP bent it 39 deg further sideways; the bar read "S_finger 0.901 ->
+    0.901" and no word of worse."""
+    from types import SimpleNamespace
+
+    from s2h_viewer.app.retarget_fixing import score_change
+    from s2h_viewer.semantics.metrics import RetargetScores
+
+    def result(sideways: float) -> SimpleNamespace:
+        return SimpleNamespace(scores=RetargetScores(
+            s_palm=0.9, s_finger=0.901, s_finger_paper=0.9, contact_precision=1.0, contact_recall=1.0,
+            palm_contact_recall=1.0, violation_rate=0.0, jitter=0.0, signature_kept=0.5, sideways_deg=sideways))
+    assert score_change(result(44.0), result(83.0)) == ("kept 0.500 -> 0.500, S_finger 0.901 -> 0.901, sideways 44 "
+                                                        "-> 83 deg (worse than before: Ctrl+Z undoes it)")
+    assert score_change(result(44.0), result(30.0)).endswith("sideways 44 -> 30 deg")
+    assert score_change(result(float("nan")), result(float("nan"))) == "kept 0.500 -> 0.500, S_finger 0.901 -> 0.901"

@@ -83,13 +83,22 @@ class Drag:
         return self.before.corrections.with_turn(self.joint, self.frame, turn, *self.frames, self.hold)
 
 
+#: degrees further sideways (the worst PIP/DIP, `semantics.flexion`) that make a fix read as worse
+SIDEWAYS_WORSE = 2.0
+
+
 def score_change(before: MethodResult, after: MethodResult, base: str = "before") -> str:
-    """"kept 0.95 -> 0.90, S_finger 0.928 -> 0.909 (worse than before)": a fix's effect on the scores a user
-    ranks by. A fresh-eyes user's 107-degree turn lowered S_finger and nothing said so."""
+    """"kept 0.95 -> 0.90, S_finger 0.928 -> 0.909, sideways 44 -> 83 deg (worse than before)": a fix's effect on
+    the scores a user ranks by. A fresh-eyes user's 107-degree turn lowered S_finger and nothing said so; another's
+    splay bent a finger 39 deg further sideways, and read "S_finger 0.901 -> 0.901"."""
     b, a = before.scores, after.scores
-    worse = a.signature_kept < b.signature_kept - 1e-9 or a.s_finger < b.s_finger - 5e-4
+    bent = np.nan_to_num(a.sideways_deg) - np.nan_to_num(b.sideways_deg)  # a finger turned sideways off its curl
+    worse = (a.signature_kept < b.signature_kept - 1e-9 or a.s_finger < b.s_finger - 5e-4 or bent > SIDEWAYS_WORSE
+             or a.violation_rate > b.violation_rate + 1e-9)
+    sideways = (f", sideways {np.nan_to_num(b.sideways_deg):.0f} -> {np.nan_to_num(a.sideways_deg):.0f} deg"
+                if abs(bent) >= 1.0 else "")
     return (f"kept {b.signature_kept:.3f} -> {a.signature_kept:.3f}, S_finger {b.s_finger:.3f} -> {a.s_finger:.3f}"
-            + (f" (worse than {base}: Ctrl+Z undoes it)" if worse else ""))
+            + sideways + (f" (worse than {base}: Ctrl+Z undoes it)" if worse else ""))
 
 
 class RetargetFixing(QObject):
