@@ -10,6 +10,7 @@ from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QFileDialog, QLineEdit, QMessageBox
 
 from compare_window import open_compare_window, when_shown
+from test_annotate_window import keyboard_to
 from s2h_viewer.batch.plan import TaskOptions, plan_batch
 from s2h_viewer.batch.summary import write_summary
 from s2h_viewer.batch.task import run_task
@@ -114,3 +115,22 @@ def test_a_row_of_one_animation_of_a_file_shows_that_animation(qtbot, sample_han
     when_shown(QFileDialog, look)
     assert win.export_motion() is None
     assert offered == [tmp_path / "out" / "two.sign" / "laurel" / "tbs_copy.npz"]
+
+
+def test_letters_typed_in_the_batch_table_find_a_row_and_fire_no_shortcut(qtbot, sample_hands, tmp_path, summary):
+    """A fresh-eyes user typed a motion's name in the batch table to find its row: O marked a range out, R turned
+    the fixing ring's axis. Letters typed there go to the table's search; Ctrl shortcuts still work."""
+    from PySide6.QtTest import QTest
+
+    win = open_compare_window(qtbot, sample_hands, tmp_path)
+    table = win.batch_browser.open(str(summary))
+    qtbot.waitExposed(table)
+    view = table.table
+    keyboard_to(qtbot, view)
+    marked = win.timeline.marked
+    view.setCurrentCell(view.rowCount() - 1, 1)  # the target column: "laurel" rows and "broken" rows
+    QTest.keyClicks(view, "bro")  # b, r, o: none is a shortcut here
+    assert win.timeline.marked == marked
+    assert view.item(view.currentRow(), 1).text() == "broken"
+    QTest.keyClick(view, Qt.Key.Key_M, Qt.KeyboardModifier.ControlModifier)  # a Ctrl shortcut: still the window's
+    assert win.view.solo >= 0

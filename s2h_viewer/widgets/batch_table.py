@@ -6,8 +6,8 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from PySide6.QtCore import Qt, Signal
-from PySide6.QtGui import QColor, QKeySequence, QShortcut
+from PySide6.QtCore import QEvent, Qt, Signal
+from PySide6.QtGui import QColor, QKeyEvent, QKeySequence, QShortcut
 from PySide6.QtWidgets import QHeaderView, QLabel, QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget
 
 from s2h_viewer.batch.summary import worst_first
@@ -36,6 +36,19 @@ class _Item(QTableWidgetItem):
         return self.text().lower() < other.text().lower()  # (super().__lt__ comes back here under PySide6)
 
 
+class _TypingTable(QTableWidget):
+    """A table that takes the letters typed in it (its search for a row by name) before the window's one-key
+    shortcuts do: a fresh-eyes user typed a motion's name to find its row, and R turned the fixing ring's axis and O
+    marked a range. Space still plays."""
+
+    def event(self, event: QEvent) -> bool:
+        if event.type() == QEvent.Type.ShortcutOverride and isinstance(event, QKeyEvent) and event.text().strip() \
+                and not event.modifiers() & ~Qt.KeyboardModifier.ShiftModifier:
+            event.accept()
+            return True
+        return super().event(event)
+
+
 class BatchTable(QWidget):
     """The rows of one batch; ``row_chosen`` carries the summary row a person double-clicked."""
 
@@ -47,7 +60,7 @@ class BatchTable(QWidget):
         failed = sum(r.get("status") == "failed" for r in self.rows)
         self.setWindowTitle(f"Batch: {Path(summary).parent.name}/{Path(summary).name} ({len(self.rows)} tasks, "
                             f"{failed} failed)")
-        self.table = QTableWidget(len(self.rows), len(COLUMNS), self)
+        self.table = _TypingTable(len(self.rows), len(COLUMNS), self)
         self.table.setHorizontalHeaderLabels([c for c, _, _ in COLUMNS])
         self.table.verticalHeader().setVisible(False)
         self.table.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
