@@ -408,7 +408,8 @@ class RetargetFixing(QObject):
     def use_marked_range(self) -> None:
         marked = self.mode.timeline.marked
         if marked is None:
-            self.mode.status("Fix: mark a range first (Playback > Mark in I, Mark out O)")
+            self.mode.status("Fix: mark a range first (Playback > Mark in I, Mark out O): none is marked (the whole "
+                             "clip marked counts as none)")
             return
         frame = self.mode.timeline.frame
         if frame not in marked:
