@@ -178,14 +178,14 @@ def _animations(motion: Input, wanted: str | None, searched: bool) -> list[Input
 
     if Path(motion.path).suffix.lower() not in ANIMATED_SUFFIXES:
         return [motion]
-    if wanted is not None and not searched:
-        return [Input(motion.path, motion.name, int(wanted) if wanted.isdigit() else wanted)]
-    try:
-        names = list_animations(motion.path)
-    except S2HError:
-        return [motion]
-    if not names and searched:
-        return []
+    names = None
+    if searched or wanted is None:
+        try:
+            names = list_animations(motion.path)
+        except S2HError:
+            return [motion]
+        if not names and searched:
+            return []
     if wanted is not None:
         return [Input(motion.path, motion.name, int(wanted) if wanted.isdigit() else wanted)]
     if len(names) < 2:
@@ -241,9 +241,9 @@ def plan_batch(motions: list[str], targets: list[str], methods: list[str], out_d
         raise BatchUsageError(f"{' '.join(motions)}: no motion files with animations (only rigs)")
     if skipped is not None:
         skipped += rigs
-    beside: dict[Path, tuple[str, ...]] = {}
-    for rig in rigs:
-        beside[Path(rig).parent] = beside.get(Path(rig).parent, ()) + (rig,)
+    # the folders searched had every file's animations listed above: their rigs are known, not listed again
+    beside = {folder: tuple(r for r in rigs if Path(r).parent == folder)
+              for folder in {Path(m.path).parent for m in motion_inputs if Path(m.path).resolve() not in named}}
     motion_inputs = [dataclasses.replace(m, rigs=_rigs_beside(Path(m.path), beside)) for m in motion_inputs]
     target_inputs = _named(_files(targets, HAND_SUFFIXES, "hand", allow_names=True))
     out = str(Path(out_dir))
