@@ -103,8 +103,7 @@ class BatchBrowser(QObject):
         from s2h_viewer.io.files import RigOptions, load_hand_file, load_motion_file
         from s2h_viewer.samples import load_sample_hand
         performer = load_hand_file(source) if source else None
-        motion, rig = load_motion_file(path, performer, RigOptions(
-            animation=int(animation) if animation.isdigit() else animation or None))
+        motion, rig = load_motion_file(path, performer, RigOptions(animation=animation or None))  # digits: an index
         return motion, rig or load_sample_hand(motion.hand_name)
 
     def _target(self, path: str, targets: list[HandModel]) -> HandModel:
