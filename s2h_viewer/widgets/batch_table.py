@@ -12,6 +12,7 @@ from PySide6.QtWidgets import QHeaderView, QLabel, QTableWidget, QTableWidgetIte
 
 from s2h_viewer.batch.summary import worst_first
 from s2h_viewer.batch.task import POSES_APART
+from s2h_viewer.widgets.scores_table import KEPT_TIP
 
 #: (header, row key, decimals or None for text)
 COLUMNS = (("Motion", "motion", None), ("Target", "target", None), ("Method", "method", None),
@@ -19,8 +20,6 @@ COLUMNS = (("Motion", "motion", None), ("Target", "target", None), ("Method", "m
            ("Contact P", "contact_p", 3), ("Contact R", "contact_r", 3), ("Violations", "violations", 3),
            ("Sideways\n(deg)", "sideways_deg", 1), ("Worst\nframe", "worst_frame", None), ("Error or warning", "error", None))
 FAILED_COLOUR = QColor("#fde7ea")
-KEPT_TIP = ("the share of frames whose signature is kept: each finger extended, bent or curled as in the source, "
-            "the thumb's touches, no finger bending sideways")
 
 
 class _Item(QTableWidgetItem):
@@ -79,8 +78,8 @@ class BatchTable(QWidget):
                         text += f" ({row['poses_kept']} poses)"
                     item = _Item(text, number)
                     if key == "kept" and number is not None:
-                        item.setToolTip(KEPT_TIP + ("\n\nposes lost:\n" + str(row["poses_lost"]).replace(POSES_APART, "\n")
-                                                    if row.get("poses_lost") else ""))
+                        lost = str(row.get("poses_lost") or "").replace(POSES_APART, "\n")
+                        item.setToolTip(KEPT_TIP + (f"\n\nposes lost:\n{lost}" if lost else ""))
                     item.setTextAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
                 else:
                     text = str(value)

@@ -21,6 +21,10 @@ from s2h_viewer.semantics.flexion import SidewaysPeak
 from s2h_viewer.widgets.tooltips import wrapped
 from s2h_viewer.wording import counted
 
+#: what the Kept column (here and in a batch's table) counts
+KEPT_TIP = ("share of frames that keep the source's signature: each finger extended, bent or curled as in the "
+            "source, the thumb's touches, a thumb out to its side where the source's is (a thumbs-up), no finger "
+            "bending sideways, no invented pad contact (1: every frame)")
 #: (header, score key or None for a name column, header tooltip)
 COLUMNS = (("Method", None, "retargeting method"), ("Target", None, "target hand"),
            ("S_palm", "s_palm", "finger-palm semantic similarity to the source (1 is the same)"),
@@ -31,10 +35,7 @@ COLUMNS = (("Method", None, "retargeting method"), ("Target", None, "target hand
            ("Viol-\nations", "violation_rate", "share of joint angles over 5 deg outside the anatomical limits"),
            ("Side-\nways", "sideways_deg", "the worst sideways bend of a PIP/DIP at its tightest curls, degrees "
                                             "(0: a clean curl toward the palm; authored clips reach 8-22)"),
-           ("Kept", "signature_kept", "share of frames that keep the source's signature: each finger extended, "
-                                      "bent or curled as in the source, the thumb's touches, a thumb out to "
-                                      "its side where the source's is (a thumbs-up), no finger bending "
-                                      "sideways, no invented pad contact (1: every frame)"),
+           ("Kept", "signature_kept", KEPT_TIP),
            ("Inv-\nented", "invented_contacts", "frames where the retarget makes a contact the source does not "
                                                "come near (within 3% of the hand; drawn blue by the contact "
                                                "overlay)"))
