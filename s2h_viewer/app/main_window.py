@@ -716,8 +716,8 @@ class MainWindow(QMainWindow):
         return Path.cwd() if os.access(Path.cwd(), os.W_OK) else Path.home()
 
     def _ask_to_save(self, title: str, file_filter: str, path: str | None, name: Callable[[], str]) -> str | None:
-        """``path`` when given, else the user's choice, offered as ``name()`` in the export folder; None without
-        a comparison to export."""
+        """``path`` when given, else the user's choice, offered as ``name()`` in the export folder (a whole path:
+        there); None without a comparison to export."""
         if self.comparison is None:
             return None
         return path or QFileDialog.getSaveFileName(self, title, str(self._export_dir() / name()), file_filter)[0] \
@@ -809,16 +809,11 @@ class MainWindow(QMainWindow):
         result = shown.selected
         asked = path is None
         row = self.batch_browser.row_of(shown.comparison.motion, result)
-        if asked and row is not None and Path(row["output"]).parent.is_dir():  # beside the batch's own output
-            output = Path(row["output"])
-            path = QFileDialog.getSaveFileName(
-                self, f"Export {exports.label(result)}", str(output.with_name(
-                    f"{output.stem}{'_fixed' if result.corrections else ''}{output.suffix}")),
-                "Motion (*.glb *.bvh *.npz *.fbx)")[0]
-            if not path:
-                return None
-        path = self._ask_to_save(f"Export {exports.label(result)}",
-                                 "Motion (*.glb *.bvh *.npz *.fbx)", path, lambda: shown.name(".glb"))
+        output = Path(row["output"]) if row is not None else None
+        beside = output.with_name(f"{output.stem}{'_fixed' if result.corrections else ''}{output.suffix}") \
+            if output is not None and output.parent.is_dir() else None  # beside the batch's own output, named as it
+        path = self._ask_to_save(f"Export {exports.label(result)}", "Motion (*.glb *.bvh *.npz *.fbx)", path,
+                                 lambda: str(beside) if beside is not None else shown.name(".glb"))
         if not path:
             return None
         frames = self._ask_frames(path, "motion", shown) if asked else self.timeline.marked
