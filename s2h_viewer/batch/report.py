@@ -17,9 +17,9 @@ from s2h_viewer.semantics.flexion import SidewaysPeak
 from s2h_viewer.wording import counted
 
 _NAMES = (("motion", "motion"), ("target", "target"), ("method", "method"), ("status", "status"))
-_SCORES = (("kept", "kept"), ("s_finger", "S_finger"), ("s_palm", "S_palm"), ("contact_p", "contact P"), ("contact_r", "contact R"),
-           ("violations", "violations"), ("sideways_deg", "sideways deg"), ("worst_frame", "worst frame"),
-           ("frames", "frames"), ("seconds", "seconds"))
+_SCORES = (("kept", "kept"), ("s_finger", "S_finger"), ("s_palm", "S_palm"), ("contact_p", "contact P"),
+           ("contact_r", "contact R"), ("violations", "violations"), ("sideways_deg", "sideways deg"),
+           ("worst_frame", "worst frame"), ("frames", "frames"), ("seconds", "seconds"))
 
 _STYLE = """
 body { font: 13px system-ui, sans-serif; margin: 1em; color: #222; }

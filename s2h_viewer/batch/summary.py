@@ -59,8 +59,6 @@ def worst_first(rows: list[dict]) -> list[dict]:
     batch ranked by it put a retarget keeping 0.60 below one keeping 0.68."""
     def key(row: dict) -> tuple:
         kept, score = row.get("kept", math.nan), row.get("s_finger", math.nan)
-        kept = math.nan if kept is None else kept
-        score = math.nan if score is None else score
         return ({"failed": 0, "not run": 1}.get(row.get("status"), 2), math.isnan(kept), kept, math.isnan(score),
                 score)
     return sorted(rows, key=key)
