@@ -49,6 +49,15 @@ def test_a_double_clicked_row_is_shown_in_compare_at_its_worst_frame(qtbot, samp
     rows = table.rows
     assert [r["status"] for r in rows] == ["failed", "failed", "ok", "ok"]  # worst first: failures, then kept
     assert (rows[2]["kept"], rows[2]["s_finger"]) <= (rows[3]["kept"], rows[3]["s_finger"])
+    reopen = win.recent_menu.actions()[0]  # the summary is a recent file, named by its batch's folder
+    assert win.recent_menu.isEnabled() and reopen.text() == f"{summary.parent.name}/summary.csv (batch)"
+    win.batch_browser.dock.close()
+    reopen.trigger()
+    assert win.batch_browser.dock.isVisible()
+    assert [(r["motion"], r["target"], r["method"]) for r in win.batch_browser.table.rows] == [
+        (r["motion"], r["target"], r["method"]) for r in rows]
+    table = win.batch_browser.table
+    rows = table.rows
 
     shown = []
     monkeypatch.setattr(QMessageBox, "critical", lambda *args: shown.append(args[2]))

@@ -387,7 +387,7 @@ class MainWindow(QMainWindow):
         return str(self.settings.value("files/last_dir", str(Path.home())))
 
     def _remember(self, path: str, kind: str | None = None) -> None:
-        """Remember the folder, and with ``kind`` ("motion", "target" or "annotate") the file as recent."""
+        """Remember the folder, and with ``kind`` ("motion", "target", "annotate" or "batch") the file as recent."""
         self.settings.setValue("files/last_dir", str(Path(path).parent))
         if kind:
             recent = [r for r in self._recent() if r != f"{kind}:{path}"]
@@ -400,7 +400,8 @@ class MainWindow(QMainWindow):
 
     def _recent_openers(self) -> dict[str, Callable[[str], None]]:
         """How each kind of recent file opens."""
-        return {"motion": self.load_motion, "target": self.add_target_file, "annotate": self.annotate_file}
+        return {"motion": self.load_motion, "target": self.add_target_file, "annotate": self.annotate_file,
+                "batch": self.open_batch}
 
     def _fill_recent(self) -> None:
         """The recent files, newest first (a hand to annotate opens in Annotate from either tab)."""
@@ -408,7 +409,9 @@ class MainWindow(QMainWindow):
         for entry in self._recent():
             kind, _, path = entry.partition(":")
             if kind in self._recent_openers():
-                action = self.recent_menu.addAction(f"{Path(path).name} ({kind})")
+                # every batch's summary is summary.csv: its folder tells them apart
+                name = f"{Path(path).parent.name}/{Path(path).name}" if kind == "batch" else Path(path).name
+                action = self.recent_menu.addAction(f"{name} ({kind})")
                 action.triggered.connect(lambda _=False, p=path, k=kind: self._open_recent(k, p))
                 action.setData(kind)
         self.recent_menu.setEnabled(bool(self.recent_menu.actions()))
@@ -424,7 +427,7 @@ class MainWindow(QMainWindow):
         self._recent_openers()[kind](path)
 
     def _enable_recent(self) -> None:
-        """Recent motions and targets are for Compare: disabled in Annotate."""
+        """Recent motions, targets and batch summaries are for Compare: disabled in Annotate."""
         for action in self.recent_menu.actions():
             action.setEnabled(action.data() == "annotate" or not self._annotating())
 
@@ -683,6 +686,7 @@ class MainWindow(QMainWindow):
         """A batch's summary.csv (`s2h batch`) as a table; double-click a row to show it here."""
         if self.batch_browser.open(path) is not None:
             self.settings.setValue("files/batch_dir", str(Path(path).resolve().parent))
+            self._remember(str(Path(path).resolve()), "batch")
 
     def _hand_dir(self) -> str:
         return self._start_dir("files/hand_dir", "hands")
