@@ -56,15 +56,17 @@ def main() -> None:
         hands[label] = hand
         labels.append(label)
     print(f"source: {pose_file.name} on {performer.source or performer.name} ({performer.meta.get('annotation')})")
-    print("| rig | method | poses kept (of 35) | contact P (poses) | violations (poses) | sideways max, poses "
+    print("| rig | method | poses kept (of 35) | contact P (poses) | violations (poses) | violations added (poses) "
+          "| sideways max, poses "
           "| thumb follows, poses | sideways max, gestures | S_finger, gestures |")
-    print("|---|---|---:|---:|---:|---:|---:|---:|---:|")
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|")
     pose_rows = evaluate([poses], hands, labels, methods)
     gesture_rows = evaluate([gestures], hands, labels, methods)
     for p, g in zip(pose_rows, gesture_rows):
         kept = sum(not lost for lost in p.poses.values())
         print(f"| {p.target} | {p.method} | {kept} | {p.scores.contact_precision:.2f} | {p.scores.violation_rate:.3f} "
-              f"| {p.scores.sideways_deg:.0f} | {p.scores.thumb_follow:.2f} ({p.scores.thumb_follow_at}) "
+              f"| {p.scores.added_violation_rate:.3f} | {p.scores.sideways_deg:.0f} "
+              f"| {p.scores.thumb_follow:.2f} ({p.scores.thumb_follow_at}) "
               f"| {g.scores.sideways_deg:.0f} ({g.scores.sideways_at}) "
               f"| {g.scores.s_finger:.3f} |", flush=True)
     print()

@@ -495,8 +495,11 @@ def test_a_retargets_violations_read_against_the_sources_own(poses, sample_hands
                                               retarget(motion, rig, sample_hands["iris"], "tbs_copy").q_tbs)
     assert scores.source_violation_rate == pytest.approx(violation_rate(motion.q_tbs)) and \
         scores.source_violation_rate > 0.5
-    text, tip = _cell("violation_rate", scores.as_dict())
-    assert text == f"{scores.violation_rate:.3f}" and f"the source itself: {scores.source_violation_rate:.3f}" in tip
+    # the cell is what the retarget adds to them (TBS Copy: none), its tooltip the whole figure and the source's
+    assert scores.violation_rate > 0.5 and scores.added_violation_rate == 0.0
+    text, tip = _cell("added_violation_rate", scores.as_dict())
+    assert text == "0.000" and f"outside them at all: {scores.violation_rate:.3f}" in tip
+    assert f"the source itself: {scores.source_violation_rate:.3f}" in tip
 
 
 def test_the_thumb_resting_on_the_curled_fingers_is_part_of_the_signature(poses):

@@ -15,7 +15,8 @@ from s2h_viewer.hand.kinematics import HandPose, forward_kinematics, identity_mo
 from s2h_viewer.hand.rotations import tbs_euler_to_quat
 from s2h_viewer.motions.fitting import fit_gesture_angles
 from s2h_viewer.motions.gestures import GESTURES
-from s2h_viewer.semantics.anatomy import BEND_HIGH, anatomical_loss, clamp_bend_change, violation_rate
+from s2h_viewer.semantics.anatomy import (BEND_HIGH, added_violation_rate, anatomical_loss, clamp_bend_change,
+                                         violation_rate)
 from s2h_viewer.semantics.asm import (BLOCK_FRAMES, SELF_CELLS, asm_columns, distance_matrix, palm_unit,
                                       semantic_matrix, semantic_matrix_by_axis)
 from s2h_viewer.semantics.contacts import contact_precision_recall, detect_contacts, pair_index
@@ -221,6 +222,31 @@ def test_a_corrected_bend_stays_in_its_limits_or_no_further_out_than_it_started(
     assert torch.rad2deg(out[:, 3, 1]).tolist() == pytest.approx([103.0, 89.0, -10.0])
     assert out[0, 3, 1] <= BEND_HIGH[3] or out[0, 3, 1] == start[0, 3, 1]
     np.testing.assert_array_equal(clamp_bend_change(start, start).numpy(), start.numpy())  # no correction, no change
+
+
+def test_a_knuckle_bent_past_90_violates_by_how_far_it_is_past_not_as_a_half_turn_twist():
+    """A fist's index knuckle at 92 deg is 2 deg past its limit (within the 5 deg tolerance), at 100 deg 10 past; the
+    bend-within-90 reading made both a 180 deg twist, so a fit that closed a fist 2 deg further read as a violation."""
+    angles = torch.zeros(3, 15, 3, dtype=torch.float64)
+    angles[:, 3, 1] = torch.deg2rad(torch.tensor([80.0, 92.0, 100.0], dtype=torch.float64))
+    q = tbs_euler_to_quat(angles)
+    assert [violation_rate(q[i:i + 1]) for i in range(3)] == [0.0, 0.0, pytest.approx(1 / 15)]
+
+
+def test_the_violations_a_retarget_adds_are_those_past_the_sources_own():
+    """A source that twists a PIP 8 deg (past the 0 limit) and a target twisting it 8 deg the other way adds nothing;
+    12 deg adds nothing either (4 further out), 15 deg adds one (7 further); a target within the limits where the
+    source is past them adds none; a copy adds none."""
+    source = torch.zeros(4, 15, 3, dtype=torch.float64)
+    source[:, 4, 0] = math.radians(8.0)  # index PIP twisted 8 deg in every frame
+    target = source.clone()
+    target[:, 4, 0] = torch.deg2rad(torch.tensor([-8.0, 12.0, 15.0, 0.0], dtype=torch.float64))
+    q_source, q_target = tbs_euler_to_quat(source), tbs_euler_to_quat(target)
+    assert violation_rate(q_source) == 1 / 15 and violation_rate(q_target) == pytest.approx(3 / 60)
+    assert added_violation_rate(q_source, q_target) == pytest.approx(1 / 60)
+    assert added_violation_rate(q_source, q_source) == 0.0
+    assert added_violation_rate(torch.zeros_like(q_source) + q_source.new_tensor([1.0, 0, 0, 0]), q_target) == \
+        pytest.approx(violation_rate(q_target))  # a source within the limits: what the retarget breaks is all it adds
 
 
 def test_the_smooth_sideways_reading_is_the_scores_and_has_gradients(sample_hands, rng):

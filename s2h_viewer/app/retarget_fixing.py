@@ -94,7 +94,7 @@ def score_change(before: MethodResult, after: MethodResult, base: str = "before"
     b, a = before.scores, after.scores
     bent = np.nan_to_num(a.sideways_deg) - np.nan_to_num(b.sideways_deg)  # a finger turned sideways off its curl
     worse = (a.signature_kept < b.signature_kept - 1e-9 or a.s_finger < b.s_finger - 5e-4 or bent > SIDEWAYS_WORSE
-             or a.violation_rate > b.violation_rate + 1e-9)
+             or a.added_violation_rate > b.added_violation_rate + 1e-9)
     sideways = (f", sideways {np.nan_to_num(b.sideways_deg):.0f} -> {np.nan_to_num(a.sideways_deg):.0f} deg"
                 if abs(bent) >= 1.0 else "")
     return (f"kept {b.signature_kept:.3f} -> {a.signature_kept:.3f}, S_finger {b.s_finger:.3f} -> {a.s_finger:.3f}"

@@ -18,7 +18,7 @@ from s2h_viewer.wording import counted
 
 _NAMES = (("motion", "motion"), ("target", "target"), ("method", "method"), ("status", "status"))
 _SCORES = (("kept", "kept"), ("s_finger", "S_finger"), ("s_palm", "S_palm"), ("contact_p", "contact P"),
-           ("contact_r", "contact R"), ("violations", "violations"), ("sideways_deg", "sideways deg"),
+           ("contact_r", "contact R"), ("violations_added", "violations added"), ("sideways_deg", "sideways deg"),
            ("worst_frame", "worst frame"), ("frames", "frames"), ("seconds", "seconds"))
 
 _STYLE = """

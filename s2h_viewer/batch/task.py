@@ -156,6 +156,7 @@ def _retarget_and_write(task: Task) -> dict:
            "s_palm": scores.s_palm, "s_finger": scores.s_finger,
            "contact_p": scores.contact_precision, "contact_r": scores.contact_recall,
            "palm_r": scores.palm_contact_recall, "violations": scores.violation_rate,
+           "violations_added": scores.added_violation_rate,
            "sideways_deg": scores.sideways_deg, "sideways_at": scores.sideways_at,
            "worst_frame": worst, "worst_error": float(frame_error[worst]) if len(frame_error) else 0.0,
            "output": str(task.output), "warning": warning, "source_path": source_path}

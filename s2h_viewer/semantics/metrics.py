@@ -11,7 +11,7 @@ from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.chunks import frame_chunks
 from s2h_viewer.hand.kinematics import HandPose, forward_kinematics
 from s2h_viewer.hand.model import HandModel
-from s2h_viewer.semantics.anatomy import violation_rate
+from s2h_viewer.semantics.anatomy import added_violation_rate, violation_rate
 from s2h_viewer.semantics.asm import semantic_matrix
 from s2h_viewer.semantics.contacts import (CONTACT_PAIRS, PAD_PAIRS, PALM_PAIRS, contact_precision_recall,
                                            detect_contacts, touching_and_near)
@@ -92,6 +92,9 @@ class RetargetScores:
     #: the source's own violation rate: a clip authored past the limits (the authored poses' 0.625) keeps past
     #: them on any target, and a retarget's figure reads against it
     source_violation_rate: float = float("nan")
+    #: the violations the retarget adds: (frame, joint) angles further outside the limits than the source's own
+    #: (`semantics.anatomy.added_violation_rate`; the same as ``violation_rate`` where the source keeps within them)
+    added_violation_rate: float = float("nan")
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -141,7 +144,8 @@ def score_retarget_frames(source_hand: HandModel, source_q: np.ndarray | torch.T
                                 signature_kept=float(kept.mean()), invented_contacts=int(invented.any(-1).sum()),
                                 invented_pairs=invented_by_pair(invented),
                                 thumb_follow=follow.get(worst_thumb, float("nan")), thumb_follow_at=worst_thumb,
-                                source_violation_rate=violation_rate(torch.as_tensor(np.asarray(source_q))))
+                                source_violation_rate=violation_rate(np.asarray(source_q)),
+                                added_violation_rate=added_violation_rate(np.asarray(source_q), tgt_q))
         return scores, frame_error
 
 

@@ -17,7 +17,7 @@ from s2h_viewer.widgets.scores_table import KEPT_TIP
 #: (header, row key, decimals or None for text)
 COLUMNS = (("Motion", "motion", None), ("Target", "target", None), ("Method", "method", None),
            ("Status", "status", None), ("Kept", "kept", 3), ("S_finger", "s_finger", 3), ("S_palm", "s_palm", 3),
-           ("Contact P", "contact_p", 3), ("Contact R", "contact_r", 3), ("Violations", "violations", 3),
+           ("Contact P", "contact_p", 3), ("Contact R", "contact_r", 3), ("Violations\nadded", "violations_added", 3),
            ("Sideways\n(deg)", "sideways_deg", 1), ("Worst\nframe", "worst_frame", None), ("Error or warning", "error", None))
 FAILED_COLOUR = QColor("#fde7ea")
 
@@ -86,6 +86,9 @@ class BatchTable(QWidget):
                     item = _Item(text, float(text) if key == "worst_frame" and text.isdigit() else None)
                 if key == "error" and value:
                     item.setToolTip(str(value))
+                if key == "violations_added" and number is not None:
+                    item.setToolTip(f"joint angles over 5 deg further outside the anatomical limits than the "
+                                    f"source's; outside them at all: {row.get('violations', math.nan):.3f}")
                 if key == "sideways_deg" and row.get("sideways_at"):
                     joint, _, frame = str(row["sideways_at"]).partition("@")
                     item.setToolTip(f"{joint.replace('_', ' ')} at frame {frame}")
