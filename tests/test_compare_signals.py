@@ -256,6 +256,22 @@ def test_an_export_of_a_flagged_target_carries_its_banner(human_female, sample_h
     assert colour_pixels(np.asarray(Image.open(png).convert("RGB")), BANNER_BACKGROUND, 6) > 200
 
 
+def test_a_skeleton_only_sources_ghost_is_drawn_so_it_can_be_seen(sample_hands, tmp_path):
+    """The Meta pinch read on its own skeleton (no mesh): its ghost is its bones. In the skin's light grey at the
+    skin's opacity they were all but invisible on the background (a fresh-eyes user saw no ghost); now dark lines."""
+    from s2h_viewer.io.files import load_motion_file
+    from s2h_viewer.render.compare_scene import GHOST_BONES_COLOUR, Framing, ViewOptions, render_comparison
+    motion, skeleton = load_motion_file(ASSETS_DIR / "motions/real/r_hand_pinch_anim.fbx")
+    assert skeleton.mesh is None
+    comparison = build_comparison(motion, skeleton, [sample_hands["iris"]], ["tbs_copy"])
+    drawn = {}
+    for ghost in (False, True):
+        png = render_comparison(comparison, tmp_path / f"ghost_{ghost}.png", frame=1, size=(600, 500),
+                                options=ViewOptions(ghost=ghost), framing=Framing(solo=1))
+        drawn[ghost] = colour_pixels(np.asarray(Image.open(png).convert("RGB")), GHOST_BONES_COLOUR, 30)
+    assert drawn[True] - drawn[False] > 500, drawn  # (text and the colour bar share a few dark pixels)
+
+
 def test_the_source_shows_as_a_ghost_over_a_retarget_shown_alone(window, human_female, tmp_path):
     """Issue 25 item 5: the source's skin over the retarget, aligned at the wrist and scaled to the target."""
     from s2h_viewer.render.compare_scene import GHOST_COLOUR

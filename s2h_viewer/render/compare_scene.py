@@ -68,6 +68,9 @@ ON_TOP_OFFSET = -1e6  # depth offset (OpenGL polygon-offset units) of the contac
 BANNER_COLOUR, BANNER_BACKGROUND = "#8a4b00", "#ffe0b2"
 #: the source's ghost over a retarget shown alone (`Ghost`)
 GHOST_COLOUR, GHOST_OPACITY = "#9e9e9e", 0.35
+#: and a skeleton-only source's bones: thin lines in the skin's grey at its opacity were all but invisible on the
+#: light background (a fresh-eyes user saw no ghost at all)
+GHOST_BONES_COLOUR, GHOST_BONES_OPACITY = "#37474f", 0.8
 #: the selected retarget's cell is framed in this colour, this many pixels wide
 SELECTED_COLOUR, SELECTED_WIDTH = "#1565c0", 3.0
 #: the contact legend's size in pixels (one line per state), LABEL_PAD from its cell's bottom left corner
@@ -702,8 +705,8 @@ class Ghost:
         shape = source.mesh if source.levels else source.bones
         self.mesh = shape.copy(deep=True)
         self.actor = pv.Actor(mapper=pv.DataSetMapper(self.mesh))
-        self.actor.prop.color = GHOST_COLOUR
-        self.actor.prop.opacity = GHOST_OPACITY
+        self.actor.prop.color = GHOST_COLOUR if source.levels else GHOST_BONES_COLOUR
+        self.actor.prop.opacity = GHOST_OPACITY if source.levels else GHOST_BONES_OPACITY
         if not source.levels:
             self.actor.prop.line_width = 4
         self.renderer = target.renderer
