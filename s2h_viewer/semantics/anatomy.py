@@ -7,6 +7,9 @@ official code's limits (model/tbs/tbs_net.py ``anatomical_loss``, euler branch):
 - splay: 0 on PIP/DIP and the thumb MCP/IP; within +-30 deg on the four MCPs, +-60 deg on the thumb CMC;
 - bend: >= -10 deg on the four MCPs (hyperextension), >= -60 deg on the thumb CMC, >= 0 elsewhere;
   <= 90 deg on all (the official asin clamp disabled this term; ours reaches it).
+
+The violation rates read the angles with the bend free past 90 deg (`quat_to_tbs_euler_past_lock`), and
+`added_violation_rate` counts only what a retarget puts further outside than its source.
 """
 
 from __future__ import annotations
@@ -93,7 +96,7 @@ def bends_within_source_limits(source_q: np.ndarray, q: np.ndarray) -> np.ndarra
 
 def anatomical_loss(q_tbs: torch.Tensor) -> torch.Tensor:
     """L_ana: sum over joints of squared excesses, averaged over frames (scalar, radians^2)."""
-    return angle_loss(quat_to_tbs_euler(q_tbs))
+    return anatomical_excess(q_tbs).square().sum(dim=(-1, -2)).mean()
 
 
 def angle_loss(angles: torch.Tensor) -> torch.Tensor:
