@@ -568,3 +568,22 @@ def test_a_fix_that_bends_a_finger_sideways_reads_as_worse():
                                                         "-> 83 deg (worse than before: Ctrl+Z undoes it)")
     assert score_change(result(44.0), result(30.0)).endswith("sideways 44 -> 30 deg")
     assert score_change(result(float("nan")), result(float("nan"))) == "kept 0.500 -> 0.500, S_finger 0.901 -> 0.901"
+
+
+def test_the_fix_bar_says_its_hint_whole_on_two_lines_in_a_1000_pixel_window(window, qtbot):
+    """A fresh-eyes user read the fix bar's hint cut off at 1000 pixels (one line, elided). It wraps onto a second
+    line of a bar that keeps its height whatever it says; what is longer still ends elided, whole in the tooltip."""
+    from s2h_viewer.widgets.correction_bar import HINT
+    bar = window.compare.fixing.bar
+    height = bar.readout.height()
+    window.resize(1000, 760)
+    qtbot.waitUntil(lambda: window.width() <= 1000)
+    bar.say(HINT)
+    lines = bar.readout.text().split("\n")
+    assert len(lines) == 2 and " ".join(lines) == HINT
+    assert all(bar.readout.fontMetrics().horizontalAdvance(line) <= bar.readout.width() for line in lines)
+    long = "index PIP: " + ", ".join(f"key at frame {f}" for f in range(40))
+    bar.say(long)
+    lines = bar.readout.text().split("\n")
+    assert len(lines) == 2 and lines[1].endswith("…") and bar.readout.toolTip() == long
+    assert bar.readout.height() == height

@@ -5,6 +5,7 @@ owner's (`app.retarget_fixing`); this only shows and asks."""
 from __future__ import annotations
 
 from PySide6.QtCore import Qt, Signal
+from PySide6.QtGui import QFontMetrics
 from PySide6.QtWidgets import (QComboBox, QHBoxLayout, QLabel, QSizePolicy, QSpinBox, QToolButton, QVBoxLayout,
                                QWidget)
 
@@ -14,6 +15,28 @@ from s2h_viewer.retarget.corrections import AXES
 DEFAULT_EASE = 10
 HINT = ("Fix: click a joint, drag its ring (Shift: finer, R: next axis, Esc: let go); keys blend over the marked range "
         "or the ease frames")
+
+
+#: lines the readout shows before it elides
+READOUT_LINES = 2
+
+
+def wrapped_lines(text: str, metrics: QFontMetrics, width: int, most: int) -> list[str]:
+    """``text`` broken at spaces into lines ``width`` pixels wide in ``metrics``' font, at most ``most`` of them:
+    the last holds the rest, elided at the right."""
+    words = text.split()
+    lines, current, taken = [], "", 0
+    while taken < len(words) and len(lines) < most - 1:
+        candidate = f"{current} {words[taken]}" if current else words[taken]
+        if metrics.horizontalAdvance(candidate) <= width:
+            current, taken = candidate, taken + 1
+        elif current:
+            lines.append(current)
+            current = ""
+        else:
+            break  # one word wider than a line: the last line elides it
+    rest = " ".join(([current] if current else []) + words[taken:])
+    return lines + [metrics.elidedText(rest, Qt.TextElideMode.ElideRight, width)] if rest else lines
 
 
 class CorrectionBar(QWidget):
@@ -27,9 +50,10 @@ class CorrectionBar(QWidget):
         super().__init__(parent)
         self._said = HINT
         self.readout = QLabel(HINT)
-        # one line whatever it says (the whole text in its tooltip): a bar that grew would shrink the 3D view under
-        # the ring being dragged
+        # two lines whatever it says (the whole text in its tooltip): a bar that grew would shrink the 3D view under
+        # the ring being dragged, and one line cut the hint and a fix's frames at 1000 pixels
         self.readout.setSizePolicy(QSizePolicy.Policy.Ignored, QSizePolicy.Policy.Fixed)
+        self.readout.setFixedHeight(READOUT_LINES * self.readout.fontMetrics().lineSpacing())
         self.axis_choice = QComboBox()
         self.axis_choice.addItems(list(AXES))
         self.axis_choice.setCurrentIndex(AXES.index("bend"))
@@ -70,14 +94,14 @@ class CorrectionBar(QWidget):
         self.axis_choice.setCurrentIndex((self.axis_choice.currentIndex() + 1) % len(AXES))
 
     def say(self, text: str) -> None:
-        """One line, elided to the bar's width (the whole text in its tooltip)."""
+        """At most `READOUT_LINES` lines, the last elided to the bar's width (the whole text in its tooltip)."""
         self._said = text
         self.readout.setToolTip(text)
         self._elide()
 
     def _elide(self) -> None:
-        self.readout.setText(self.readout.fontMetrics().elidedText(self._said, Qt.TextElideMode.ElideRight,
-                                                                   max(self.readout.width(), 40)))
+        self.readout.setText("\n".join(wrapped_lines(self._said, self.readout.fontMetrics(),
+                                                     max(self.readout.width(), 40), READOUT_LINES)))
 
     def resizeEvent(self, event) -> None:
         super().resizeEvent(event)
