@@ -292,6 +292,21 @@ def test_a_rig_recognised_with_low_confidence_is_flagged_in_its_row(tmp_path):
     assert low["warning"] in write_report([low, good], page).read_text().replace("&#x27;", "'").replace("&quot;", '"')
 
 
+def test_a_target_whose_frames_are_guessed_is_flagged_in_its_row_as_in_the_viewer(tmp_path):
+    """The RPM avatar's index frames are the palm plane's guess: the viewer's banner says so over its cell, and a
+    fresh-eyes user found the batch row for the same retarget silent."""
+    from s2h_viewer.annotate.trust import frame_warning
+    from s2h_viewer.batch.task import run_task
+    from s2h_viewer.io.files import RigOptions, load_hand_file
+    rpm = ASSETS_DIR / "hands" / "real" / "RPM_Template_Mesh_XR.glb"
+    banner = frame_warning(load_hand_file(rpm, RigOptions(side="right"))).banner
+    (task,) = plan_batch([COUNTING], [f"{rpm}"], ["tbs_copy"], tmp_path, TaskOptions(format="npz", render=False,
+                                                                                    side="right"), tuple(METHODS))
+    row = run_task(task)
+    assert row["status"] == "ok" and banner.startswith("frames guessed: index")
+    assert f"target {banner}: retargets may bend there" in row["warning"]
+
+
 POSES = str(ASSETS_DIR / "motions" / "real" / "godot_hand_poses_r.gltf")
 
 

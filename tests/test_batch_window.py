@@ -72,6 +72,7 @@ def test_a_double_clicked_row_is_shown_in_compare_at_its_worst_frame(qtbot, samp
     double_click(next(r for r in range(view.rowCount()) if view.item(r, 3).text() == "failed"))
     assert shown and "failed in the batch" in shown[-1] and "broken.glb" in shown[-1]
 
+    remembered = win.settings.value("compare/methods")
     chosen = next(r for r in range(view.rowCount()) if view.item(r, 2).text() == "dm"
                   and view.item(r, 3).text() == "ok")
     wanted = table.rows[view.item(chosen, 0).data(Qt.ItemDataRole.UserRole)]
@@ -90,6 +91,8 @@ def test_a_double_clicked_row_is_shown_in_compare_at_its_worst_frame(qtbot, samp
     with qtbot.waitSignal(win.comparison_ready, timeout=120_000):
         double_click(ok)  # the same clip: its retarget joins the grid
     assert win.compare.state.methods == ["tbs_copy", "dm"] and len(win.compare.state.targets) == 1
+    # the rows' methods are not the user's choice: the next session starts with the methods the user chose
+    assert win.settings.value("compare/methods") == remembered and remembered != ["tbs_copy", "dm"]
 
 
 def test_a_row_of_one_animation_of_a_file_shows_that_animation(qtbot, sample_hands, tmp_path):

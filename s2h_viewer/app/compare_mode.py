@@ -185,6 +185,9 @@ class CompareMode(QWidget):
         super().__init__(parent)
         self.error, self.status = error, status
         self.state = CompareState(setup.motion, setup.source, list(setup.targets), list(setup.methods))
+        #: the methods are a batch's rows' (`replace_comparison`) until the user chooses some or opens a motion: not
+        #: remembered for the next session
+        self.methods_from_batch = False
         self._shown: tuple | None = None  # (motion, source, targets, methods) on screen: where Cancel returns
         self._shown_index = 0  # the undo stack's index when the grid showed ``_shown``
         self._reverting = False  # Cancel is undoing its dropped changes: they only set the state back
@@ -353,6 +356,7 @@ class CompareMode(QWidget):
         history starts afresh: the earlier one's commands name targets this one does not have."""
         self.undo_stack.clear()
         self.state.targets, self.state.methods = list(targets), [m for m in METHODS if m in methods]
+        self.methods_from_batch = True
         self.load(motion, source)
 
     def select(self, key: ResultKey, turn_page: bool = True) -> None:

@@ -354,12 +354,15 @@ class MainWindow(QMainWindow):
             self.error("Choose at least one retargeting method.")
             self._state_changed()
             return
+        self.compare.methods_from_batch = False  # the user's own choice
         self.settings.setValue("compare/methods", methods)
         self.compare.set_methods(methods)
 
     def _state_changed(self) -> None:
-        """The menus (and the remembered methods) say what the compare state holds, after a cancel too."""
-        self.settings.setValue("compare/methods", list(self.setup.methods))
+        """The menus (and the remembered methods, unless a batch row's) say what the compare state holds, after a
+        cancel too."""
+        if not self.compare.methods_from_batch:  # one row's method had become every later session's only one
+            self.settings.setValue("compare/methods", list(self.setup.methods))
         last = self.setup.methods[0] if len(self.setup.methods) == 1 else None
         for name, action in self.method_actions.items():
             action.blockSignals(True)
@@ -599,6 +602,7 @@ class MainWindow(QMainWindow):
         from s2h_viewer.samples import load_sample_hand
         if rig_file is None and not self.confirm_corrections(f"opening {Path(path).name}"):
             return
+        self.compare.methods_from_batch = False  # a motion the user opens: the methods are theirs again
         clip_key = OpenedClips.key(path, (self.open_options, rig_file))  # hashed once, whether read again or not
         opened = self.opened_clips.get(clip_key)
         if opened is not None:  # the same file again, unchanged: its retargets are shown, not computed again

@@ -45,7 +45,7 @@ def _cell(value) -> str:
     if value is None or (isinstance(value, float) and math.isnan(value)):
         return ""
     if isinstance(value, float):
-        return f"{value:.4f}"
+        return f"{value:.6f}"  # the viewer rounds to 3: 4 here turned its 0.023 into 0.022
     return str(value)
 
 

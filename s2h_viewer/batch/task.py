@@ -138,7 +138,8 @@ def _retarget_and_write(task: Task) -> dict:
 
     motion, source, source_path = _load_motion(task)
     target = _load_target(task)
-    warning = rig_warning(source, "source") or rig_warning(target, "target")
+    warning = "; ".join(w for w in (rig_warning(source, "source"), rig_warning(target, "target"),
+                                    frames_warning(target)) if w)
     given = task.options.source
     if given and source_path != given and (source_path or source.mesh is None or source.meta.get("rest_note")):
         read_on = f"read on {Path(source_path).name}, beside it" if source_path else "read on its own skeleton"
@@ -184,6 +185,14 @@ def rig_warning(hand, role: str) -> str:
     how = hand.meta.get("rig_scheme", "")
     return (f"{role} rig recognised with confidence {confidence:.2f} ({how} scheme): its joints may be misread; "
             f"check with `s2h rig {hand.source}` or give a joint map")
+
+
+def frames_warning(target) -> str:
+    """A line for the row when ``target``'s TBS frames are unsure or guessed (`annotate.trust`), as the viewer's
+    banner over its cell says (a fresh-eyes user read it in the viewer and found the batch's row silent), else ""."""
+    from s2h_viewer.annotate.trust import frame_warning
+    warning = frame_warning(target)
+    return "" if warning is None else f"target {warning.banner}: retargets may bend there; check its frames in Annotate"
 
 
 #: characters of a target's name the worst frame's picture holds in its 300-pixel cell
