@@ -210,7 +210,7 @@ def test_a_sideways_bend_past_the_limit_is_red_in_the_table(window):
     the limit (and past the source's own + 5) is drawn red, as over the error curve."""
     from PySide6.QtGui import QColor
 
-    from s2h_viewer.widgets.scores_table import COLUMNS, SIDEWAYS_RED
+    from s2h_viewer.widgets.scores_table import COLUMNS, SIDEWAYS_BACKGROUND, SIDEWAYS_RED
     table = window.compare.scores
     column = next(c for c, (_, key, _) in enumerate(COLUMNS) if key == "sideways_deg")
     comparison = window.comparison
@@ -221,6 +221,14 @@ def test_a_sideways_bend_past_the_limit_is_red_in_the_table(window):
     assert bent.scores.sideways_broken and not within.scores.sideways_broken
     assert table.item(0, column).foreground().color() == QColor(SIDEWAYS_RED)
     assert table.item(1, column).foreground().color() != QColor(SIDEWAYS_RED)
+    # and stays so in the selected row, the retarget being looked at (the selection's blue hid it)
+    table.selectRow(0)
+    image = table.viewport().grab().toImage()
+    shot = np.array([[QColor(image.pixel(x, y)).getRgb()[:3] for x in range(image.width())]
+                     for y in range(image.height())], dtype=np.uint8)
+    cells = [table.visualItemRect(table.item(r, column)) for r in (0, 1)]
+    tinted = [colour_pixels(shot[c.top():c.bottom(), c.left():c.right()], SIDEWAYS_BACKGROUND, 6) for c in cells]
+    assert tinted[0] > 0.5 * cells[0].width() * cells[0].height() and tinted[1] == 0, tinted
 
 
 def test_a_visibly_wrong_pinky_drops_the_kept_score_where_s_finger_hardly_moves(human_female, sample_hands):

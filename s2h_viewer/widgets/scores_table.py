@@ -10,8 +10,8 @@ from __future__ import annotations
 import math
 
 from PySide6.QtCore import QSize, Qt
-from PySide6.QtGui import QColor, QPalette
-from PySide6.QtWidgets import QHeaderView, QTableWidget, QTableWidgetItem, QWidget
+from PySide6.QtGui import QBrush, QColor, QPalette
+from PySide6.QtWidgets import QHeaderView, QStyledItemDelegate, QTableWidget, QTableWidgetItem, QWidget
 
 from s2h_viewer.annotate.trust import frame_warning
 from s2h_viewer.render.compare_scene import BANNER_BACKGROUND, BANNER_COLOUR
@@ -46,8 +46,8 @@ KEPT_COLUMN, SIDEWAYS_COLUMN = (next(c for c, (_, key, _) in enumerate(COLUMNS) 
                                 for name in ("signature_kept", "sideways_deg"))
 SHOWN_ROWS, MIN_ROWS = 6, 2  # rows the table asks room for, and keeps in view at least
 NAME_WIDTH = 140  # pixels: widest a name column starts (drag the header edge for more)
-#: a sideways bend past the limit, in the table and over the error curve
-SIDEWAYS_RED = "#c62828"
+#: a sideways bend past the limit, in the table and over the error curve (in the table on this background)
+SIDEWAYS_RED, SIDEWAYS_BACKGROUND = "#c62828", "#ffcdd2"
 #: invented pairs the Invented cell's tooltip names (most frames first), and poses lost the Kept cell's names
 INVENTED_LISTED, POSES_LISTED = 5, 8
 #: why a score is n/a (NaN), per score key
@@ -89,6 +89,19 @@ def poses_tip(result) -> str:
     return f"{kept}" + (f"; lost:{listed}{more}" if lost else " (every one)")
 
 
+class OwnColours(QStyledItemDelegate):
+    """A cell with colours of its own keeps them in a selected row: the red of a finger bent sideways and the orange of
+    a target with unsure frames were hidden under the selection's blue, on the very retarget being looked at."""
+
+    def initStyleOption(self, option, index) -> None:
+        super().initStyleOption(option, index)
+        for role, shown in ((Qt.ItemDataRole.BackgroundRole, QPalette.ColorRole.Highlight),
+                            (Qt.ItemDataRole.ForegroundRole, QPalette.ColorRole.HighlightedText)):
+            colour = index.data(role)
+            if colour is not None:
+                option.palette.setBrush(shown, QBrush(colour))
+
+
 class ScoresTable(QTableWidget):
     def __init__(self, parent: QWidget | None = None):
         super().__init__(0, len(COLUMNS), parent)
@@ -104,6 +117,7 @@ class ScoresTable(QTableWidget):
         # a row is one retarget: select whole rows, one at a time, highlighted even with the focus elsewhere
         self.setSelectionBehavior(QTableWidget.SelectionBehavior.SelectRows)
         self.setSelectionMode(QTableWidget.SelectionMode.SingleSelection)
+        self.setItemDelegate(OwnColours(self))
         palette = self.palette()
         for role in (QPalette.ColorRole.Highlight, QPalette.ColorRole.HighlightedText):
             palette.setColor(QPalette.ColorGroup.Inactive, role, palette.color(QPalette.ColorGroup.Active, role))
@@ -146,6 +160,7 @@ class ScoresTable(QTableWidget):
                     item.setToolTip(wrapped(tip))  # a list of invented pairs, a warning: long
                 if col == SIDEWAYS_COLUMN and result.scores.sideways_broken:  # a finger bent sideways
                     item.setForeground(QColor(SIDEWAYS_RED))
+                    item.setBackground(QColor(SIDEWAYS_BACKGROUND))
                 if warning is not None and col == TARGET_COLUMN:  # frames unsure: the target's cell says so
                     item.setForeground(QColor(BANNER_COLOUR))
                     item.setBackground(QColor(BANNER_BACKGROUND))
