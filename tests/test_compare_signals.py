@@ -266,7 +266,8 @@ def test_an_export_of_a_flagged_target_carries_its_banner(human_female, sample_h
 
 def test_a_skeleton_only_sources_ghost_is_drawn_so_it_can_be_seen(sample_hands, tmp_path):
     """The Meta pinch read on its own skeleton (no mesh): its ghost is its bones. In the skin's light grey at the
-    skin's opacity they were all but invisible on the background (a fresh-eyes user saw no ghost); now dark lines."""
+    skin's opacity they were all but invisible on the background (a fresh-eyes user saw no ghost); now cyan lines,
+    seen on the light background and on the heatmap's dark skin alike."""
     from s2h_viewer.io.files import load_motion_file
     from s2h_viewer.render.compare_scene import GHOST_BONES_COLOUR, Framing, ViewOptions, render_comparison
     motion, skeleton = load_motion_file(ASSETS_DIR / "motions/real/r_hand_pinch_anim.fbx")

@@ -69,8 +69,8 @@ BANNER_COLOUR, BANNER_BACKGROUND = "#8a4b00", "#ffe0b2"
 #: the source's ghost over a retarget shown alone (`Ghost`)
 GHOST_COLOUR, GHOST_OPACITY = "#9e9e9e", 0.35
 #: and a skeleton-only source's bones: thin lines in the skin's grey at its opacity were all but invisible on the
-#: light background (a fresh-eyes user saw no ghost at all)
-GHOST_BONES_COLOUR, GHOST_BONES_OPACITY = "#37474f", 0.8
+#: light background (a fresh-eyes user saw no ghost at all), dark slate ones on the heatmap's dark purple skin
+GHOST_BONES_COLOUR, GHOST_BONES_OPACITY = "#00acc1", 0.9
 #: the selected retarget's cell is framed in this colour, this many pixels wide
 SELECTED_COLOUR, SELECTED_WIDTH = "#1565c0", 3.0
 #: the contact legend's size in pixels (one line per state), LABEL_PAD from its cell's bottom left corner
