@@ -148,9 +148,9 @@ def test_a_ring_drag_in_solo_keys_the_joint_live_and_undo_brings_back_the_method
     drag(qtbot, win, 40.0, while_held)
     angle, curve, s_finger, method_cell, said = live[0]
     assert said.startswith("index PIP: bend +") and "deg (curls it in) at frame 40" in said  # which way: said
-    assert said.endswith("; held over the fist pose, frames 40-66, blended over frames 30-76")
+    assert ", held over the fist pose (frames 40-66), blended over frames 30-76; kept " in said
     # the scores a user ranks by, the method's then the fix's: a turn off the source says it is worse
-    assert f"S_finger {method.scores.s_finger:.3f} -> {s_finger:.3f} (worse than before: Ctrl+Z undoes it)" in said
+    assert f"S_finger {method.scores.s_finger:.3f} -> {s_finger:.3f}" in said and "(worse than before: Ctrl+Z" in said
     assert abs(angle - 20.0) < 3.0 and s_finger != method.scores.s_finger  # half the turn, live
     assert curve[FRAME] > method.frame_error[FRAME]  # the curve too
     assert method_cell == "TBS Copy (fixed)"
@@ -168,8 +168,9 @@ def test_a_ring_drag_in_solo_keys_the_joint_live_and_undo_brings_back_the_method
     np.testing.assert_allclose(mode.curve.error, fixed.frame_error)  # the curve shows the corrected retarget
     assert fixed.frame_error[FRAME] > method.frame_error[FRAME]  # turned off the source: the error says so
     assert mode.scores.item(0, 0).text() == "TBS Copy (fixed)" and "index PIP" in mode.scores.item(0, 0).toolTip()
-    assert f"S_finger {method.scores.s_finger:.3f} -> {fixed.scores.s_finger:.3f} (worse than the method: Ctrl+Z" \
-        in mode.fixing.bar.readout.toolTip()  # picked still: the joint's line says what its fix did
+    said = mode.fixing.bar.readout.toolTip()  # picked still: the joint's line says what its fix did
+    assert f"S_finger {method.scores.s_finger:.3f} -> {fixed.scores.s_finger:.3f}" in said
+    assert "(worse than the method: Ctrl+Z" in said and "frame 40 (held over 40-66, blended over 30-76)" in said
     hand = win.view.solo_hand()
     assert hand.pose is fixed.pose and "1 fix" in hand.label.text  # the cell draws and says the corrected one
     assert win.heatmap_choice.currentText() == "TBS Copy -> iris (fixed)"
@@ -560,14 +561,18 @@ def test_a_fix_that_bends_a_finger_sideways_reads_as_worse():
     from s2h_viewer.app.retarget_fixing import score_change
     from s2h_viewer.semantics.metrics import RetargetScores
 
-    def result(sideways: float) -> SimpleNamespace:
+    def result(sideways: float, added: float = float("nan")) -> SimpleNamespace:
         return SimpleNamespace(scores=RetargetScores(
             s_palm=0.9, s_finger=0.901, s_finger_paper=0.9, contact_precision=1.0, contact_recall=1.0,
-            palm_contact_recall=1.0, violation_rate=0.0, jitter=0.0, signature_kept=0.5, sideways_deg=sideways))
+            palm_contact_recall=1.0, violation_rate=0.0, jitter=0.0, signature_kept=0.5, sideways_deg=sideways,
+            added_violation_rate=added))
     assert score_change(result(44.0), result(83.0)) == ("kept 0.500 -> 0.500, S_finger 0.901 -> 0.901, sideways 44 "
                                                         "-> 83 deg (worse than before: Ctrl+Z undoes it)")
     assert score_change(result(44.0), result(30.0)).endswith("sideways 44 -> 30 deg")
     assert score_change(result(float("nan")), result(float("nan"))) == "kept 0.500 -> 0.500, S_finger 0.901 -> 0.901"
+    # a finger bent back past straight: worse, and the bar says why (another user read "worse" and no reason)
+    assert score_change(result(20.0, 0.0), result(20.0, 0.0012)) == (
+        "kept 0.500 -> 0.500, S_finger 0.901 -> 0.901, violations 0.000 -> 0.001 (worse than before: Ctrl+Z undoes it)")
 
 
 def test_the_fix_bar_says_its_hint_whole_on_two_lines_in_a_1000_pixel_window(window, qtbot):

@@ -62,7 +62,7 @@ def test_a_key_on_a_held_pose_holds_over_the_pose_and_eases_only_between_poses()
     assert np.all(curve[labels == "Cup"] < 1e-9) and np.all(curve[labels == "Peace"] < 1e-9)
     assert np.all(np.diff(curve[12:21]) >= 0) and np.all(np.diff(curve[31:40]) <= 0)  # eased between
     (key,) = fixes.of(INDEX_PIP).keys
-    assert key.hold == (20, 31) and "25 held 20-31 over 12-39" in fixes.describe()
+    assert key.hold == (20, 31) and "frame 25 (held over 20-31, blended over 12-39)" in fixes.describe()
     again = fixes.with_turn(INDEX_PIP, 25, turn_about("bend", 10.0), 0, 43, None)  # its frames kept
     np.testing.assert_allclose(degrees(again, INDEX_PIP, len(labels))[20:32], 40.0, atol=1e-6)
     narrower = fixes.with_range(INDEX_PIP, 25, 22, 28)  # a marked range within the pose: the hold within it
@@ -243,4 +243,4 @@ def test_every_message_names_a_joint_one_way():
     assert _sideways_note({"sideways_at": "thumb_ip@3", "sideways_deg": 40.0}) == SidewaysPeak(
         40.0, "thumb_ip", 3).describe()
     fixes = Corrections().with_turn(topo.ARTICULATED_NAMES.index("thumb_ip"), 5, turn_about("bend", 10.0), 0, 9)
-    assert fixes.describe() == "thumb IP (key at 5 over 0-9)"
+    assert fixes.describe() == "thumb IP: key at frame 5 (blended over 0-9)"

@@ -97,8 +97,11 @@ def score_change(before: MethodResult, after: MethodResult, base: str = "before"
              or a.added_violation_rate > b.added_violation_rate + 1e-9)
     sideways = (f", sideways {np.nan_to_num(b.sideways_deg):.0f} -> {np.nan_to_num(a.sideways_deg):.0f} deg"
                 if abs(bent) >= 1.0 else "")
+    # a finger bent back past straight read "worse" and nothing said why (a fresh-eyes user)
+    violations = (f", violations {b.added_violation_rate:.3f} -> {a.added_violation_rate:.3f}"
+                  if f"{a.added_violation_rate:.3f}" != f"{b.added_violation_rate:.3f}" else "")
     return (f"kept {b.signature_kept:.3f} -> {a.signature_kept:.3f}, S_finger {b.s_finger:.3f} -> {a.s_finger:.3f}"
-            + sideways + (f" (worse than {base}: Ctrl+Z undoes it)" if worse else ""))
+            + sideways + violations + (f" (worse than {base}: Ctrl+Z undoes it)" if worse else ""))
 
 
 class RetargetFixing(QObject):
@@ -347,10 +350,11 @@ class RetargetFixing(QObject):
             turn = drag.sense * drag.degrees
             way = {"bend": (" (curls it in)", " (opens it out)")}.get(drag.axis, ("", ""))[turn < 0]
             held = "" if drag.hold is None else (f"held over the {self.mode.comparison.motion.labels[drag.frame]} "
-                                                 f"pose, frames {drag.hold[0]}-{drag.hold[1]}, ")
+                                                 f"pose (frames {drag.hold[0]}-{drag.hold[1]}), ")
+            # the frames first: at the end, a 1000-pixel bar cut them off (a fresh-eyes user)
             self.bar.say(f"{topo.joint_label(topo.ARTICULATED_NAMES[drag.joint])}: {drag.axis} {turn:+.0f} deg{way} "
-                         f"at frame {drag.frame}; {score_change(drag.before, now)}; {held}blended over frames "
-                         f"{drag.frames[0]}-{drag.frames[1]}")
+                         f"at frame {drag.frame}, {held}blended over frames {drag.frames[0]}-{drag.frames[1]}; "
+                         f"{score_change(drag.before, now)}")
 
     def _end(self) -> None:
         drag, self._drag = self._drag, None

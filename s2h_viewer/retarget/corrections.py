@@ -179,14 +179,16 @@ class Corrections:
         return np.unique([k.frame for c in self.joints for k in c.keys]).astype(np.int64)
 
     def describe(self) -> str:
-        """'index PIP (keys at 40 over 30-50, 60 over 50-70), pinky DIP (key at 12 over 2-22)'."""
-        return ", ".join(f"{topo.joint_label(c.name)} ({describe_keys(c)})" for c in self.joints)
+        """'index PIP: keys at frame 40 (blended over 30-50), frame 60 (blended over 50-70); pinky DIP: key at frame 12
+        (blended over 2-22)'."""
+        return "; ".join(f"{topo.joint_label(c.name)}: {describe_keys(c)}" for c in self.joints)
 
 
 def describe_keys(correction: JointCorrection) -> str:
-    """'keys at 40 over 30-50, 60 held 55-66 over 50-70'."""
-    keys = ", ".join(f"{k.frame}{' held {}-{}'.format(*k.hold) if k.hold else ''} over {k.start}-{k.end}"
-                     for k in correction.keys)
+    """'keys at frame 40 (blended over 30-50), frame 60 (held over 55-66, blended over 50-70)' (a fresh-eyes user read
+    'key at 200 held 200-211 over 192-219' as a riddle)."""
+    keys = ", ".join(f"frame {k.frame} ({'held over {}-{}, '.format(*k.hold) if k.hold else ''}blended over "
+                     f"{k.start}-{k.end})" for k in correction.keys)
     return f"{plural('key', len(correction.keys))} at {keys}"
 
 
