@@ -128,6 +128,9 @@ def test_a_batch_on_a_local_cluster_equals_the_in_process_retarget_and_a_rerun_s
     assert float(cells[columns["kept"]]) == pytest.approx(rows[-1]["kept"], abs=1e-4)  # decimals
     assert float(cells[columns["kept"]]) != pytest.approx(rows[-1]["s_finger"], abs=1e-4)
     assert 'src="gestures/iris/asrn.worst.png"' in page
+    # within 1400 pixels: the files under the picture, the seconds under the frames (columns of their own were past it)
+    assert "<th>files</th>" not in page and page.count('<div class="files"><a href=') == 4
+    assert re.search(rf'data-sort="{rows[-1]["frames"]}">{rows[-1]["frames"]}<br>\d+\.\d s</td>', last)
 
     row_files = sorted((out / "gestures" / "iris").glob("*.row.json"))
     stamps = [p.stat().st_mtime_ns for p in row_files]

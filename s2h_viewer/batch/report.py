@@ -19,7 +19,7 @@ from s2h_viewer.wording import counted
 _NAMES = (("motion", "motion"), ("target", "target"), ("method", "method"), ("status", "status"))
 _SCORES = (("kept", "kept"), ("s_finger", "S_finger"), ("s_palm", "S_palm"), ("contact_p", "contact P"),
            ("contact_r", "contact R"), ("violations_added", "violations added"), ("sideways_deg", "sideways deg"),
-           ("worst_frame", "worst frame"), ("frames", "frames"), ("seconds", "seconds"))
+           ("worst_frame", "worst frame"), ("frames", "frames, seconds"))
 
 _STYLE = """
 body { font: 13px system-ui, sans-serif; margin: 1em; color: #222; }
@@ -41,6 +41,7 @@ td.error { color: #b00020; }
 details ul { margin: .2em 0; padding-left: 1.2em; color: #222; } summary { cursor: pointer; }
 .failures { color: #b00020; margin: .4em 0; } .failures ul { margin: .2em 0; } .failures .tasks { color: #555; }
 img { height: 120px; display: block; }
+.files { font-size: .9em; } .files a { margin-right: .6em; }
 """
 
 _SCRIPT = """
@@ -82,10 +83,14 @@ def _value(row: dict, key: str) -> tuple[str, str]:
     if isinstance(value, float):
         if math.isnan(value):
             return "n/a", ""
-        text = f"{value:.1f}" if key in ("sideways_deg", "seconds") else f"{value:.3f}"
+        text = f"{value:.1f}" if key == "sideways_deg" else f"{value:.3f}"
         if key == "kept" and row.get("poses_kept"):
             text += f" ({row['poses_kept']} poses)"
         return text, repr(value)
+    if key == "frames":  # and how long the task took, under them: a column of its own made the page too wide
+        seconds = row.get("seconds")
+        took = f"{float(seconds):.1f} s" if str(seconds or "").replace(".", "", 1).isdigit() else ""
+        return "\n".join(t for t in (str(value), took) if t), str(value)
     return str(value), str(value)
 
 
@@ -126,7 +131,8 @@ def _sideways_note(row: dict) -> str:
 
 def _cell(row: dict, key: str, numeric: bool) -> str:
     text, sort = _value(row, key)
-    return f'<td{" class=num" if numeric else ""} data-sort="{html.escape(sort)}">{html.escape(text)}</td>'
+    shown = "<br>".join(html.escape(line) for line in text.split("\n"))
+    return f'<td{" class=num" if numeric else ""} data-sort="{html.escape(sort)}">{shown}</td>'
 
 
 def write_report(rows: list[dict], path: str | Path, title: str = "s2h batch") -> Path:
@@ -138,10 +144,9 @@ def write_report(rows: list[dict], path: str | Path, title: str = "s2h batch") -
     ok = len(rows) - failed - not_run
     warned = sum(r.get("status") == "ok" and bool(r.get("warning")) for r in rows)
     head = "".join(f'<th data-col="{i}">{html.escape(label)}</th>' for i, (_, label) in enumerate(_NAMES))
-    head += '<th>error / note</th><th>worst frame: source | retarget</th>'  # not sortable: 2 columns
+    head += '<th>error / note</th><th>worst frame: source | retarget; files</th>'  # not sortable: 2 columns
     head += "".join(f'<th data-col="{len(_NAMES) + 2 + i}">{html.escape(label)}</th>'
                     for i, (_, label) in enumerate(_SCORES))
-    head += '<th>files</th>'
     lines = []
     for row in rows:
         cells = [_cell(row, key, numeric=False) for key, _ in _NAMES]
@@ -149,16 +154,15 @@ def write_report(rows: list[dict], path: str | Path, title: str = "s2h batch") -
         note += _poses_lost(row)
         cells.append(f'<td class="{"error" if row.get("error") or row.get("warning") else "note"}">{note}</td>')
         picture = row.get("picture") or ""
-        cells.append(f'<td><a href="{html.escape(_relative(picture, folder))}"><img loading="lazy" alt="frame '
-                     f'{row.get("worst_frame", "")}" src="{html.escape(_relative(picture, folder))}"></a></td>'
-                     if picture else "<td></td>")
-        measured = row.get("status") == "ok"  # a task that failed or did not run measured nothing: no "n/a"
-        cells += [_cell(row, key, numeric=True) if measured or key == "seconds" else '<td class=num data-sort=""></td>'
-                  for key, _ in _SCORES]
         links = [f'<a href="{html.escape(_relative(row[k], folder))}">{label}</a>'
                  for k, label in (("output", "output"), ("motion_path", "motion"), ("target_path", "target"))
                  if row.get(k) and (k == "output" or Path(row[k]).is_file())]
-        cells.append(f"<td>{'<br>'.join(links)}</td>")
+        image = (f'<a href="{html.escape(_relative(picture, folder))}"><img loading="lazy" alt="frame '
+                 f'{row.get("worst_frame", "")}" src="{html.escape(_relative(picture, folder))}"></a>' if picture else "")
+        cells.append(f'<td>{image}<div class="files">{" ".join(links)}</div></td>')  # the files under the picture
+        measured = row.get("status") == "ok"  # a task that failed or did not run measured nothing: no "n/a"
+        cells += [_cell(row, key, numeric=True) if measured or key == "frames" else '<td class=num data-sort=""></td>'
+                  for key, _ in _SCORES]
         text = " ".join(str(row.get(k, "")) for k in ("motion", "target", "method", "status", "error", "warning",
                                                           "poses_lost")).lower()
         css = {"failed": ' class="failed"', "not run": ' class="not-run"'}.get(row.get("status"), "")
