@@ -32,7 +32,7 @@ COLUMNS = (("Method", None, "retargeting method"), ("Target", None, "target hand
            ("Contact\nP", "contact_precision", "contact precision: pad contacts made that the source makes"),
            ("Contact\nR", "contact_recall", "contact recall: pad contacts of the source that are kept"),
            ("Palm\nR", "palm_contact_recall", "fingertip-on-palm contacts of the source that are kept"),
-           ("Viol-\nations", "added_violation_rate", "share of joint angles the retarget puts over 5 deg further "
+           ("Viol.\nadded", "added_violation_rate", "share of joint angles the retarget puts over 5 deg further "
                                                      "outside the anatomical limits than the source's own (a clip "
                                                      "authored past them stays past them: TBS Copy adds none)"),
            ("Side-\nways", "sideways_deg", "the worst sideways bend of a PIP/DIP at its tightest curls, degrees "
