@@ -190,7 +190,12 @@ def test_the_cli_on_its_own_local_cluster_and_on_a_scheduler_started_here_give_t
         assert address.startswith("tcp://127.0.0.1:")
         worker = _start(["distributed.cli.dask_worker", address, "--host", "127.0.0.1", "--nworkers", "1",
                          "--nthreads", "1", "--no-dashboard"], tmp_path / "worker.log")
-        assert main([*args, "--out", str(tmp_path / "remote"), "--scheduler", address]) == 0
+        capsys.readouterr()
+        talking = [a for a in args if a != "--quiet"]  # not a terminal here: a line per task instead of a bar
+        assert main([*talking, "--out", str(tmp_path / "remote"), "--scheduler", address]) == 0
+        said = capsys.readouterr().err.splitlines()
+        done = [line for line in said if line.startswith("batch: ") and line.endswith("(tbs_copy): ok")]
+        assert sorted(line.split()[1] for line in done) == ["1/2", "2/2"], said
     finally:
         for process in (worker, scheduler):
             if process is not None:

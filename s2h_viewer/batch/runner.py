@@ -76,6 +76,8 @@ def run_batch(config: BatchConfig, show_progress: bool | None = None) -> BatchRe
     redone = sum((read_row_json(tasks[i].row_file) or {}).get("status") == "ok" for i in todo)
     index = {(tasks[i].motion.name, tasks[i].target.name, tasks[i].method): i for i in todo}
     interrupted = False
+    # no terminal (a log, a pipe): a line per finished task instead of the bar (a user saw no progress at all)
+    lines = show_progress is None and not sys.stderr.isatty()
     with tqdm(total=len(tasks), initial=skipped, desc="batch", unit="task", file=sys.stderr,
               disable=(not sys.stderr.isatty()) if show_progress is None else not show_progress) as bar:
         counts = {"ok": sum(r["status"] == "ok" for r in rows.values()),  # those done before count as the summary
@@ -99,6 +101,9 @@ def run_batch(config: BatchConfig, show_progress: bool | None = None) -> BatchRe
             counts["ok" if row["status"] == "ok" else "failed"] += 1
             show()
             bar.update()
+            if lines:
+                print(f"batch: {len(rows)}/{len(tasks)} {row['motion']} -> {row['target']} ({row['method']}): "
+                      f"{row['status']}", file=sys.stderr, flush=True)
 
         if todo:
             from s2h_viewer.batch.cluster import batch_client, run_tasks
