@@ -81,6 +81,9 @@ class BatchBrowser(QObject):
                 return
             self._pending = (target, row["method"], frame)
             self._motion_read, self._motion = read, motion
+            # the next Open motion starts where this clip is, as after opening it by hand (it started in the
+            # shipped motions: a fresh-eyes user)
+            self.window.settings.setValue("files/motion_dir", str(Path(row["motion_path"]).resolve().parent))
             self._rows[(id(motion), id(target), row["method"])] = row
             compare.replace_comparison(motion, source, [target], [row["method"]])
         else:  # the clip shown: the row's retarget joins the grid, to compare with the others of the clip
