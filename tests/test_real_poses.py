@@ -393,7 +393,8 @@ def test_where_the_fingers_cannot_reach_a_thumb_held_near_its_path_the_thumb_goe
     """The VRM 1.0 robot (no skin: palm-plane frames): with the thumb CMC pulled 5x toward the network's pose, the
     fit closed only 28% of the poses' pad touches (its fingers cannot reach the thumb there); the frames still
     disagreeing are fitted again with the thumb pulled like any joint, and the touches are made (ASRN's guard then
-    takes the frame or so the fit makes a touch the source does not)."""
+    takes the frame or so the fit makes a touch the source does not; one frame of the horns' middle and ring pads stays
+    closed since the thumb-across term fits the frames either side, where the thumb passes across the palm)."""
     from s2h_viewer.retarget.asrn.inference import network_retarget
     motion, source = poses
     robot = load_hand_file(ROOT / "assets/hands/real/debug_robot.vrm", RigOptions(side="right"))
@@ -401,7 +402,7 @@ def test_where_the_fingers_cannot_reach_a_thumb_held_near_its_path_the_thumb_goe
     scores = score_retarget(source, motion.q_tbs, robot, fit_contacts(motion.q_tbs, source, robot, network.copy()))
     assert scores.contact_recall >= 0.9 and scores.contact_precision >= 0.9, scores
     asrn = score_retarget(source, motion.q_tbs, robot, retarget(motion, source, robot, "asrn").q_tbs)
-    assert asrn.contact_recall >= 0.9 and asrn.contact_precision >= 0.99, asrn
+    assert asrn.contact_recall >= 0.9 and asrn.contact_precision >= 0.98, asrn
 
 
 def test_a_thumb_out_to_its_side_is_read_and_kept(poses):
@@ -543,3 +544,30 @@ def test_the_contact_fit_brings_the_thumb_back_onto_the_curled_fingers(poses):
     assert {"Horns", "Peace", "Sign 2"} <= set(let_go[0.0]) and not let_go[ContactFitConfig().thumb_rest_weight], let_go
     masks = loss_masks(rig, motion.q_tbs, target, retarget(motion, rig, target, "asrn").q_tbs)
     assert not ((masks >> THUMB_REST_BIT) & 1).any()  # ASRN, its guard and all
+
+
+def test_the_thumb_across_the_palm_is_part_of_the_signature_and_the_fit_brings_it_back(poses):
+    """Sign 4 (a four): four fingers up, the thumb folded across the palm. TBS Copy and ASRN left its thumb at the
+    palm's side on every real rig (0.32 of the palm's width past the index knuckle at most, the source's 0.60), and
+    the signature read it kept: a fresh-eyes user saw it. Now the pose is lost, in words, where the thumb lies less
+    far across; the fit, whose thumb-across term pulls it back, keeps it onto the WebXR hand, where without the term
+    it is lost."""
+    from s2h_viewer.retarget.asrn.inference import network_retarget
+    from s2h_viewer.retarget.contact_fit import ContactFitConfig
+    from s2h_viewer.semantics.signature import THUMB_ACROSS_BIT, THUMB_ACROSS_FROM
+    motion, rig = poses
+    frames = dict(held_poses(motion.labels))
+    four, thumbs_up = signatures(rig, motion.q_tbs[[frames["Sign 4"], frames["Thumb"]]])
+    assert four.thumb_across > THUMB_ACROSS_FROM and thumbs_up.thumb_across < 0
+    target = load_hand_file(WEBXR_R)
+    copied = retarget(motion, rig, target, "tbs_copy").q_tbs
+    lost = pose_differences(rig, motion.q_tbs, target, copied, motion.labels)["Sign 4"]
+    assert any(what.startswith("thumb not across the palm") for what in lost), lost
+    assert (loss_masks(rig, motion.q_tbs, target, copied)[frames["Sign 4"]] >> THUMB_ACROSS_BIT) & 1
+    assert not ((loss_masks(rig, motion.q_tbs, rig, motion.q_tbs) >> THUMB_ACROSS_BIT) & 1).any()
+    network = network_retarget("asrn", motion.q_tbs, rig, target)
+    kept = {}
+    for weight in (0.0, ContactFitConfig().thumb_across_weight):
+        fitted = fit_contacts(motion.q_tbs, rig, target, network.copy(), ContactFitConfig(thumb_across_weight=weight))
+        kept[weight] = not pose_differences(rig, motion.q_tbs, target, fitted, motion.labels)["Sign 4"]
+    assert kept == {0.0: False, ContactFitConfig().thumb_across_weight: True}, kept

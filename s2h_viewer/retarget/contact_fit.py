@@ -5,8 +5,9 @@ thumb at the fingertips the source's thumb is at (the pose signature's looser to
 A network trained on procedural hands brings pads close on a hand it never saw, but not always within
 the 1.5% tolerance that makes a touch (DESIGN.md section 5). This pass takes its output as given and
 optimises a correction of the TBS Euler angles on the frames where a pad pair is touching on one hand and
-apart on the other (or the thumb at a fingertip, `gaps_disagree`, a finger bent sideways, or a thumb the source
-holds out to its side held in: `semantics.signature.thumb_out_lost`), and on
+apart on the other (or the thumb at a fingertip, `gaps_disagree`, a finger bent sideways, a thumb the source
+holds out to its side held in, `semantics.signature.thumb_out_lost`, or one off the curled fingers or not across
+the palm where the source's rests on them or lies across it), and on
 ``reach`` frames either side, where the correction fades to zero (a smoothness term ties each run's ends to
 zero): elsewhere the retarget is returned bit for bit. Loss: the contact term
 (`semantics.contacts.contact_loss`), L_ana on what the correction adds to the angles' excess (a twist the
@@ -18,7 +19,9 @@ source's than the signature's margin allows: a bent ring finger curled to meet t
 thumb-out term (a thumb the source holds out to its side, a thumbs-up's, brought out as far: on the Meta hand,
 whose rest thumb lies along the fingers, the network held it in front of the palm), a thumb-rest term (a thumb the
 source rests on its curled fingers, the horns' and the V sign's, brought back onto them: the network lifted it off
-on every real rig), and a sideways term: no
+on every real rig), a thumb-across term (a thumb the source folds across the palm, a four's, brought back
+across: the network left it at the palm's side on every real rig; its metacarpal stays slowed, as swinging it for
+one pose made the thumb follow the source's less), and a sideways term: no
 flexed PIP/DIP bent more than `SIDEWAYS_FREE` out of the curl plane (on the Godot hand, opening the ring-pinky
 touch of fists bent the pinky DIP 45 deg sideways without it). The angles are read with the twist within +-90
 deg (`quat_to_tbs_euler_past_lock`): a knuckle of a fist bent past 90 read as twisted 160 deg, and the anatomy
@@ -44,11 +47,11 @@ from s2h_viewer.retarget.progress import report, stage
 from s2h_viewer.retarget.threads import torch_threads
 from s2h_viewer.semantics.anatomy import angle_excess, clamp_bend_change
 from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, contact_loss, pad_pair_gaps
-from s2h_viewer.semantics.flexion import hinge_flexion_and_alignment, thumb_out
+from s2h_viewer.semantics.flexion import hinge_flexion_and_alignment, thumb_across, thumb_out
 from s2h_viewer.semantics.signature import (CURL_CHAINS, CURL_MARGIN, SIDEWAYS_FLEXION, SIDEWAYS_LIMIT,
-                                            THUMB_ON_MARGIN, THUMB_OUT_ABOVE, THUMB_PAIRS, THUMB_TOUCH, finger_curls,
-                                            frame_sideways, thumb_out_lost, thumb_rest_distances, thumb_rest_lost,
-                                            thumb_resting)
+                                            THUMB_ACROSS_MARGIN, THUMB_ON_MARGIN, THUMB_OUT_ABOVE, THUMB_PAIRS,
+                                            THUMB_TOUCH, finger_curls, frame_sideways, thumb_across_lost,
+                                            thumb_out_lost, thumb_rest_distances, thumb_rest_lost, thumb_resting)
 
 #: the thumb-to-fingertip pairs, as indices into the pad pairs (the thumb's come first in both)
 _THUMB = list(THUMB_PAIRS)
@@ -82,6 +85,7 @@ class ContactFitConfig:
     curl_weight: float = 1e3  # no finger's curl moved further from the source's than `CURL_FREE` (`_curl_excess`)
     thumb_out_weight: float = 1e3  # the thumb out to its side as the source's (`_thumb_out_allowed`)
     thumb_rest_weight: float = 1e3  # the thumb back on the curled fingers the source's rests on (`_thumb_resting`)
+    thumb_across_weight: float = 1e3  # the thumb back across the palm where the source's lies across it (a four)
     reach: int = 4  # frames either side of a disagreement over which the correction fades in and out
     batch_frames: int = 4096  # frames optimised at once (memory of one batch)
 
@@ -178,8 +182,9 @@ def disagreement(source_hand: HandModel, source_q: np.ndarray, target_hand: Hand
 def _shape_lost(source_hand: HandModel, source_q: np.ndarray, target_hand: HandModel, target_q: np.ndarray,
                 source_touches: np.ndarray) -> np.ndarray:
     """(T,) bool: the target's worst flexed PIP/DIP bends sideways past `SIDEWAYS_LIMIT` and past the source's + 5,
-    or its thumb is not out to its side where the source's is, or off the curled fingers the source's rests on, and
-    touches no fingertip (the signature's rules, `semantics.signature`)."""
+    or its thumb is not out to its side where the source's is, or off the curled fingers the source's rests on, or
+    not across the palm where the source's lies across it, and touches no fingertip (the signature's rules,
+    `semantics.signature`)."""
     with torch.no_grad():
         positions = [joint_positions(hand, torch.as_tensor(q, dtype=torch.float64))
                      for hand, q in ((source_hand, source_q), (target_hand, target_q))]
@@ -187,8 +192,10 @@ def _shape_lost(source_hand: HandModel, source_q: np.ndarray, target_hand: HandM
                                                                                                 target_hand))]
     sideways = [frame_sideways(p.numpy()) for p in positions]
     out = [np.degrees(thumb_out(p).numpy()) for p in positions]
+    curls = finger_curls(positions[0].numpy())
     return ((sideways[1] > np.maximum(SIDEWAYS_LIMIT, sideways[0] + 5.0)) | thumb_out_lost(*out, source_touches)
-            | thumb_rest_lost(finger_curls(positions[0].numpy()), *rest, source_touches[:, None]))
+            | thumb_rest_lost(curls, *rest, source_touches[:, None])
+            | thumb_across_lost(curls, rest[0], source_touches[:, None], *(thumb_across(p).numpy() for p in positions)))
 
 
 def gaps_disagree(source_gaps: np.ndarray, target_gaps: np.ndarray) -> np.ndarray:
@@ -237,7 +244,7 @@ def fit_contacts(source_q: np.ndarray, source_hand: HandModel, target_hand: Hand
             positions = joint_positions(source_hand, torch.as_tensor(source_q[idx], dtype=torch.float32))
             # read as the target's
             return SourceFrames(_pose_pad_gaps(source_hand, positions), pose_curls(positions), thumb_out(positions),
-                                thumb_rest_distances(positions, source_hand.hand_length))
+                                thumb_rest_distances(positions, source_hand.hand_length), thumb_across(positions))
     return _fit_frames(out, frames, source_at, target_hand, config)
 
 
@@ -262,6 +269,7 @@ class SourceFrames:
     curls: torch.Tensor | None = None
     thumb_out: torch.Tensor | None = None
     thumb_rest: torch.Tensor | None = None  # (F, 4) `semantics.signature.thumb_rest_distances`
+    thumb_across: torch.Tensor | None = None  # (F,) palm widths, `semantics.flexion.thumb_across`
 
 
 def _fit_frames(out: np.ndarray, disagree: np.ndarray, source_at, hand: HandModel, config: ContactFitConfig
@@ -344,6 +352,10 @@ def _fit_runs(q: np.ndarray, source_frames: SourceFrames, lengths: list[int], ha
             rate[out_lost, 0] = 1.0  # a thumb to bring out to its side turns at its metacarpal: not slowed
         if source_frames.thumb_rest is not None:
             resting = _thumb_resting(source_frames, source)
+        if source_frames.thumb_across is not None:
+            across_lost = torch.as_tensor(thumb_across_lost(
+                np.degrees(source_frames.curls.numpy()), source_frames.thumb_rest.numpy(), _thumb_at_tips(source).numpy(),
+                source_frames.thumb_across.numpy(), thumb_across(start_positions).numpy()))
     # each run's correction sits between two zero frames: second differences across them tie its ends
     # to zero, and no difference spans two runs
     offsets = np.cumsum([0] + [n + 2 for n in lengths[:-1]])
@@ -381,6 +393,9 @@ def _fit_runs(q: np.ndarray, source_frames: SourceFrames, lengths: list[int], ha
             miss = torch.relu(thumb_rest_distances(positions, hand.hand_length) - source_frames.thumb_rest
                               - 0.75 * THUMB_ON_MARGIN)
             loss = loss + config.thumb_rest_weight * (miss * resting).square().sum(-1).mean()
+        if source_frames.thumb_across is not None:
+            miss = torch.relu(source_frames.thumb_across - 0.5 * THUMB_ACROSS_MARGIN - thumb_across(positions))
+            loss = loss + config.thumb_across_weight * (miss * across_lost).square().mean()
         optimiser.zero_grad()
         loss.backward()
         optimiser.step()

@@ -81,6 +81,19 @@ def thumb_out(positions: torch.Tensor) -> torch.Tensor:
     return torch.atan2(aside, (x.square() + z.square() + 1e-12).sqrt())
 
 
+def thumb_across(positions: torch.Tensor) -> torch.Tensor:
+    """(T,) how far the thumb's tip lies across the palm, from (T, 21, 3) FK positions: past the index knuckle toward
+    the pinky's along the palm's across axis (`palm_axes`), in palm widths (index to pinky knuckle). The authored
+    Sign 4 (four fingers up, the thumb folded across the palm) reads 0.60, a thumbs-up -1.4; TBS Copy and ASRN left
+    Sign 4's thumb at the palm's side on the real rigs (-0.37 to 0.32). Differentiable in the thumb, for the contact
+    fit (the palm's axes carry no gradient, as in `thumb_out`)."""
+    positions = positions - positions[:, :1]
+    toward_pinky = -torch.as_tensor(palm_axes(positions.detach().numpy())[:, :, 1], dtype=positions.dtype)
+    knuckles = (positions[:, _PINKY_MCP] - positions[:, _INDEX_MCP]).detach()
+    width = (knuckles * toward_pinky).sum(-1).abs().clamp_min(1e-12)
+    return ((positions[:, _THUMB_TIP] - positions[:, _INDEX_MCP]) * toward_pinky).sum(-1) / width
+
+
 @dataclass(frozen=True)
 class SidewaysPeak:
     """The clip's worst sideways flexion at its tightest curls: degrees, which joint, which frame."""

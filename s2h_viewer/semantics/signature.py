@@ -1,6 +1,7 @@
 """A pose's signature, what a viewer reads off a hand at a glance: each finger extended, bent or curled;
 which fingertips the thumb touches, or whether it stands out to the side (a thumbs-up) where it touches
-none, or rests on the curled fingers (horns, a V sign: the thumb holds them down); no finger curling sideways.
+none, or rests on the curled fingers (horns, a V sign: the thumb holds them down), or lies across the palm (a
+four); no finger curling sideways.
 A retarget keeps a pose when its signature matches the source's (issue 26: scoring authored poses on real rigs)."""
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.kinematics import HandPose, forward_kinematics
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.semantics.contacts import CONTACT_PAIRS, contact_gaps, pad_centres
-from s2h_viewer.semantics.flexion import HINGE_JOINTS, flexion_and_sideways, thumb_out
+from s2h_viewer.semantics.flexion import HINGE_JOINTS, flexion_and_sideways, thumb_across, thumb_out
 
 #: a finger's curl (its MCP, PIP and DIP flexion summed, degrees) below which it reads extended, above
 #: which curled; a curl within `CURL_MARGIN` of the source's is kept whatever the words
@@ -42,6 +43,12 @@ THUMB_OUT_ABOVE, THUMB_IN_BELOW = 35.0, 25.0
 #: viewer saw the thumb off the fingers where kept read 1.000. Read only where the source's thumb touches no
 #: fingertip: a touch says where a thumb is.
 THUMB_ON, THUMB_ON_MARGIN = 0.13, 0.08
+#: the thumb lies across the palm where its tip is this far past the index knuckle toward the pinky's (palm widths,
+#: `semantics.flexion.thumb_across`): the authored Sign 4 (a four) 0.60, its Pinch Middle 0.39, the sample clips'
+#: four and letters B and S 0.8-1.1. A retarget lets it go where its thumb lies `THUMB_ACROSS_MARGIN` less far across:
+#: TBS Copy and ASRN held Sign 4's at the palm's side (-0.37 to 0.16 on six real rigs; 0.32 on the mitten avatar).
+#: Read only where the source's thumb touches no fingertip and rests on no bent finger: those say where it is.
+THUMB_ACROSS_FROM, THUMB_ACROSS_MARGIN = 0.45, 0.3
 
 
 @dataclass(frozen=True)
@@ -56,6 +63,7 @@ class PoseSignature:
     thumb_out: float = 0.0  # degrees the thumb points out to its side (`semantics.flexion.thumb_out`)
     #: (4,) hand lengths from the thumb's tip to index..pinky's first two bones (`thumb_rest_distances`)
     thumb_rest: np.ndarray = None  # type: ignore[assignment]
+    thumb_across: float = 0.0  # palm widths its tip lies across the palm (`semantics.flexion.thumb_across`)
 
     @property
     def states(self) -> list[str]:
@@ -121,8 +129,9 @@ def signatures(hand: HandModel, q_tbs: np.ndarray) -> list[PoseSignature]:
     which = np.argmax(np.nan_to_num(sideways, nan=-1.0), axis=1)
     worst = np.where(none, np.nan, np.nan_to_num(sideways, nan=-1.0)[np.arange(len(which)), which])
     rest = thumb_rest_distances(pose.positions, hand.hand_length).numpy()
+    across = thumb_across(pose.positions).numpy()
     return [PoseSignature(curls[t], contacts[t], float(worst[t]), "" if none[t] else HINGE_JOINTS[which[t]][0],
-                          float(out[t]), rest[t]) for t in range(len(positions))]
+                          float(out[t]), rest[t], float(across[t])) for t in range(len(positions))]
 
 
 def differences(source: PoseSignature, target: PoseSignature) -> list[str]:
@@ -144,12 +153,25 @@ def differences(source: PoseSignature, target: PoseSignature) -> list[str]:
         them = "it" if len(fingers) == 1 else "them"
         out.append(f"thumb off the {names} ({target.thumb_rest[fingers].min():.2f} hand lengths from {them}; the "
                    f"source's: {source.thumb_rest[fingers].min():.2f})")
+    if thumb_across_lost(source.curl[None], source.thumb_rest[None], source.thumb_contacts[None],
+                         np.array([source.thumb_across]), np.array([target.thumb_across]))[0]:
+        out.append(f"thumb not across the palm ({target.thumb_across:.2f} of its width past the index knuckle; the "
+                   f"source's: {source.thumb_across:.2f})")
     limit = max(SIDEWAYS_LIMIT, (0.0 if np.isnan(source.sideways) else source.sideways) + 5.0)
     if target.sideways > limit:
         joint = target.sideways_joint.replace("_", " ").replace("pip", "PIP").replace("dip", "DIP")
         source_deg = "no joint flexed enough" if np.isnan(source.sideways) else f"{source.sideways:.0f}"
         out.append(f"{joint} bends {target.sideways:.0f} deg sideways (the source: {source_deg})")
     return out
+
+
+def thumb_across_lost(source_curl: np.ndarray, source_rest: np.ndarray, source_touches: np.ndarray,
+                      source_across: np.ndarray, target_across: np.ndarray) -> np.ndarray:
+    """(T,) bool: the source's thumb lies across the palm (`THUMB_ACROSS_FROM`), touching no fingertip and resting on
+    no bent finger, and the target's `THUMB_ACROSS_MARGIN` less far across; from (T, 4) curls, rest distances and
+    thumb touches and (T,) `thumb_across` readings."""
+    free = ~np.asarray(source_touches).any(-1) & ~thumb_resting(source_curl, source_rest, source_touches).any(-1)
+    return free & (source_across >= THUMB_ACROSS_FROM) & (target_across < source_across - THUMB_ACROSS_MARGIN)
 
 
 def thumb_out_lost(source_deg, target_deg, source_touches):
@@ -183,8 +205,9 @@ def pose_differences(source_hand: HandModel, source_q: np.ndarray, target_hand: 
 
 #: bits of `loss_masks`: finger states (index..pinky), thumb-tip touches (index..pinky), sideways, a pad
 #: contact (the metric's 1.5% tolerance) the source does not make, the thumb out to its side or not, the thumb
-#: resting on the curled fingers or not
+#: resting on the curled fingers or not, the thumb across the palm or not
 STATE_BITS, TOUCH_BITS, SIDEWAYS_BIT, INVENTED_BIT, THUMB_OUT_BIT, THUMB_REST_BIT = 0, 4, 8, 9, 10, 11
+THUMB_ACROSS_BIT = 12
 
 
 def frame_sideways(positions: np.ndarray) -> np.ndarray:
@@ -195,17 +218,18 @@ def frame_sideways(positions: np.ndarray) -> np.ndarray:
 
 
 def _frame_features(hand: HandModel, pose: HandPose
-                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(T, 4) curls, (T, 4) thumb touches, (T,) `frame_sideways`, (T, 10) pad contacts at the metric's tolerance,
-    (T,) degrees the thumb points out to its side, (T, 4) `thumb_rest_distances`."""
+    (T,) degrees the thumb points out to its side, (T, 4) `thumb_rest_distances`, (T,) `thumb_across`."""
     from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, PAD_PAIRS
     with torch.no_grad():
         gaps = contact_gaps(hand, pose).numpy() / hand.hand_length
         out = np.degrees(thumb_out(pose.positions).numpy())
         rest = thumb_rest_distances(pose.positions, hand.hand_length).numpy()
+        across = thumb_across(pose.positions).numpy()
     positions = pose.positions.numpy()
     return (finger_curls(positions), gaps[:, list(THUMB_PAIRS)] < THUMB_TOUCH, frame_sideways(positions),
-            gaps[:, PAD_PAIRS] < CONTACT_TOLERANCE, out, rest)
+            gaps[:, PAD_PAIRS] < CONTACT_TOLERANCE, out, rest, across)
 
 
 def loss_masks(source_hand: HandModel, source_q: np.ndarray, target_hand: HandModel, target_q: np.ndarray
@@ -221,8 +245,10 @@ def loss_masks(source_hand: HandModel, source_q: np.ndarray, target_hand: HandMo
 def pose_loss_masks(source_hand: HandModel, source_pose: HandPose, target_hand: HandModel, target_pose: HandPose
                     ) -> np.ndarray:
     """`loss_masks` from FK already done (float64 poses): scoring a retarget has both."""
-    src_curl, src_touch, src_side, src_pads, src_out, src_rest = _frame_features(source_hand, source_pose)
-    tgt_curl, tgt_touch, tgt_side, tgt_pads, tgt_out, tgt_rest = _frame_features(target_hand, target_pose)
+    src_curl, src_touch, src_side, src_pads, src_out, src_rest, src_across = _frame_features(source_hand,
+                                                                                             source_pose)
+    tgt_curl, tgt_touch, tgt_side, tgt_pads, tgt_out, tgt_rest, tgt_across = _frame_features(target_hand,
+                                                                                             target_pose)
 
     def states(curl: np.ndarray) -> np.ndarray:
         return np.where(curl < EXTENDED_BELOW, 0, np.where(curl > CURLED_ABOVE, 2, 1))
@@ -234,4 +260,5 @@ def pose_loss_masks(source_hand: HandModel, source_pose: HandPose, target_hand: 
     mask += (tgt_pads & ~src_pads).any(-1) * (1 << INVENTED_BIT)
     mask += thumb_out_lost(src_out, tgt_out, src_touch.any(-1)) * (1 << THUMB_OUT_BIT)
     mask += thumb_rest_lost(src_curl, src_rest, tgt_rest, src_touch) * (1 << THUMB_REST_BIT)
+    mask += thumb_across_lost(src_curl, src_rest, src_touch, src_across, tgt_across) * (1 << THUMB_ACROSS_BIT)
     return mask.astype(int)
