@@ -46,7 +46,7 @@ THUMB_ON, THUMB_ON_MARGIN = 0.13, 0.08
 #: the thumb lies across the palm where its tip is this far past the index knuckle toward the pinky's (palm widths,
 #: `semantics.flexion.thumb_across`): the authored Sign 4 (a four) 0.60, its Pinch Middle 0.39, the sample clips'
 #: four and letters B and S 0.8-1.1. A retarget lets it go where its thumb lies `THUMB_ACROSS_MARGIN` less far across:
-#: TBS Copy and ASRN held Sign 4's at the palm's side (-0.37 to 0.16 on six real rigs; 0.32 on the mitten avatar).
+#: TBS Copy and ASRN held Sign 4's at the palm's side (-0.37 to 0.11 on six real rigs; 0.16 and 0.32 on the mitten).
 #: Read only where the source's thumb touches no fingertip and rests on no bent finger: those say where it is.
 THUMB_ACROSS_FROM, THUMB_ACROSS_MARGIN = 0.45, 0.3
 
