@@ -15,8 +15,8 @@ from s2h_viewer.hand.kinematics import HandPose, forward_kinematics, identity_mo
 from s2h_viewer.hand.rotations import tbs_euler_to_quat
 from s2h_viewer.motions.fitting import fit_gesture_angles
 from s2h_viewer.motions.gestures import GESTURES
-from s2h_viewer.semantics.anatomy import (BEND_HIGH, added_violation_rate, anatomical_loss, clamp_bend_change,
-                                         violation_rate)
+from s2h_viewer.semantics.anatomy import (BEND_HIGH, anatomical_loss, clamp_bend_change, violation_rate,
+                                         violation_rates)
 from s2h_viewer.semantics.asm import (BLOCK_FRAMES, SELF_CELLS, asm_columns, distance_matrix, palm_unit,
                                       semantic_matrix, semantic_matrix_by_axis)
 from s2h_viewer.semantics.contacts import contact_precision_recall, detect_contacts, pair_index
@@ -243,9 +243,9 @@ def test_the_violations_a_retarget_adds_are_those_past_the_sources_own():
     target[:, 4, 0] = torch.deg2rad(torch.tensor([-8.0, 12.0, 15.0, 0.0], dtype=torch.float64))
     q_source, q_target = tbs_euler_to_quat(source), tbs_euler_to_quat(target)
     assert violation_rate(q_source) == 1 / 15 and violation_rate(q_target) == pytest.approx(3 / 60)
-    assert added_violation_rate(q_source, q_target) == pytest.approx(1 / 60)
-    assert added_violation_rate(q_source, q_source) == 0.0
-    assert added_violation_rate(torch.zeros_like(q_source) + q_source.new_tensor([1.0, 0, 0, 0]), q_target) == \
+    assert violation_rates(q_source, q_target) == pytest.approx((1 / 15, 3 / 60, 1 / 60))
+    assert violation_rates(q_source, q_source)[2] == 0.0
+    assert violation_rates(torch.zeros_like(q_source) + q_source.new_tensor([1.0, 0, 0, 0]), q_target)[2] == \
         pytest.approx(violation_rate(q_target))  # a source within the limits: what the retarget breaks is all it adds
 
 

@@ -9,7 +9,7 @@ official code's limits (model/tbs/tbs_net.py ``anatomical_loss``, euler branch):
   <= 90 deg on all (the official asin clamp disabled this term; ours reaches it).
 
 The violation rates read the angles with the bend free past 90 deg (`quat_to_tbs_euler_past_lock`), and
-`added_violation_rate` counts only what a retarget puts further outside than its source.
+`violation_rates` also counts what a retarget puts further outside than its source.
 """
 
 from __future__ import annotations
@@ -113,14 +113,21 @@ def _excess_past_lock(q_tbs: torch.Tensor | np.ndarray) -> torch.Tensor:
 
 def violation_rate(q_tbs: torch.Tensor | np.ndarray, tolerance_deg: float = 5.0) -> float:
     """Fraction of (frame, joint) pairs with any angle more than ``tolerance_deg`` outside its limits."""
-    return float((_excess_past_lock(q_tbs) > math.radians(tolerance_deg)).any(-1).double().mean())
+    return _share_past(_excess_past_lock(q_tbs), tolerance_deg)
 
 
-def added_violation_rate(source_q: torch.Tensor | np.ndarray, q_tbs: torch.Tensor | np.ndarray,
-                         tolerance_deg: float = 5.0) -> float:
-    """Fraction of (frame, joint) pairs where some angle of ``q_tbs`` lies more than ``tolerance_deg`` further outside
-    its limits than the source's same angle: the violations a retarget adds. The authored poses themselves break the
-    limits at 0.62 of their angles (a PIP's splay, a knuckle's twist), so a retarget that keeps them does too; this
-    counts what it breaks that the source does not (TBS Copy: 0)."""
-    added = _excess_past_lock(q_tbs) - _excess_past_lock(source_q)
-    return float((added > math.radians(tolerance_deg)).any(-1).double().mean())
+def violation_rates(source_q: torch.Tensor | np.ndarray, q_tbs: torch.Tensor | np.ndarray,
+                    tolerance_deg: float = 5.0) -> tuple[float, float, float]:
+    """The source's `violation_rate`, ``q_tbs``'s, and the violations ``q_tbs`` adds: the share of (frame, joint)
+    pairs where some angle lies more than ``tolerance_deg`` further outside its limits than the source's same angle,
+    each clip's angles read once. The authored poses themselves break the limits at 0.62 of their angles (a PIP's
+    splay, a knuckle's twist), so a retarget that keeps them does too; the third counts what it breaks that the source
+    does not (TBS Copy: 0)."""
+    source, target = _excess_past_lock(source_q), _excess_past_lock(q_tbs)
+    return (_share_past(source, tolerance_deg), _share_past(target, tolerance_deg),
+            _share_past(target - source, tolerance_deg))
+
+
+def _share_past(excess: torch.Tensor, tolerance_deg: float) -> float:
+    """The share of (frame, joint) pairs of ``excess`` (..., 15, 3) with any angle over ``tolerance_deg``."""
+    return float((excess > math.radians(tolerance_deg)).any(-1).double().mean())

@@ -11,7 +11,7 @@ from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.chunks import frame_chunks
 from s2h_viewer.hand.kinematics import HandPose, forward_kinematics
 from s2h_viewer.hand.model import HandModel
-from s2h_viewer.semantics.anatomy import added_violation_rate, violation_rate
+from s2h_viewer.semantics.anatomy import violation_rates
 from s2h_viewer.semantics.asm import semantic_matrix
 from s2h_viewer.semantics.contacts import (CONTACT_PAIRS, PAD_PAIRS, PALM_PAIRS, contact_precision_recall,
                                            detect_contacts, touching_and_near)
@@ -93,7 +93,7 @@ class RetargetScores:
     #: them on any target, and a retarget's figure reads against it
     source_violation_rate: float = float("nan")
     #: the violations the retarget adds: (frame, joint) angles further outside the limits than the source's own
-    #: (`semantics.anatomy.added_violation_rate`; the same as ``violation_rate`` where the source keeps within them)
+    #: (`semantics.anatomy.violation_rates`; the same as ``violation_rate`` where the source keeps within them)
     added_violation_rate: float = float("nan")
 
     def as_dict(self) -> dict:
@@ -136,16 +136,16 @@ def score_retarget_frames(source_hand: HandModel, source_q: np.ndarray | torch.T
         follow = {name: c for name, c in thumb_follow(src_pose.positions.numpy(), tgt_pose.positions.numpy()).items()
                   if not np.isnan(c)}
         worst_thumb = min(follow, key=follow.get, default="")
+        source_violations, target_violations, added_violations = violation_rates(np.asarray(source_q), tgt_q)
         scores = RetargetScores(s_palm=s_palm, s_finger=s_finger, s_finger_paper=s_finger_paper,
                                 contact_precision=precision, contact_recall=recall, palm_contact_recall=palm_recall,
-                                violation_rate=violation_rate(tgt_q), jitter=jitter(tgt_pose, target_hand.hand_length),
+                                violation_rate=target_violations, jitter=jitter(tgt_pose, target_hand.hand_length),
                                 mse=mse, sideways_deg=peak.degrees, sideways_at=peak.where,
                                 source_sideways_deg=sideways_peak(src_pose.positions.numpy()).degrees,
                                 signature_kept=float(kept.mean()), invented_contacts=int(invented.any(-1).sum()),
                                 invented_pairs=invented_by_pair(invented),
                                 thumb_follow=follow.get(worst_thumb, float("nan")), thumb_follow_at=worst_thumb,
-                                source_violation_rate=violation_rate(np.asarray(source_q)),
-                                added_violation_rate=added_violation_rate(np.asarray(source_q), tgt_q))
+                                source_violation_rate=source_violations, added_violation_rate=added_violations)
         return scores, frame_error
 
 
