@@ -23,8 +23,9 @@ from s2h_viewer.wording import counted
 
 #: what the Kept column (here and in a batch's table) counts
 KEPT_TIP = ("share of frames that keep the source's signature: each finger extended, bent or curled as in the "
-            "source, the thumb's touches, a thumb out to its side where the source's is (a thumbs-up), no finger "
-            "bending sideways, no invented pad contact (1: every frame)")
+            "source, the thumb's touches, a thumb out to its side where the source's is (a thumbs-up), on the curled "
+            "fingers where the source's rests on them (the horns), across the palm where the source's lies across "
+            "it (a four), no finger bending sideways, no invented pad contact (1: every frame)")
 #: (header, score key or None for a name column, header tooltip)
 COLUMNS = (("Method", None, "retargeting method"), ("Target", None, "target hand"),
            ("S_palm", "s_palm", "finger-palm semantic similarity to the source (1 is the same)"),
