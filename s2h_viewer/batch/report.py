@@ -88,8 +88,10 @@ def _value(row: dict, key: str) -> tuple[str, str]:
             text += f" ({row['poses_kept']} poses)"
         return text, repr(value)
     if key == "frames":  # and how long the task took, under them: a column of its own made the page too wide
-        seconds = row.get("seconds")
-        took = f"{float(seconds):.1f} s" if str(seconds or "").replace(".", "", 1).isdigit() else ""
+        try:
+            took = f"{float(row['seconds']):.1f} s"  # a float here, a string read back from a summary
+        except (KeyError, TypeError, ValueError):
+            took = ""
         return "\n".join(t for t in (str(value), took) if t), str(value)
     return str(value), str(value)
 
