@@ -1213,10 +1213,15 @@ def test_removing_a_target_is_undone_with_its_results_not_recomputed(window, qtb
     qtbot.wait(200)
     with qtbot.waitSignal(window.comparison_ready, timeout=10_000):
         QTest.keyClick(window, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
+    assert window.statusBar().currentMessage() == "Undone: remove iris"  # the key says what it took back
     assert [r.target.name for r in window.comparison.results] == ["iris", "iris", "laurel", "laurel"]
     assert all(a is b for a, b in zip(window.comparison.results, iris_results))  # the same results: not recomputed
     assert len(window.compare.queue.computed) == computed
     assert [a.text() for a in removals(window)] == ["Remove iris", "Remove laurel"]
+    with qtbot.waitSignal(window.comparison_ready, timeout=10_000):
+        QTest.keyClick(window, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier)
+    assert window.statusBar().currentMessage() == "Redone: remove iris"
+    assert [a.text() for a in removals(window)] == ["Remove laurel"]
 
 
 def test_reticking_a_method_takes_its_results_from_the_cache(window, qtbot):

@@ -162,6 +162,14 @@ class MainWindow(QMainWindow):
     def annotation(self):
         return self.annotate.session
 
+    def _say_undone(self, verb: str, offset: int) -> None:
+        """The status bar names the change Edit > Undo took back or Redo made again ("Undone: remove iris"): a
+        key press changes a hand or a curve somewhere in the window, and says nothing there of what it was."""
+        stack = self.undo_group.activeStack()
+        command = stack.command(stack.index() + offset) if stack is not None else None
+        if command is not None and command.text():
+            self.statusBar().showMessage(f"{verb}: {command.text()}", 5000)
+
     @property
     def undo_stack(self):
         return self.annotate.undo_stack
@@ -210,6 +218,9 @@ class MainWindow(QMainWindow):
         redo.setShortcut(QKeySequence.StandardKey.Redo)
         for action, name in ((undo, "Undo"), (redo, "Redo")):
             action.setProperty("help_name", name)  # for Help: their text names the change ("Undo remove iris")
+        # connected after the group's own undo and redo: the stack has moved when these run
+        undo.triggered.connect(lambda: self._say_undone("Undone", 0))
+        redo.triggered.connect(lambda: self._say_undone("Redone", -1))
         edit_menu.addActions([undo, redo])
         methods_menu = bar.addMenu("&Methods")
         chosen = self.setup.methods if self._methods_named else self.settings.value("compare/methods",
