@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # The README's test command (`make test` calls it): the whole suite but benchmarks and the long fuzz run, in
 # two processes (pytest-xdist; up to four on a bigger machine), each drawing its windows on an Xvfb display
-# of its own (pytest-xvfb). Xvfb and the Qt xcb libraries are installed from Debian first when they are
-# missing and we are root (as on CI); without them the window's tests are skipped, saying so.
+# of its own (tests/own_display.py). Xvfb and the Qt xcb libraries are installed from Debian first when they
+# are missing and we are root (as on CI); without them the window's tests are skipped, saying so.
 set -euo pipefail
 PY=${1:-.venv/bin/python}
 # one thread per process (conftest.py sets it for the test process): results that do not hang on the core

@@ -10,6 +10,11 @@ from s2h_viewer import samples
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.procedural import generate_hand
 
+from own_display import start_own_display
+
+# before any test module asks for a display (the window's tests skip without one)
+start_own_display()
+
 # Every test on one thread: the same results on any machine whatever its cores, and no threads spinning for
 # a busy 2-core machine (the training test took 531 s with torch's two threads there, 51 s with one).
 torch.set_num_threads(1)
