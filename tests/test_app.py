@@ -67,6 +67,18 @@ def test_export_retargeted_motion_and_a_bad_file_gives_a_dialog(window, tmp_path
     assert window.statusBar().currentMessage() == f"wrote {tmp_path / 'on_iris.npz'}"
     shown = []
     monkeypatch.setattr(QMessageBox, "critical", lambda parent, title, text: shown.append(text))
+    # an FBX with no Blender here: said at once, before the frames are asked (a fresh-eyes user answered which
+    # frames, then heard it could not be written)
+    monkeypatch.setenv("S2H_BLENDER_PYTHON", str(tmp_path / "no_blender" / "python"))
+    monkeypatch.setattr(window, "_ask_to_save", lambda *args: str(tmp_path / "on_iris.fbx"))
+    asked = []
+    monkeypatch.setattr(window, "_ask_frames", lambda *args: asked.append(args))
+    assert window.export_motion() is None
+    assert asked == [] and shown == [f"{tmp_path / 'on_iris.fbx'}: writing FBX goes through Blender, which is not "
+                                     "installed here: run `make blender` (or set S2H_BLENDER_PYTHON to a Python with "
+                                     "bpy), or write .glb, which Blender, Unity and Unreal import"]
+    assert not (tmp_path / "on_iris.fbx").exists()
+    shown.clear()
     broken = tmp_path / "broken.glb"
     broken.write_bytes(b"glTF not really")
     window.add_target_file(str(broken))

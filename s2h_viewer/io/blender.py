@@ -23,14 +23,21 @@ def blender_python() -> Path | None:
     return path if path.is_file() else None
 
 
-def run_blender(script: str, *args: str, for_file: Path) -> None:
-    """Run ``io/blender_scripts/<script>.py`` with ``args`` in Blender; an `InputFileError` naming ``for_file``
-    when Blender is not installed or the script fails."""
+def require_blender(for_file: Path) -> Path:
+    """`blender_python`, or an `InputFileError` naming ``for_file`` that says how to get it (asked before any
+    other question about writing an FBX, so the user hears it first)."""
     python = blender_python()
     if python is None:
         raise InputFileError(for_file, "writing FBX goes through Blender, which is not installed here: run `make "
                                        "blender` (or set S2H_BLENDER_PYTHON to a Python with bpy), or write .glb, "
                                        "which Blender, Unity and Unreal import")
+    return python
+
+
+def run_blender(script: str, *args: str, for_file: Path) -> None:
+    """Run ``io/blender_scripts/<script>.py`` with ``args`` in Blender; an `InputFileError` naming ``for_file``
+    when Blender is not installed or the script fails."""
+    python = require_blender(for_file)
     try:
         done = subprocess.run([str(python), str(SCRIPTS / f"{script}.py"), *args], capture_output=True, text=True,
                               timeout=RUN_TIMEOUT_S)
