@@ -36,6 +36,12 @@ def os_problem(exc: OSError, target: Path) -> str:
     return f"{exc.strerror}: {culprit}"
 
 
+def _same_annotation(a: Annotation, b: Annotation) -> bool:
+    """The same frames, setters and confidences (NaN equal to NaN: joints never scored)."""
+    return (a.set_by == b.set_by and np.array_equal(a.frames, b.frames)
+            and np.array_equal(a.confidence, b.confidence, equal_nan=True))
+
+
 class EditFrameCommand(QUndoCommand):
     """One turn of a joint's TBS frame (undoable): the frame and its "set by" before and after."""
 
@@ -191,10 +197,15 @@ class AnnotateMode(QObject):
         session = self.session
         before, before_from = session.annotation(), session.frames_from
         session.apply_solution(solution, keep_manual)
-        self.undo_stack.push(SolveCommand(self, before, session.annotation(), before_from))
+        after = session.annotation()
         review = sum(session.needs_review(j) for j in range(topo.N_ARTICULATED))
         kept = f", {len(session.manual_joints())} manual frame(s) kept" if keep_manual else ""
-        self.status(f"solver: {review} joint(s) to review{kept}")
+        if _same_annotation(before, after):  # nothing to undo, nothing to save (a rerun on the frames it gave)
+            session.frames_from = before_from
+            self.status(f"solver: the frames are as they were, {review} joint(s) to review{kept}")
+        else:
+            self.undo_stack.push(SolveCommand(self, before, after, before_from))
+            self.status(f"solver: {review} joint(s) to review{kept}")
         self.annotation_ready.emit()
 
     def _frame_edited(self, joint: int, before: np.ndarray, after: np.ndarray) -> None:
