@@ -1318,6 +1318,31 @@ def test_add_target_hand_opens_in_the_last_hand_folder_else_the_shipped_hands(wi
     assert folder_offered(window.add_target) == folder.resolve()
 
 
+def test_a_hand_file_named_at_launch_is_where_the_next_hand_is_looked_for(qtbot, sample_hands, tmp_path):
+    """`s2h view --target avatars/x.vrm`: Annotate > Open hand and Add target start beside it (a fresh-eyes user's
+    Open hand started in the shipped hands, far from the avatar it was told to check in Annotate)."""
+    import shutil
+
+    from compare_window import open_window
+    from s2h_viewer.app.compare_mode import CompareSetup
+    from s2h_viewer.io.files import load_hand_file
+    avatars = tmp_path / "avatars"
+    avatars.mkdir()
+    hand = load_hand_file(shutil.copy(ASSETS_DIR / "hands" / "webxr" / "generic-hand-right.glb", avatars / "x.glb"))
+    from s2h_viewer.samples import load_sample_motions
+    gestures = next(m for m in load_sample_motions() if m.name.startswith("gestures"))
+    win = open_window(qtbot, CompareSetup(gestures, sample_hands["birch"], [hand], ["tbs_copy"]), tmp_path,
+                      compute=False)
+    assert folder_offered(win.open_hand_to_annotate) == avatars.resolve()
+    assert folder_offered(win.add_target) == avatars.resolve()
+    win.settings.sync()
+    # the next launch on a shipped hand keeps it: the shipped hands' folder is no folder of the user's
+    shipped = load_hand_file(ASSETS_DIR / "hands" / "webxr" / "generic-hand-right.glb")
+    again = open_window(qtbot, CompareSetup(gestures, sample_hands["birch"], [shipped], ["tbs_copy"]), tmp_path,
+                        compute=False)
+    assert folder_offered(again.add_target) == avatars.resolve()
+
+
 def test_open_motion_opens_in_the_last_motion_folder_not_the_last_hand_folder(window, qtbot, tmp_path):
     import shutil
 

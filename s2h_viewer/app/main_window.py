@@ -65,6 +65,11 @@ class MainWindow(QMainWindow):
         self._methods_named = setup.methods_named  # `s2h view --methods`: over the ones last ticked
         self.setWindowTitle("s2h-viewer[*]")
         self.settings = settings or QSettings("s2h-viewer", "s2h-viewer")
+        from s2h_viewer.samples import ASSETS_DIR
+        given = [Path(h.source).resolve() for h in setup.targets if h.source and Path(h.source).is_file()]
+        given = [path for path in given if not path.is_relative_to(ASSETS_DIR.resolve())]  # not a sample hand
+        if given:  # a hand file named at launch (`s2h view --target`): the next hand is likely beside it
+            self.settings.setValue("files/hand_dir", str(given[-1].parent))
         self.runner = TaskRunner(self, self.error, self.statusBar().showMessage)
         self.compare = CompareMode(setup, self.error, lambda text: self.statusBar().showMessage(text, 5000))
         self.video_export: exports.VideoExport | None = None
