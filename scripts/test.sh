@@ -19,6 +19,8 @@ if ! command -v Xvfb >/dev/null || ! /sbin/ldconfig -p | grep -q libxcb-cursor; 
     echo "no Xvfb: the window's tests will be skipped (sudo apt-get install $APT_PACKAGES)" >&2
   fi
 fi
-# a worker holds up to 3 GB (the real rigs' retargets): at most four, whatever the cores
-WORKERS=$(( $(nproc) < 2 ? 1 : ($(nproc) > 4 ? 4 : $(nproc)) ))
+# a worker holds up to 3 GB (the real rigs' retargets): at most four, whatever the cores (nproc without the
+# OMP_NUM_THREADS set above, which it would take for the answer)
+CORES=$(env -u OMP_NUM_THREADS -u OMP_THREAD_LIMIT nproc)
+WORKERS=$(( CORES < 2 ? 1 : (CORES > 4 ? 4 : CORES) ))
 exec "$PY" -m pytest -q --durations=25 -n "$WORKERS" --dist worksteal -m "not benchmark and not fuzz_long"
