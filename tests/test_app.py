@@ -131,14 +131,15 @@ def test_annotation_mode_solve_turn_undo_save(window, qtbot, tmp_path):
     assert window.tabs.currentWidget() is window.annotate_view
     assert [a.text() for a in window.recent_menu.actions()] == ["hand.glb (annotate)"]
     with qtbot.waitSignal(window.annotation_ready, timeout=60_000):
-        window.run_solver()
+        window.run_solver()  # on the frames the solver gave at opening: the same frames, no edit
+    assert window.undo_stack.count() == 0 and window.undo_stack.isClean()
     session = window.annotation
     view = window.annotate_view
     view.select(4)  # index_pip
     solved = session.frames[4].copy()
     arrows_before = view._arrow_meshes[2].points.copy()
     view.turn_selected(30)
-    assert session.set_by[4] == "manual" and window.undo_stack.count() == 2  # the solver run, the turn
+    assert session.set_by[4] == "manual" and window.undo_stack.count() == 1  # the turn
     angle = np.degrees(np.arccos(np.clip((np.trace(solved.T @ session.frames[4]) - 1) / 2, -1, 1)))
     assert abs(angle - 30) < 1e-6
     np.testing.assert_allclose(session.frames[4][:, 0], solved[:, 0], atol=1e-12)  # twist unchanged
