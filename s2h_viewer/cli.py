@@ -314,9 +314,10 @@ def _say_hand_notes(hands: list[tuple[HandModel, str]]) -> None:
 
 
 def _cmd_retarget(args: argparse.Namespace) -> int:
-    from s2h_viewer.io.files import export_sidecar, load_hand_file, save_motion_file
+    from s2h_viewer.io.files import check_motion_export, export_sidecar, load_hand_file, save_motion_file
     from s2h_viewer.retarget import retarget
 
+    check_motion_export(args.out)  # before the retarget, not after it
     options = _rig_options(args)
     motion, source = _performed(args.motion, args.source, options)
     target = load_hand_file(args.target, options)

@@ -25,8 +25,7 @@ from s2h_viewer.app.tasks import TaskRunner
 from s2h_viewer.errors import S2HError, TooFewBonesError, UnrecognisedRigError, reading
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.io.annotation import hand_side
-from s2h_viewer.io.blender import require_blender
-from s2h_viewer.io.files import export_sidecar
+from s2h_viewer.io.files import check_motion_export, export_sidecar
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.widgets import annotation_view, asm_heatmap, compare_view, error_curve, vtk_widget
 
@@ -841,12 +840,11 @@ class MainWindow(QMainWindow):
                                  lambda: str(beside) if beside is not None else shown.name(".glb"))
         if not path:
             return None
-        if Path(path).suffix.lower() == ".fbx":
-            try:
-                require_blender(Path(path))  # said now, not after the frames are asked
-            except S2HError as exc:
-                self.error(str(exc))
-                return None
+        try:
+            check_motion_export(path)  # a format it cannot write (FBX with no Blender): said now, not after the frames
+        except S2HError as exc:
+            self.error(str(exc))
+            return None
         frames = self._ask_frames(path, "motion", shown) if asked else self.timeline.marked
         if asked and frames is None:
             return None

@@ -24,8 +24,7 @@ def blender_python() -> Path | None:
 
 
 def require_blender(for_file: Path) -> Path:
-    """`blender_python`, or an `InputFileError` naming ``for_file`` that says how to get it (asked before any
-    other question about writing an FBX, so the user hears it first)."""
+    """`blender_python`, or an `InputFileError` naming ``for_file`` that says how to get it."""
     python = blender_python()
     if python is None:
         raise InputFileError(for_file, "writing FBX goes through Blender, which is not installed here: run `make "

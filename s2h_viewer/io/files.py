@@ -223,13 +223,25 @@ def list_animations(path: str | Path) -> list[str]:
     return listed
 
 
-def save_motion_file(path: str | Path, motion: Motion, hand: HandModel) -> Path:
-    """Write ``motion`` (on ``hand``) as npz, BVH, GLB or FBX (through Blender), chosen by suffix, atomically."""
+def check_motion_export(path: str | Path) -> Path:
+    """``path`` as a Path, or the `InputFileError` `save_motion_file` would raise for its format: a suffix it cannot
+    write, or FBX with no Blender here. Asked before the work that precedes writing (the window's frames question,
+    the CLI's retarget), so the user hears it first."""
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in EXPORT_SUFFIXES:
         raise InputFileError(path, f"cannot write motion as {suffix or 'a suffix-less file'}; "
                                    f"use {', '.join(EXPORT_SUFFIXES)}")
+    if suffix == ".fbx":
+        from s2h_viewer.io.blender import require_blender
+        require_blender(path)
+    return path
+
+
+def save_motion_file(path: str | Path, motion: Motion, hand: HandModel) -> Path:
+    """Write ``motion`` (on ``hand``) as npz, BVH, GLB or FBX (through Blender), chosen by suffix, atomically."""
+    path = check_motion_export(path)
+    suffix = path.suffix.lower()
     if suffix == ".npz":
         from s2h_viewer.io.npz import save_motion
         return save_motion(motion, path)
