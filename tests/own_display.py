@@ -16,6 +16,8 @@ import subprocess
 #: the size of the screen the windows open on (the window's tests ask up to 1400 x 1000)
 SCREEN = "1600x1000x24"
 _PR_SET_PDEATHSIG = 1
+#: this process's Xvfb, held for as long as the process lives
+_xvfb: subprocess.Popen | None = None
 
 
 def _stop_with_parent() -> None:
@@ -25,12 +27,14 @@ def _stop_with_parent() -> None:
 def start_own_display() -> str | None:
     """Start Xvfb on the first free display number and point ``DISPLAY`` at it (under xdist always, alone only
     where there is no display); the display, or None where nothing was started (no Xvfb: those tests skip)."""
-    if not (os.environ.get("PYTEST_XDIST_WORKER") or not os.environ.get("DISPLAY")) or shutil.which("Xvfb") is None:
+    global _xvfb
+    use_given_display = os.environ.get("DISPLAY") and not os.environ.get("PYTEST_XDIST_WORKER")
+    if use_given_display or shutil.which("Xvfb") is None:
         return None
     read, write = os.pipe()
-    subprocess.Popen(["Xvfb", "-displayfd", str(write), "-screen", "0", SCREEN, "-nolisten", "tcp"],
-                     pass_fds=(write,), stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
-                     stderr=subprocess.DEVNULL, preexec_fn=_stop_with_parent)
+    _xvfb = subprocess.Popen(["Xvfb", "-displayfd", str(write), "-screen", "0", SCREEN, "-nolisten", "tcp"],
+                             pass_fds=(write,), stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                             stderr=subprocess.DEVNULL, preexec_fn=_stop_with_parent)
     os.close(write)
     with os.fdopen(read) as said:  # Xvfb writes its display number once it accepts connections
         number = said.readline().strip()
