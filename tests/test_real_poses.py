@@ -329,7 +329,11 @@ def test_the_contact_fit_steps_the_thumb_metacarpal_slower_so_the_thumb_keeps_th
         scores[name] = score_retarget(source, motion.q_tbs, hand, fitted)
     assert (across["like any joint"] + 0.05 < across["the CMC slower"] < across["its bend slower still"] - 0.015
             ), across
-    assert all(s.contact_recall >= 0.95 and s.contact_precision >= 0.95 for s in scores.values()), scores
+    assert all(s.contact_precision >= 0.95 for s in scores.values()), scores
+    # the robot's thumb lies 0.7 palm widths further out than the source's: with every angle within its limits (the
+    # fit's steps projected there), its slowest swing leaves Sign 3's thumb and pinky pads 0.03 apart (the pose kept)
+    assert scores["like any joint"].contact_recall >= 0.93, scores
+    assert min(s.contact_recall for s in scores.values()) >= (0.7 if rig == "debug_robot.vrm" else 0.95), scores
 
 
 def test_the_contact_fit_does_not_curl_a_bent_finger_to_meet_the_thumb():
@@ -392,17 +396,22 @@ def test_a_centimetre_export_of_an_avatar_reads_the_same_hand(poses, rig, side, 
 def test_where_the_fingers_cannot_reach_a_thumb_held_near_its_path_the_thumb_goes_to_them(poses):
     """The VRM 1.0 robot (no skin: palm-plane frames): with the thumb CMC pulled 5x toward the network's pose, the
     fit closed only 28% of the poses' pad touches (its fingers cannot reach the thumb there); the frames still
-    disagreeing are fitted again with the thumb pulled like any joint, and the touches are made (ASRN's guard then
-    takes the frame or so the fit makes a touch the source does not; one frame of the horns' middle and ring pads stays
-    closed since the thumb-across term fits the frames either side, where the thumb passes across the palm)."""
+    disagreeing, or whose thumb is still off the curled fingers or short of across the palm, are fitted again with
+    the thumb pulled like any joint: the first pass alone lost Sign 3 (thumb-pinky) and Sign 4 (the thumb across),
+    both passes keep every pose. Within the joint limits the robot's thumb, 0.7 palm widths further out than the
+    source's, leaves some pads a little apart that the signature reads touching (Sign 3's 0.03 hand lengths)."""
     from s2h_viewer.retarget.asrn.inference import network_retarget
     motion, source = poses
     robot = load_hand_file(ROOT / "assets/hands/real/debug_robot.vrm", RigOptions(side="right"))
     network = network_retarget("asrn", motion.q_tbs, source, robot)
-    scores = score_retarget(source, motion.q_tbs, robot, fit_contacts(motion.q_tbs, source, robot, network.copy()))
-    assert scores.contact_recall >= 0.9 and scores.contact_precision >= 0.9, scores
+    assert {"Sign 3", "Sign 4"} <= {name for name, lost in pose_differences(source, motion.q_tbs, robot, network,
+                                                                            motion.labels).items() if lost}
+    fitted = fit_contacts(motion.q_tbs, source, robot, network.copy())
+    scores = score_retarget(source, motion.q_tbs, robot, fitted)
+    assert scores.contact_recall >= 0.7 and scores.contact_precision >= 0.95, scores
+    assert not any(pose_differences(source, motion.q_tbs, robot, fitted, motion.labels).values())
     asrn = score_retarget(source, motion.q_tbs, robot, retarget(motion, source, robot, "asrn").q_tbs)
-    assert asrn.contact_recall >= 0.9 and asrn.contact_precision >= 0.98, asrn
+    assert asrn.contact_recall >= 0.7 and asrn.contact_precision >= 0.95, asrn
 
 
 def test_a_thumb_out_to_its_side_is_read_and_kept(poses):
@@ -458,31 +467,44 @@ def test_a_left_hand_and_its_mirrored_right_twin_curl_alike(gestures, sample_han
         assert np.nanmax(np.abs(sideways[0] - sideways[1])) < 2.0, method
 
 
-def test_asrn_adds_no_bend_violation_the_source_does_not_make():
+def test_asrn_adds_no_violation_the_source_does_not_make():
     """The WebXR recording onto the Meta hand: ASRN's network bends the thumb MCP back past straight (down to -9
     deg, the limit is 0) on 83 frames where the recording keeps within it: 4% of the clip's angles violated. Its
-    bends are now kept within the limits, or no further out than the source's: none violate, and every joint whose
-    bend is within them is the network's rotation bit for bit."""
+    angles are now kept within the limits, or no further out than the source's: none violate, and every joint whose
+    angles are within them is the network's rotation bit for bit."""
+    from s2h_viewer.hand.rotations import quat_to_tbs_euler_past_lock
     from s2h_viewer.retarget.asrn.inference import network_retarget
-    from s2h_viewer.semantics.anatomy import bends_within_source_limits, violation_rate
+    from s2h_viewer.semantics.anatomy import limits_reaching, violation_rate, within_source_limits
     motion, source = load_motion_file(ROOT / "assets/recordings/webxr_hand_poses_right.json")
     meta = load_hand_file(ROOT / "assets/hands/real/r_hand_skeletal_lowres.fbx")
     network = network_retarget("asrn", motion.q_tbs, source, meta)
     assert violation_rate(motion.q_tbs) == 0.0 and violation_rate(network) > 0.02
-    kept = bends_within_source_limits(motion.q_tbs, network.copy())
+    kept = within_source_limits(motion.q_tbs, network.copy())
     assert violation_rate(kept) == 0.0
-    from s2h_viewer.hand.rotations import quat_to_tbs_euler_past_lock
-    from s2h_viewer.semantics.anatomy import BEND_HIGH, BEND_LOW
-    bends = [quat_to_tbs_euler_past_lock(torch.as_tensor(q, dtype=torch.float64))[..., 1].numpy()
-             for q in (network, motion.q_tbs)]
-    outside = ((bends[0] < np.minimum(BEND_LOW.numpy(), bends[1]) - 1e-9)
-               | (bends[0] > np.maximum(BEND_HIGH.numpy(), bends[1]) + 1e-9))
+    angles = [quat_to_tbs_euler_past_lock(torch.as_tensor(q, dtype=torch.float64)) for q in (network, motion.q_tbs)]
+    low, high = limits_reaching(angles[1], margin=0.0)
+    outside = ((angles[0] < low - 1e-9) | (angles[0] > high + 1e-9)).any(-1).numpy()
     np.testing.assert_array_equal((kept != network).any(-1), outside)  # what moved is what was out, nothing else
     assert violation_rate(retarget(motion, source, meta, "asrn").q_tbs) == 0.0
-    # a source bent past a limit keeps its own excursion: the network's bend may go as far, not further
+    # a source past a limit keeps its own excursion: the network's angle may go as far, not further
     hyper = network.copy()
     hyper[:, 1] = [np.cos(np.radians(-10)), 0.0, np.sin(np.radians(-10)), 0.0]  # the thumb MCP bent back 20 deg
-    np.testing.assert_array_equal(bends_within_source_limits(hyper, hyper.copy())[:, 1], hyper[:, 1])
+    np.testing.assert_array_equal(within_source_limits(hyper, hyper.copy())[:, 1], hyper[:, 1])
+
+
+def test_asrn_adds_no_violation_on_the_authored_poses():
+    """Onto the robot (VRM), the network twisted knuckles and the contact fit twisted and splayed them and the thumb
+    MCP to close the authored poses' touches (6.4% of the angles violated where the poses' own did not, under L_ana
+    alone); its angles now stay within the limits, or no further out than the network's or the source's, and every
+    pose is kept (the source's frames as the README's tables read them, checked against the poses' hinges)."""
+    motion, source = load_motion_file(POSES, load_hand_file(POSED_RIG, RigOptions(hinges_from=POSES)),
+                                      RigOptions(animation="all"))
+    robot = load_hand_file(ROOT / "assets/hands/real/debug_robot.vrm", RigOptions(side="right"))
+    out = retarget(motion, source, robot, "asrn")
+    scores = score_retarget(source, motion.q_tbs, robot, out.q_tbs)
+    assert scores.added_violation_rate == 0.0
+    assert scores.contact_precision == 1.0
+    assert not any(pose_differences(source, motion.q_tbs, robot, out.q_tbs, motion.labels).values())
 
 
 def test_a_retargets_violations_read_against_the_sources_own(poses, sample_hands):

@@ -15,7 +15,7 @@ from s2h_viewer.hand.kinematics import HandPose, forward_kinematics, identity_mo
 from s2h_viewer.hand.rotations import tbs_euler_to_quat
 from s2h_viewer.motions.fitting import fit_gesture_angles
 from s2h_viewer.motions.gestures import GESTURES
-from s2h_viewer.semantics.anatomy import (BEND_HIGH, anatomical_loss, clamp_bend_change, violation_rate,
+from s2h_viewer.semantics.anatomy import (anatomical_loss, clamp_angles, limits_reaching, violation_rate,
                                          violation_rates)
 from s2h_viewer.semantics.asm import (BLOCK_FRAMES, SELF_CELLS, asm_columns, distance_matrix, palm_unit,
                                       semantic_matrix, semantic_matrix_by_axis)
@@ -212,16 +212,28 @@ def test_ok_sign_on_a_generated_hand_has_the_thumb_index_contact(sample_hands):
     assert not contacts[1].any()  # spread: no contacts at all
 
 
-def test_a_corrected_bend_stays_in_its_limits_or_no_further_out_than_it_started():
+def test_a_corrected_angle_stays_in_its_limits_or_no_further_out_than_it_started():
     start = torch.zeros(3, 15, 3, dtype=torch.float64)
-    start[:, 3, 1] = torch.tensor([math.radians(103.0), math.radians(85.0), math.radians(-5.0)])  # index MCP
+    start[:, 3, 1] = torch.tensor([math.radians(103.0), math.radians(85.0), math.radians(-5.0)])  # index MCP bend
+    start[:, 4, 0] = torch.tensor([math.radians(-12.0), 0.0, math.radians(3.0)])  # index PIP twist (limit 0)
+    start[:, 3, 2] = torch.tensor([math.radians(40.0), math.radians(20.0), 0.0])  # index MCP splay (limit 30)
     moved = start.clone()
     moved[:, 3, 1] += torch.tensor([math.radians(4.0), math.radians(10.0), math.radians(-20.0)])
-    out = clamp_bend_change(start, moved)
+    moved[:, 4, 0] += torch.tensor([math.radians(-5.0), math.radians(7.0), math.radians(1.0)])
+    moved[:, 3, 2] += torch.tensor([math.radians(-50.0), math.radians(15.0), math.radians(-45.0)])
+    out = torch.rad2deg(clamp_angles(moved, *limits_reaching(start)))
     # a fist's 103 deg stays (not snapped to 89), may not grow; 85 + 10 stops 1 deg short of 90; -25 stops at -10
-    assert torch.rad2deg(out[:, 3, 1]).tolist() == pytest.approx([103.0, 89.0, -10.0])
-    assert out[0, 3, 1] <= BEND_HIGH[3] or out[0, 3, 1] == start[0, 3, 1]
-    np.testing.assert_array_equal(clamp_bend_change(start, start).numpy(), start.numpy())  # no correction, no change
+    assert out[:, 3, 1].tolist() == pytest.approx([103.0, 89.0, -10.0])
+    # a twist of -12 may turn back through 0 as far as +12, not further out; one of 0 stays 0; 3 + 1 stops at 3
+    assert out[:, 4, 0].tolist() == pytest.approx([-12.0, 0.0, 3.0])
+    # a splay of 40 may swing to -10 (inside); 20 + 15 stops at the limit, 30; 0 - 45 stops at -30
+    assert out[:, 3, 2].tolist() == pytest.approx([-10.0, 30.0, -30.0])
+    np.testing.assert_array_equal(clamp_angles(start, *limits_reaching(start)).numpy(), start.numpy())  # no change
+    # a second reach widens the limits as far as it goes, both ways for the twist
+    wider = start.clone()
+    wider[:, 4, 0] = math.radians(-20.0)
+    assert torch.rad2deg(clamp_angles(moved, *limits_reaching(start, wider)))[:, 4, 0].tolist() == pytest.approx(
+        [-17.0, 7.0, 4.0])
 
 
 def test_a_knuckle_bent_past_90_violates_by_how_far_it_is_past_not_as_a_half_turn_twist():

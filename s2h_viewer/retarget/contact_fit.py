@@ -25,10 +25,12 @@ one pose made the thumb follow the source's less), and a sideways term: no
 flexed PIP/DIP bent more than `SIDEWAYS_FREE` out of the curl plane (on the Godot hand, opening the ring-pinky
 touch of fists bent the pinky DIP 45 deg sideways without it). The angles are read with the twist within +-90
 deg (`quat_to_tbs_euler_past_lock`): a knuckle of a fist bent past 90 read as twisted 160 deg, and the anatomy
-term "untwisted" it. Bends
-moved by the fit stay within their limits, or no further out than they were. All runs of a clip are
-optimised together in one batch, a bounded number of frames at a time; frames whose touches still disagree
-are fitted once more with the thumb free to go to the fingers.
+term "untwisted" it. Every
+angle the fit moves stays within its limits, or no further out than the retarget's or the source's: each step is
+projected there (L_ana alone let it twist and splay knuckles to close a touch). All runs of a clip are
+optimised together in one batch, a bounded number of frames at a time; frames whose touches still disagree, or
+whose thumb is still off the curled fingers or short of across the palm, are fitted once more with the thumb free
+to go there.
 """
 
 from __future__ import annotations
@@ -45,7 +47,7 @@ from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.rotations import quat_to_tbs_euler_past_lock, tbs_euler_to_quat
 from s2h_viewer.retarget.progress import report, stage
 from s2h_viewer.retarget.threads import torch_threads
-from s2h_viewer.semantics.anatomy import angle_excess, clamp_bend_change
+from s2h_viewer.semantics.anatomy import angle_excess, clamp_angles, limits_reaching
 from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, contact_loss, pad_pair_gaps
 from s2h_viewer.semantics.flexion import hinge_flexion_and_alignment, thumb_across, thumb_out
 from s2h_viewer.semantics.signature import (CURL_CHAINS, CURL_MARGIN, SIDEWAYS_FLEXION, SIDEWAYS_LIMIT,
@@ -73,6 +75,10 @@ class ContactFitConfig:
     sideways_weight: float = 1e3  # no flexed PIP/DIP bent sideways past `SIDEWAYS_FREE`
     thumb_prior_weight: float = 5.0  # the thumb CMC pulled this much harder: fingers move to the thumb first
     thumb_lift_weight: float = 10.0  # and its splay (the metacarpal's lift out of the palm plane) this much more
+    #: the thumb's MCP and IP pulled this much harder: with its twists and splays held within the limits, the fit
+    #: reached the fingertips by bending them away from the network's (the robot's IP followed the poses' at 0.67,
+    #: the mitten avatar's left at 0.88); so 0.75 and 0.93, the poses kept, the touches the same within 0.02
+    thumb_hinge_prior_weight: float = 3.0
     #: the thumb CMC's angles move at this share of the other joints' rate (Adam's steps), so the fingers and the
     #: thumb's own hinges reach a touch before its metacarpal swings away from the source's path: ASRN's thumb
     #: followed the authored poses' at 0.59-0.91 (its CMC across the palm), 0.69-0.93 so; 0.1 lost pad touches
@@ -244,7 +250,8 @@ def fit_contacts(source_q: np.ndarray, source_hand: HandModel, target_hand: Hand
             positions = joint_positions(source_hand, torch.as_tensor(source_q[idx], dtype=torch.float32))
             # read as the target's
             return SourceFrames(_pose_pad_gaps(source_hand, positions), pose_curls(positions), thumb_out(positions),
-                                thumb_rest_distances(positions, source_hand.hand_length), thumb_across(positions))
+                                thumb_rest_distances(positions, source_hand.hand_length), thumb_across(positions),
+                                quat_to_tbs_euler_past_lock(torch.as_tensor(source_q[idx], dtype=torch.float32)))
     return _fit_frames(out, frames, source_at, target_hand, config)
 
 
@@ -270,6 +277,7 @@ class SourceFrames:
     thumb_out: torch.Tensor | None = None
     thumb_rest: torch.Tensor | None = None  # (F, 4) `semantics.signature.thumb_rest_distances`
     thumb_across: torch.Tensor | None = None  # (F,) palm widths, `semantics.flexion.thumb_across`
+    angles: torch.Tensor | None = None  # (F, 15, 3) its TBS angles: the fit may reach as far past the limits
 
 
 def _fit_frames(out: np.ndarray, disagree: np.ndarray, source_at, hand: HandModel, config: ContactFitConfig
@@ -303,20 +311,23 @@ def _fit_pass(out: np.ndarray, disagree: np.ndarray, source_at, hand: HandModel,
         with torch.no_grad():
             positions = joint_positions(hand, torch.as_tensor(out[frames], dtype=torch.float32))
             gaps = _pose_pad_gaps(hand, positions).numpy()
-        left[frames] = (gaps_disagree(source.gaps.numpy(), gaps) | _thumb_rest_left(source, hand, positions)
+        left[frames] = (gaps_disagree(source.gaps.numpy(), gaps) | _thumb_left(source, hand, positions)
                         ) & disagree[frames]
     return left
 
 
-def _thumb_rest_left(source: SourceFrames, hand: HandModel, positions: torch.Tensor) -> np.ndarray:
+def _thumb_left(source: SourceFrames, hand: HandModel, positions: torch.Tensor) -> np.ndarray:
     """(F,) bool: frames whose thumb (``positions``, (F, 21, 3)) is still off the curled fingers the source's rests
-    on (none where the source frames do not say where its thumb is)."""
+    on, or not across the palm where the source's lies across it (none where the source frames do not say where
+    its thumb is)."""
     if source.thumb_rest is None:
         return np.zeros(len(positions), dtype=bool)
     with torch.no_grad():
         rest = thumb_rest_distances(positions, hand.hand_length).numpy()
-    return thumb_rest_lost(np.degrees(source.curls.numpy()), source.thumb_rest.numpy(), rest,
-                           _thumb_at_tips(source.gaps).numpy())
+        across = thumb_across(positions).numpy()
+    curls, touches = np.degrees(source.curls.numpy()), _thumb_at_tips(source.gaps).numpy()
+    return (thumb_rest_lost(curls, source.thumb_rest.numpy(), rest, touches)
+            | thumb_across_lost(curls, source.thumb_rest.numpy(), touches, source.thumb_across.numpy(), across))
 
 
 def _batches(runs: list[tuple[int, int]], batch_frames: int) -> list[list[tuple[int, int]]]:
@@ -342,6 +353,9 @@ def _fit_runs(q: np.ndarray, source_frames: SourceFrames, lengths: list[int], ha
     with torch.no_grad():
         start = quat_to_tbs_euler_past_lock(torch.as_tensor(q, dtype=torch.float32))
         start_excess = angle_excess(start)  # what the retarget already has is not the fit's to undo
+        # every angle stays within its limits, or no further out than the retarget's or the source's: the fit adds
+        # no violation (L_ana alone let it twist and splay knuckles and the thumb MCP, 1-3% of the poses' angles)
+        low, high = limits_reaching(start, *([] if source_frames.angles is None else [source_frames.angles]))
         start_positions = joint_positions(hand, torch.as_tensor(q, dtype=torch.float32))
         start_curls = pose_curls(start_positions)
         rate = torch.ones(len(q), *start.shape[1:])
@@ -367,6 +381,7 @@ def _fit_runs(q: np.ndarray, source_frames: SourceFrames, lengths: list[int], ha
     # its splay, the lift: a thumb lifted to meet a fingertip the source's reaches lying in the palm plane read
     # as not following (the gestures onto the mitten avatar: lift 0.71; 0.82 with it, the touches the same)
     prior_scale[0, 2] *= config.thumb_lift_weight
+    prior_scale[1:3] *= config.thumb_hinge_prior_weight  # the thumb's MCP and IP
     optimiser = torch.optim.Adam([correction], lr=config.learning_rate)
     # Adam steps every angle alike whatever the gradient's scale, so the prior's weights alone set only where the
     # fit ends, not which joints it moves first: the CMC's angles are stepped at a share of the others' rate (`rate`)
@@ -399,5 +414,7 @@ def _fit_runs(q: np.ndarray, source_frames: SourceFrames, lengths: list[int], ha
         optimiser.zero_grad()
         loss.backward()
         optimiser.step()
+        with torch.no_grad():  # projected: the next step starts within the limits
+            correction.copy_((clamp_angles(start + correction * rate, low, high) - start) / rate)
     with torch.no_grad():
-        return tbs_euler_to_quat(clamp_bend_change(start, start + correction * rate)).numpy()
+        return tbs_euler_to_quat(start + correction * rate).numpy()

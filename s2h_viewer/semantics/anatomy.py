@@ -65,30 +65,43 @@ def clamp_bends(angles: torch.Tensor, margin: float = math.radians(1.0)) -> torc
     return torch.stack([angles[..., 0], bend, angles[..., 2]], -1)
 
 
-def clamp_bend_change(start: torch.Tensor, angles: torch.Tensor, margin: float = math.radians(1.0)) -> torch.Tensor:
-    """(..., 15, 3) ``angles`` (``start`` corrected) with each bend kept within its limits (`clamp_bends`), or
-    where ``start`` already lies outside them, no further out: a correction never adds a violation, and never
-    snaps a pose it was not asked to change (a 103 deg knuckle of a fist stays 103)."""
-    dtype = angles.dtype
-    low = torch.minimum(BEND_LOW.to(dtype), start[..., 1])
-    high = torch.maximum(BEND_HIGH.to(dtype) - margin, start[..., 1])
-    return torch.stack([angles[..., 0], torch.minimum(torch.maximum(angles[..., 1], low), high), angles[..., 2]], -1)
+def limits_reaching(*reached: torch.Tensor, margin: float = math.radians(1.0)) -> tuple[torch.Tensor, torch.Tensor]:
+    """(..., 15, 3) lowest and highest (twist, bend, splay) allowed: the anatomical limits (the bend's ``margin``
+    inside 90 deg), each widened as far as any of ``reached`` (..., 15, 3 angles) lies outside it, the twist and
+    splay's both ways (their limits are symmetric, and so is their excess). Angles clamped into them
+    (`clamp_angles`) lie no further outside the limits than the furthest of ``reached``: they add no violation."""
+    dtype = reached[0].dtype
+    twist = torch.zeros_like(reached[0][..., 0])
+    splay = SPLAY_LIMIT.to(dtype).expand_as(twist)
+    bend_low, bend_high = BEND_LOW.to(dtype).expand_as(twist), (BEND_HIGH.to(dtype) - margin).expand_as(twist)
+    for angles in reached:
+        twist = torch.maximum(twist, angles[..., 0].abs())
+        splay = torch.maximum(splay, angles[..., 2].abs())
+        bend_low = torch.minimum(bend_low, angles[..., 1])
+        bend_high = torch.maximum(bend_high, angles[..., 1])
+    return torch.stack([-twist, bend_low, -splay], -1), torch.stack([twist, bend_high, splay], -1)
 
 
-def bends_within_source_limits(source_q: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """(T, 15, 4) ``q`` with each joint's bend kept within its limits, or no further out than the source's
-    (`clamp_bend_change`): a retarget adds no bend violation the source does not make (ASRN's network, on the Meta
-    hand, bent the thumb MCP back 9 deg past straight where the WebXR recording's stays within it: 4% of its angles
-    violated). Only the joints whose bend moves change; the others are ``q``'s rotations, bit for bit. A float32
-    ``q`` is changed in place and a chunk of frames done at a time (a long clip's rotations are not copied, its
-    temporaries stay a chunk's), as the contact fit does."""
+def clamp_angles(angles: torch.Tensor, low: torch.Tensor, high: torch.Tensor) -> torch.Tensor:
+    """(..., 15, 3) ``angles`` clamped into [``low``, ``high``] (`limits_reaching`)."""
+    return torch.minimum(torch.maximum(angles, low), high)
+
+
+def within_source_limits(source_q: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """(T, 15, 4) ``q`` with each joint's twist, bend and splay kept within its limits, or no further out than the
+    source's same angle (`limits_reaching`): a retarget adds no violation the source does not make. ASRN's network,
+    on the Meta hand, bent the thumb MCP back 9 deg past straight where the WebXR recording's stays within it (4% of
+    its angles violated); on the authored poses it twisted and splayed knuckles and the pinky PIP (1.0-1.7%). Only
+    the joints whose angles move change; the others are ``q``'s rotations, bit for bit. A float32 ``q`` is changed
+    in place and a chunk of frames done at a time (a long clip's rotations are not copied, its temporaries stay a
+    chunk's), as the contact fit does."""
     out = np.asarray(q, dtype=np.float32)
     for first, end in frame_chunks(len(out)):
         with torch.no_grad():
             angles = quat_to_tbs_euler_past_lock(torch.as_tensor(out[first:end], dtype=torch.float64))
             source = quat_to_tbs_euler_past_lock(torch.as_tensor(np.asarray(source_q[first:end]), dtype=torch.float64))
-            clamped = clamp_bend_change(source, angles, margin=0.0)
-            moved = (clamped[..., 1] - angles[..., 1]).abs() > 1e-9
+            clamped = clamp_angles(angles, *limits_reaching(source, margin=0.0))
+            moved = (clamped - angles).abs().amax(-1) > 1e-9
             if moved.any():
                 out[first:end][moved.numpy()] = tbs_euler_to_quat(clamped[moved]).numpy()
     return out

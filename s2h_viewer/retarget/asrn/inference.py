@@ -23,7 +23,7 @@ from s2h_viewer.retarget.guard import guarded
 from s2h_viewer.retarget.methods import on_target, register
 from s2h_viewer.retarget.progress import report, stage
 from s2h_viewer.retarget.windows import stream_windows
-from s2h_viewer.semantics.anatomy import bends_within_source_limits
+from s2h_viewer.semantics.anatomy import within_source_limits
 
 MODELS_DIR = Path(__file__).resolve().parents[3] / "assets" / "models"
 #: source frames whose features are made and run at once: sets the working memory, not the result
@@ -84,9 +84,9 @@ def retarget_dm(motion: Motion, source_hand: HandModel, target_hand: HandModel) 
                           "contacts then fitted to the source's, guarded frame by frame by TBS Copy")
 def retarget_asrn(motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
     with stage(0.0, 0.1, "network"):
-        # the network's bends within the anatomical limits the source keeps (L_ana trains toward them, not to them)
-        network = bends_within_source_limits(motion.q_tbs,
-                                             network_retarget("asrn", motion.q_tbs, source_hand, target_hand))
+        # the network's angles within the anatomical limits the source keeps (L_ana trains toward them, not to them)
+        network = within_source_limits(motion.q_tbs,
+                                       network_retarget("asrn", motion.q_tbs, source_hand, target_hand))
     with stage(0.1, 0.85, "contact fit"):
         q = fit_contacts(motion.q_tbs, source_hand, target_hand, network.copy())
     with stage(0.85, 1.0, "guard"):
