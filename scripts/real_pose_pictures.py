@@ -1,7 +1,9 @@
 """Issue 26's pictures: fist, point, OK, pinch and thumbs-up of the authored Godot poses on every real rig,
 TBS Copy and ASRN side by side (one PNG per pose and group of rigs), off screen.
 
-    python scripts/real_pose_pictures.py OUT_DIR [--shared ../shared] [--methods tbs_copy,asrn]
+    python scripts/real_pose_pictures.py OUT_DIR [--shared ../shared] [--methods tbs_copy,asrn] [--poses "Sign 3,Horns"]
+
+``--poses`` names other authored poses to picture instead (the file named after the pose).
 """
 
 from __future__ import annotations
@@ -32,10 +34,15 @@ def main() -> None:
     parser.add_argument("out", type=Path)
     parser.add_argument("--shared", type=Path, default=ROOT.parent / "shared")
     parser.add_argument("--methods", default="tbs_copy,asrn")
+    parser.add_argument("--poses", help=f"authored poses to picture, comma-separated (default: {', '.join(SHOWN.values())})")
     args = parser.parse_args()
+    shown = ({pose.lower().replace(" ", "_"): pose for pose in args.poses.split(",")} if args.poses else SHOWN)
     rig = load_hand_file(ROOT / "assets/motions/real/godot_hand_r_posed_rig.gltf", RigOptions(hinges_from=POSES))
     motion, source = load_motion_file(POSES, rig, RigOptions(animation="all"))
     starts = dict(held_poses(motion.labels))
+    unknown = [pose for pose in shown.values() if pose not in starts]
+    if unknown:
+        parser.error(f"no such pose: {', '.join(unknown)} (the file holds {', '.join(starts)})")
     args.out.mkdir(parents=True, exist_ok=True)
     for group, rigs in GROUPS.items():
         targets = []
@@ -45,7 +52,7 @@ def main() -> None:
             if path.exists():
                 targets.append(load_hand_file(path, RigOptions(side=side)))
         comparison = build_comparison(motion, source, targets, args.methods.split(","))
-        for name, pose in SHOWN.items():
+        for name, pose in shown.items():
             frame = starts[pose]  # the middle of its held frames
             print(render_comparison(comparison, args.out / f"{name}_{group}.png", frame=frame, size=(1600, 1000)))
 
