@@ -578,7 +578,7 @@ def build_parser() -> argparse.ArgumentParser:
     rt.add_argument("--method", default="asrn", help="copy, tbs_copy, dm, asrn or asm_opt")
     rt.add_argument("--out", required=True, help="output file: .glb (on the target rig), .bvh, .npz, or .fbx (through "
                                                        "Blender: `make blender`)")
-    rt.add_argument("--corrections", metavar="FILE", help="a corrections sidecar (<name>.corrections.json, written by "
+    rt.add_argument("--corrections", metavar="FILE", help="a corrections sidecar (<file name>.corrections.json, written by "
                     "the viewer's motion export or Fix > Save corrections): its per-joint offset keys applied to the "
                     "retarget before it is written, and recorded beside the output")
     rt.add_argument("--quiet", action="store_true", help="no progress bar")

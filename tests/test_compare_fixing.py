@@ -223,7 +223,7 @@ def test_every_motion_export_carries_the_corrections_and_s2h_retarget_applies_th
     for suffix in (".npz", ".glb", ".bvh"):
         path = tmp_path / f"take{suffix}"
         assert win.export_motion(str(path)) == path
-        sidecar = tmp_path / "take.corrections.json"
+        sidecar = tmp_path / f"take{suffix}.corrections.json"
         record = load_corrections(sidecar)
         assert record.corrections.n_keys == 1 and record.corrections.of(ARTICULATED) is not None
         np.testing.assert_allclose(record.corrections.apply(mode.comparison.motion.q_tbs),
@@ -232,28 +232,33 @@ def test_every_motion_export_carries_the_corrections_and_s2h_retarget_applies_th
         exported, _ = load_motion_file(path)
         dots = np.abs(np.einsum("tjk,tjk->tj", exported.q_tbs, fixed.motion.q_tbs))
         assert dots.min() > 1 - 1e-4, suffix  # the corrected motion, on the target's rig
-        assert "its corrections take.corrections.json" in win.statusBar().currentMessage()
+        assert f"its corrections take{suffix}.corrections.json" in win.statusBar().currentMessage()
+    # one name in three formats: a sidecar each, none overwritten (with the stem alone they shared one)
+    assert sorted(p.name for p in tmp_path.glob("take*.corrections.json")) == [
+        "take.bvh.corrections.json", "take.glb.corrections.json", "take.npz.corrections.json"]
     # the command line, given the sidecar, writes the same motion
     clip = save_motion(mode.comparison.motion, tmp_path / "clip.npz")
     assert main(["retarget", "--motion", str(clip), "--source", "birch", "--target", "iris", "--method", "tbs_copy",
-                 "--corrections", str(tmp_path / "take.corrections.json"), "--out", str(tmp_path / "cli.npz"),
+                 "--corrections", str(tmp_path / "take.glb.corrections.json"), "--out", str(tmp_path / "cli.npz"),
                  "--quiet"]) == 0
     from_cli, _ = load_motion_file(tmp_path / "cli.npz")
     np.testing.assert_allclose(from_cli.q_tbs, fixed.motion.q_tbs, atol=1e-5)
-    # the corrections undone, an export over the same name leaves no sidecar telling of them
+    # the corrections undone, an export over the same name leaves no sidecar telling of them; the other
+    # formats' exports keep theirs
     QTest.keyClick(win, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
     win.export_motion(str(tmp_path / "take.npz"))
-    assert not (tmp_path / "take.corrections.json").exists()
+    assert not (tmp_path / "take.npz.corrections.json").exists()
+    assert (tmp_path / "take.glb.corrections.json").exists() and (tmp_path / "take.bvh.corrections.json").exists()
     # Fix > Load corrections puts them back (undoable); a damaged sidecar is refused naming the file
     mode.fixing.forget_unsaved()
-    win.load_corrections(str(tmp_path / "cli.corrections.json"))
-    assert mode.selected_result().corrections == load_corrections(tmp_path / "cli.corrections.json").corrections
+    win.load_corrections(str(tmp_path / "cli.npz.corrections.json"))
+    assert mode.selected_result().corrections == load_corrections(tmp_path / "cli.npz.corrections.json").corrections
     bad = tmp_path / "bad.corrections.json"
-    bad.write_text((tmp_path / "cli.corrections.json").read_text().replace('"index_pip"', '"index_pi"'))
+    bad.write_text((tmp_path / "cli.npz.corrections.json").read_text().replace('"index_pip"', '"index_pi"'))
     shown = answer(click("OK"))
     win.load_corrections(str(bad))
     assert "bad.corrections.json" in shown[0] and "index_pi" in shown[0]
-    assert mode.undo_stack.undoText() == "load corrections from cli.corrections.json"
+    assert mode.undo_stack.undoText() == "load corrections from cli.npz.corrections.json"
 
 
 def test_closing_with_unsaved_corrections_asks_and_offers_to_save_them(window, qtbot, tmp_path):
@@ -294,12 +299,12 @@ def test_a_menu_export_asks_its_frames_and_the_menu_loads_corrections(window, qt
     assert shown[0].endswith("short_iris_tbs_copy_fixed.glb") and shown[1:] == ["Export motion: frames"]  # where, frames
     exported, _ = load_motion_file(path)
     assert exported.n_frames == mode.comparison.n_frames  # the whole clip, as chosen (not the marked range)
-    assert load_corrections(tmp_path / "menu.corrections.json").frames == mode.comparison.n_frames
+    assert load_corrections(tmp_path / "menu.npz.corrections.json").frames == mode.comparison.n_frames
     win.activateWindow()  # the dialogs gone (no window manager here): the window takes the keys again
     qtbot.waitUntil(win.isActiveWindow, timeout=5000)
     QTest.keyClick(win, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
     assert not mode.selected_result().corrections
-    shown = answer(choose_file(tmp_path / "menu.corrections.json"))
+    shown = answer(choose_file(tmp_path / "menu.npz.corrections.json"))
     menu_action(win, "Load corrections onto the selected retarget...").trigger()
     qtbot.waitUntil(lambda: bool(mode.selected_result().corrections), timeout=5000)
     assert mode.selected_result().corrections.n_keys == 1
@@ -360,8 +365,8 @@ def test_an_export_over_another_retargets_sidecar_says_so_and_a_part_says_its_fr
     assert win.export_motion(str(tmp_path / "b.npz")) and mode.fixing.unsaved() == []
     QTest.keyClick(win, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)  # the method's own, no corrections
     win.export_motion(str(tmp_path / "b.npz"))  # over the same name: its sidecar told of what is gone
-    assert not (tmp_path / "b.corrections.json").exists()
-    assert "removed b.corrections.json" in win.statusBar().currentMessage()
+    assert not (tmp_path / "b.npz.corrections.json").exists()
+    assert "removed b.npz.corrections.json" in win.statusBar().currentMessage()
     QTest.keyClick(win, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier)
     assert [r.method for r in mode.fixing.unsaved()] == ["tbs_copy"]  # no file holds them now: quitting asks
     win.timeline.set_frame(20)
@@ -369,11 +374,11 @@ def test_an_export_over_another_retargets_sidecar_says_so_and_a_part_says_its_fr
     win.timeline.set_frame(60)
     QTest.keyClick(win, Qt.Key.Key_O)
     win.export_motion(str(tmp_path / "part.npz"))  # a script's export: the marked range
-    part = load_corrections(tmp_path / "part.corrections.json")
+    part = load_corrections(tmp_path / "part.npz.corrections.json")
     assert part.part == (20, 60) and part.frames == mode.comparison.n_frames  # keys in the clip's frames
     # a sidecar made on another retarget asks before it is applied; declined, nothing changes
     other = tmp_path / "other.corrections.json"
-    other.write_text((tmp_path / "part.corrections.json").read_text().replace('"target": "iris"', '"target": "kale"'))
+    other.write_text((tmp_path / "part.npz.corrections.json").read_text().replace('"target": "iris"', '"target": "kale"'))
     QTest.keyClick(win, Qt.Key.Key_K, Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier)
     shown = answer(click("Cancel"))
     win.load_corrections(str(other))
@@ -544,7 +549,7 @@ def test_a_motion_exports_message_fits_the_status_bar_naming_its_files(window, q
     assert win.export_motion(str(folder / "on_iris.glb"))
     message, bar = win.statusBar().currentMessage(), win.statusBar()
     assert message.startswith("wrote on_iris.glb and its TBS frames on_iris.right.tbs.json and its corrections "
-                              "on_iris.corrections.json in /")
+                              "on_iris.glb.corrections.json in /")
     assert "..." in message or "\u2026" in message
     assert bar.fontMetrics().horizontalAdvance(message) < bar.width()
     win.resize(1600, win.height())  # room for it all: the whole path

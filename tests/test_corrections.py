@@ -149,7 +149,7 @@ def sample_file(tmp_path) -> tuple[CorrectionsFile, object]:
              .with_turn(INDEX_PIP, 50, turn_about("splay", 10.0), 45, 55)
              .with_turn(topo.ARTICULATED_NAMES.index("thumb_ip"), 10, turn_about("twist", -20.0), 0, 30, (5, 15)))
     file = CorrectionsFile(fixes, "clip", 100, 30.0, "birch", "iris", "tbs_copy")
-    return file, save_corrections(tmp_path / "take.corrections.json", file)
+    return file, save_corrections(tmp_path / "take.glb.corrections.json", file)
 
 
 def test_the_sidecar_reads_back_what_was_written_and_sits_beside_its_motion(tmp_path):
@@ -221,9 +221,9 @@ def test_s2h_retarget_applies_a_sidecar_and_records_it_beside_its_output(tmp_pat
     plain, _ = load_motion_file(tmp_path / "plain.npz")
     fixed, _ = load_motion_file(tmp_path / "fixed.npz")
     np.testing.assert_allclose(fixed.q_tbs, fixes.apply(plain.q_tbs), atol=1e-6)
-    record = load_corrections(tmp_path / "fixed.corrections.json")
+    record = load_corrections(tmp_path / "fixed.npz.corrections.json")
     assert (record.target, record.method) == ("iris", "tbs_copy") and record.corrections.n_keys == 1
-    assert not (tmp_path / "plain.corrections.json").exists()
+    assert not list(tmp_path.glob("plain*.corrections.json"))
     short = save_corrections(tmp_path / "short.corrections.json", CorrectionsFile(
         fixes, "clip", motion.n_frames + 5, motion.fps, "birch", "iris", "tbs_copy"))
     assert main(args + ["--out", str(tmp_path / "never.npz"), "--corrections", str(short)]) != 0

@@ -1,5 +1,6 @@
 """The corrections sidecar: a retarget's per-joint offset keys (`retarget.corrections`) as JSON, written
-beside every motion exported with corrections (``<motion file stem>.corrections.json``) and read back by
+beside every motion exported with corrections (``<motion file name>.corrections.json``: ``take.glb.corrections.json``,
+so exports of one name in two formats keep a sidecar each) and read back by
 the viewer (Fix > Load corrections) and ``s2h retarget --corrections FILE``.
 
 Schema (version 1)::
@@ -55,9 +56,10 @@ class CorrectionsFile:
 
 
 def sidecar_path(motion_file: str | Path) -> Path:
-    """``<stem>.corrections.json`` beside ``motion_file``."""
+    """``<name>.corrections.json`` beside ``motion_file``, its suffix kept: take.glb and take.bvh, exported from
+    two retargets, each keep their own (with the stem alone the second export overwrote, or removed, the first's)."""
     motion_file = Path(motion_file)
-    return motion_file.with_name(motion_file.stem + SUFFIX)
+    return motion_file.with_name(motion_file.name + SUFFIX)
 
 
 def save_corrections(path: str | Path, file: CorrectionsFile) -> Path:
