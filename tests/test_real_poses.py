@@ -331,9 +331,8 @@ def test_the_contact_fit_steps_the_thumb_metacarpal_slower_so_the_thumb_keeps_th
             ), across
     assert all(s.contact_precision >= 0.95 for s in scores.values()), scores
     # the robot's thumb lies 0.7 palm widths further out than the source's: with every angle within its limits (the
-    # fit's steps projected there), its slowest swing leaves Sign 3's thumb and pinky pads 0.03 apart (the pose kept)
-    assert scores["like any joint"].contact_recall >= 0.93, scores
-    assert min(s.contact_recall for s in scores.values()) >= (0.7 if rig == "debug_robot.vrm" else 0.95), scores
+    # fit's steps projected there) its slowest swing reaches the pinky only in the third pass (below)
+    assert min(s.contact_recall for s in scores.values()) >= (0.9 if rig == "debug_robot.vrm" else 0.95), scores
 
 
 def test_the_contact_fit_does_not_curl_a_bent_finger_to_meet_the_thumb():
@@ -397,9 +396,10 @@ def test_where_the_fingers_cannot_reach_a_thumb_held_near_its_path_the_thumb_goe
     """The VRM 1.0 robot (no skin: palm-plane frames): with the thumb CMC pulled 5x toward the network's pose, the
     fit closed only 28% of the poses' pad touches (its fingers cannot reach the thumb there); the frames still
     disagreeing, or whose thumb is still off the curled fingers or short of across the palm, are fitted again with
-    the thumb pulled like any joint: the first pass alone lost Sign 3 (thumb-pinky) and Sign 4 (the thumb across),
-    both passes keep every pose. Within the joint limits the robot's thumb, 0.7 palm widths further out than the
-    source's, leaves some pads a little apart that the signature reads touching (Sign 3's 0.03 hand lengths)."""
+    the thumb pulled like any joint: the first pass alone lost Sign 3 (thumb-pinky) and Sign 4 (the thumb across).
+    Within the joint limits the robot's thumb, 0.7 palm widths further out than the source's, still missed the pinky
+    (Sign 3 and Ring from the left-hand pose file; recall 0.74): frames whose thumb is still not at the fingertips the
+    source's is at are fitted a third time with the metacarpal swinging as fast as the other joints."""
     from s2h_viewer.retarget.asrn.inference import network_retarget
     motion, source = poses
     robot = load_hand_file(ROOT / "assets/hands/real/debug_robot.vrm", RigOptions(side="right"))
@@ -408,10 +408,13 @@ def test_where_the_fingers_cannot_reach_a_thumb_held_near_its_path_the_thumb_goe
                                                                             motion.labels).items() if lost}
     fitted = fit_contacts(motion.q_tbs, source, robot, network.copy())
     scores = score_retarget(source, motion.q_tbs, robot, fitted)
-    assert scores.contact_recall >= 0.7 and scores.contact_precision >= 0.95, scores
+    assert scores.contact_recall >= 0.9 and scores.contact_precision >= 0.95, scores
     assert not any(pose_differences(source, motion.q_tbs, robot, fitted, motion.labels).values())
     asrn = score_retarget(source, motion.q_tbs, robot, retarget(motion, source, robot, "asrn").q_tbs)
-    assert asrn.contact_recall >= 0.7 and asrn.contact_precision >= 0.95, asrn
+    assert asrn.contact_recall >= 0.9 and asrn.contact_precision >= 0.95, asrn
+    left, rig = load_motion_file(ROOT / "assets/motions/real/godot_hand_poses_l.gltf", None, RigOptions(animation="all"))
+    out = retarget(left, rig, robot, "asrn").q_tbs
+    assert not any(pose_differences(rig, left.q_tbs, robot, out, left.labels).values())
 
 
 def test_a_thumb_out_to_its_side_is_read_and_kept(poses):

@@ -30,7 +30,8 @@ angle the fit moves stays within its limits, or no further out than the retarget
 projected there (L_ana alone let it twist and splay knuckles to close a touch). All runs of a clip are
 optimised together in one batch, a bounded number of frames at a time; frames whose touches still disagree, or
 whose thumb is still off the curled fingers or short of across the palm, are fitted once more with the thumb free
-to go there.
+to go there (its metacarpal's swing still slowed), and those whose thumb is still not at the source's fingertips a
+third time with that swing free too.
 """
 
 from __future__ import annotations
@@ -77,7 +78,8 @@ class ContactFitConfig:
     thumb_lift_weight: float = 10.0  # and its splay (the metacarpal's lift out of the palm plane) this much more
     #: the thumb's MCP and IP pulled this much harder: with its twists and splays held within the limits, the fit
     #: reached the fingertips by bending them away from the network's (the robot's IP followed the poses' at 0.67,
-    #: the mitten avatar's left at 0.88); so 0.75 and 0.93, the poses kept, the touches the same within 0.02
+    #: the mitten avatar's left at 0.88); so 0.75 and 0.93 (before the third pass), the poses kept, the touches the
+    #: same within 0.02
     thumb_hinge_prior_weight: float = 3.0
     #: the thumb CMC's angles move at this share of the other joints' rate (Adam's steps), so the fingers and the
     #: thumb's own hinges reach a touch before its metacarpal swings away from the source's path: ASRN's thumb
@@ -284,24 +286,33 @@ def _fit_frames(out: np.ndarray, disagree: np.ndarray, source_at, hand: HandMode
                 ) -> np.ndarray:
     """The fit of `fit_contacts` on the runs around the ``disagree`` frames; ``source_at(frames)``: the source's
     `SourceFrames` there. Frames whose touches still disagree after it, where the fingers could not reach a thumb
-    held near its path, or whose thumb is still off the curled fingers, are fitted again with the thumb pulled and
-    stepped like any joint (the VRM robot's pad recall: 0.28 with the first pass alone)."""
+    held near its path, or whose thumb is still off the curled fingers or short of across the palm, are fitted again
+    with the thumb pulled and stepped like any joint but for its metacarpal's swing across the palm (the VRM robot's
+    pad recall: 0.28 with the first pass alone); those whose thumb is then still not at the fingertips the source's is
+    at, a third time with that swing too as fast (the robot, held within the joint limits, lost Sign 3 and Ring from
+    the left-hand pose file without it: its thumb lies 0.7 palm widths further out than the source's)."""
     with stage(0.0, 0.8):
-        left = _fit_pass(out, disagree, source_at, hand, config)
+        left, _ = _fit_pass(out, disagree, source_at, hand, config)
     if (config.thumb_prior_weight, config.thumb_lift_weight) != (1.0, 1.0) and left.any():
-        with stage(0.8, 1.0):
+        with stage(0.8, 0.9):
             # half the steps: a handful of frames, from where the first pass left them
             again = dataclasses.replace(config, thumb_prior_weight=1.0, thumb_lift_weight=1.0, thumb_cmc_rate=1.0,
                                         steps=config.steps // 2)
-            _fit_pass(out, left, source_at, hand, again)
+            _, thumb_lost = _fit_pass(out, left, source_at, hand, again)
+        if config.thumb_cmc_bend_rate != 1.0 and thumb_lost.any():
+            with stage(0.9, 1.0):
+                _fit_pass(out, thumb_lost, source_at, hand, dataclasses.replace(again, thumb_cmc_bend_rate=1.0))
     report(1.0)
     return out
 
 
 def _fit_pass(out: np.ndarray, disagree: np.ndarray, source_at, hand: HandModel, config: ContactFitConfig
-              ) -> np.ndarray:
-    """One pass of `_fit_frames`, in place: (T,) bool, the frames whose touches disagree after it."""
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """One pass of `_fit_frames`, in place: (T,) bool, the frames whose touches disagree after it (or whose thumb
+    is off the curled fingers or short of across the palm), and (T,) bool, those whose thumb is not at the
+    fingertips the source's is at (the signature's looser touch: a pose lost)."""
     left = np.zeros(len(out), dtype=bool)
+    thumb_lost = np.zeros(len(out), dtype=bool)
     batches = _batches(runs_around(disagree, config.reach), config.batch_frames)
     for i, batch in enumerate(batches):
         frames = np.concatenate([np.arange(a, b) for a, b in batch])
@@ -313,7 +324,8 @@ def _fit_pass(out: np.ndarray, disagree: np.ndarray, source_at, hand: HandModel,
             gaps = _pose_pad_gaps(hand, positions).numpy()
         left[frames] = (gaps_disagree(source.gaps.numpy(), gaps) | _thumb_left(source, hand, positions)
                         ) & disagree[frames]
-    return left
+        thumb_lost[frames] = (_thumb_at_tips(source.gaps.numpy()) != _thumb_at_tips(gaps)).any(-1) & disagree[frames]
+    return left, thumb_lost
 
 
 def _thumb_left(source: SourceFrames, hand: HandModel, positions: torch.Tensor) -> np.ndarray:
