@@ -665,8 +665,11 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         return args.func(args)
-    except (S2HError, KeyError) as exc:
-        message = exc.args[0] if isinstance(exc, KeyError) and exc.args else str(exc)
+    except (S2HError, KeyError, OSError) as exc:
+        if isinstance(exc, OSError):  # a file the command could not write (its folder's name is a file's, say)
+            message = f"{exc.filename}: could not write ({exc.strerror or exc})" if exc.filename else str(exc)
+        else:
+            message = exc.args[0] if isinstance(exc, KeyError) and exc.args else str(exc)
         print(f"s2h: error: {message}", file=sys.stderr)
         if args.debug:
             original = exc.__cause__ or exc.__context__

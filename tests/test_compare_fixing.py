@@ -259,6 +259,10 @@ def test_every_motion_export_carries_the_corrections_and_s2h_retarget_applies_th
     win.load_corrections(str(bad))
     assert "bad.corrections.json" in shown[0] and "index_pi" in shown[0]
     assert mode.undo_stack.undoText() == "load corrections from cli.npz.corrections.json"
+    # an export into a "folder" that is a file: the motion could not be written, said so (not its sidecar)
+    shown = answer(click("OK"))
+    assert win.export_motion(str(tmp_path / "take.npz" / "x.glb")) is None
+    assert "could not write (Not a directory)" in shown[0] and "sidecar" not in shown[0], shown
 
 
 def test_closing_with_unsaved_corrections_asks_and_offers_to_save_them(window, qtbot, tmp_path):
@@ -364,6 +368,9 @@ def test_an_export_over_another_retargets_sidecar_says_so_and_a_part_says_its_fr
     drag(qtbot, win, 30.0)
     assert win.export_motion(str(tmp_path / "b.npz")) and mode.fixing.unsaved() == []
     QTest.keyClick(win, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)  # the method's own, no corrections
+    # nothing to save: quitting asked a fresh-eyes user to save "the corrections of TBS Copy -> iris", and Save said
+    # there were none, so only Discard let the window close
+    assert mode.fixing.unsaved() == []
     win.export_motion(str(tmp_path / "b.npz"))  # over the same name: its sidecar told of what is gone
     assert not (tmp_path / "b.npz.corrections.json").exists()
     assert "removed b.npz.corrections.json" in win.statusBar().currentMessage()
@@ -385,7 +392,7 @@ def test_an_export_over_another_retargets_sidecar_says_so_and_a_part_says_its_fr
     assert "made on TBS Copy -> kale" in shown[0] and not mode.selected_result().corrections
     shown = answer(click("Apply"))
     win.load_corrections(str(other))
-    assert mode.selected_result().corrections.n_keys == 1 and "loaded 1 correction keys" in \
+    assert mode.selected_result().corrections.n_keys == 1 and "loaded 1 correction key (" in \
         win.statusBar().currentMessage()
 
 

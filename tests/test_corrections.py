@@ -230,6 +230,10 @@ def test_s2h_retarget_applies_a_sidecar_and_records_it_beside_its_output(tmp_pat
     err = capsys.readouterr().err
     assert "short.corrections.json" in err and f"this one has {motion.n_frames}" in err and "Traceback" not in err
     assert not (tmp_path / "never.npz").exists()
+    # an output whose folder's name is a file's: one line naming it (a fresh-eyes user got a traceback)
+    assert main(args + ["--out", str(tmp_path / "plain.npz" / "x.glb"), "--corrections", str(sidecar)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "plain.npz: could not write (Not a directory)" in err, err
 
 
 def test_every_message_names_a_joint_one_way():

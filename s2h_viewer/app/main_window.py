@@ -850,12 +850,16 @@ class MainWindow(QMainWindow):
             return None
         try:
             written = exports.export_motion(shown, path, frames)
-            fixes, removed = exports.export_corrections(self.compare, shown, written, frames)
         except S2HError as exc:
             self.error(str(exc))
             return None
+        except OSError as exc:  # the motion itself (a fresh-eyes user read "its corrections sidecar" here)
+            self.error(f"{path}: could not write ({exc.strerror or exc})")
+            return None
+        try:
+            fixes, removed = exports.export_corrections(self.compare, shown, written, frames)
         except OSError as exc:
-            self.error(f"{path}: could not write its corrections sidecar ({exc.strerror or exc})")
+            self.error(f"{written}: written, but not its corrections sidecar ({exc.strerror or exc})")
             return None
         sidecar = export_sidecar(written, result.target)
         parts = ([f"its TBS frames {sidecar.name}"] if sidecar is not None else []) + (

@@ -31,6 +31,7 @@ from s2h_viewer.retarget.corrections import AXES, Corrections, describe_keys, ke
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.widgets.correction_bar import HINT, CorrectionBar
 from s2h_viewer.widgets.rotation_handle import RotationRing, nearest_on_screen, nearest_segment_on_screen
+from s2h_viewer.wording import counted
 
 #: while the ring is dragged the whole clip is measured again at most this often (ms)
 LIVE_MS = 40
@@ -504,17 +505,19 @@ class RetargetFixing(QObject):
         self._push(key, result, self.mode.corrected(result, file.corrections),
                    f"load corrections from {Path(path).name}")
         self._held_by(Path(path), key, file.corrections)
-        self.mode.status(f"loaded {file.corrections.n_keys} correction keys ({file.corrections.describe()}) from "
-                         f"{Path(path).name} onto {result.name}")
+        self.mode.status(f"loaded {counted(file.corrections.n_keys, 'correction key')} "
+                         f"({file.corrections.describe()}) from {Path(path).name} onto {result.name}")
         return True
 
     def unsaved(self) -> list[MethodResult]:
-        """The retargets on screen whose corrections were changed since they were last exported or saved."""
+        """The retargets on screen whose corrections were changed since they were last exported or saved. One whose
+        corrections were all undone is not: there is nothing to save, and what was saved stays in its file (a
+        fresh-eyes user, asked to save them on quitting, got "has no corrections to save" and could only discard)."""
         if self.mode.comparison is None:
             return []
         keys = self.mode.shown_keys()
         return [r for k, r in zip(keys, self.mode.comparison.results)
-                if r.corrections != self._saved.get(k, Corrections())]
+                if r.corrections and r.corrections != self._saved.get(k, Corrections())]
 
     def forget_unsaved(self) -> None:
         """Whatever is on screen counts as saved: nothing to ask about when the window closes (a discard)."""
