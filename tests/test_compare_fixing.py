@@ -8,6 +8,7 @@ about."""
 from __future__ import annotations
 
 import os
+import shutil
 
 import numpy as np
 import pytest
@@ -263,6 +264,32 @@ def test_every_motion_export_carries_the_corrections_and_s2h_retarget_applies_th
     shown = answer(click("OK"))
     assert win.export_motion(str(tmp_path / "take.npz" / "x.glb")) is None
     assert "could not write (Not a directory)" in shown[0] and "sidecar" not in shown[0], shown
+
+
+def test_an_export_without_corrections_asks_before_removing_an_earlier_sessions_sidecar(window, qtbot, tmp_path):
+    """A fresh-eyes user exported a retarget without a fix over take.glb, exported with one in an earlier session:
+    the sidecar beside it, the only record of that fix, was removed with no word first. Now the export asks; Cancel
+    writes nothing, "Export and remove them" does what it says. This session's own sidecars need no question
+    (their corrections count as unsaved once the file is gone: quitting asks)."""
+    win, mode = window, window.compare
+    pick_joint(qtbot, win)
+    drag(qtbot, win, 30.0)
+    assert win.export_motion(str(tmp_path / "take.glb"))
+    # an earlier session's export: files of that name this session never wrote or loaded
+    earlier, sidecar = tmp_path / "old.glb", tmp_path / "old.glb.corrections.json"
+    shutil.copy(tmp_path / "take.glb", earlier)
+    shutil.copy(tmp_path / "take.glb.corrections.json", sidecar)
+    before = (earlier.read_bytes(), sidecar.read_bytes())
+    QTest.keyClick(win, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
+    assert win.export_motion(str(tmp_path / "take.glb"))  # this session's own: removed with no question
+    assert not (tmp_path / "take.glb.corrections.json").exists()
+    shown = answer(click("Cancel"))
+    assert win.export_motion(str(earlier)) is None
+    assert "old.glb.corrections.json beside it holds 1 correction key" in shown[0] and "TBS Copy -> iris" in shown[0]
+    assert (earlier.read_bytes(), sidecar.read_bytes()) == before  # nothing written, nothing removed
+    shown = answer(click("Export and remove them"))
+    assert win.export_motion(str(earlier)) == earlier
+    assert not sidecar.exists() and earlier.read_bytes() != before[0]
 
 
 def test_closing_with_unsaved_corrections_asks_and_offers_to_save_them(window, qtbot, tmp_path):

@@ -84,14 +84,14 @@ class SolveCommand(QUndoCommand):
 
 
 def ask(parent: QWidget | None, title: str, text: str, buttons: list[tuple[str, QMessageBox.ButtonRole]],
-        detail: str = "") -> int:
+        detail: str = "", default: int = 0) -> int:
     """A modal question (``detail`` under it); the index of the button the user chose (the last one, Cancel,
-    if closed)."""
+    if closed); Return presses button ``default``."""
     box = QMessageBox(QMessageBox.Icon.Question, title, text, parent=parent)
     box.setObjectName("annotate_question")
     box.setInformativeText(detail)
     added = [box.addButton(label, role) for label, role in buttons]
-    box.setDefaultButton(added[0])
+    box.setDefaultButton(added[default])
     box.setEscapeButton(added[-1])
     box.exec()
     clicked = box.clickedButton()

@@ -19,6 +19,7 @@ from PySide6.QtWidgets import QWidget
 
 from s2h_viewer.app.compare_mode import CompareMode, label
 from s2h_viewer.app.job_progress import JobProgress
+from s2h_viewer.errors import S2HError
 from s2h_viewer.render.caption import add_caption, band_within, caption_text, clip_at, page_caption
 from s2h_viewer.render.compare_scene import Framing, ViewOptions, render_comparison
 from s2h_viewer.retarget.comparison import Comparison, MethodResult
@@ -197,6 +198,26 @@ def export_motion(shown: Shown, path: str, frames: range | None = None) -> Path:
                                      meta={**motion.meta, "frames": [frames.start, frames[-1]]})
     save_motion_file(path, motion, result.target)
     return Path(path)
+
+
+def corrections_to_remove(mode: CompareMode, shown: Shown, motion_path: str | Path) -> str | None:
+    """What an export of the selected retarget to ``motion_path`` would take away with the sidecar beside it: the
+    corrections it holds, said for a question, where the retarget has none of its own and the sidecar's keys are
+    held nowhere in this session (an earlier session's export: the file is their only record). None: nothing lost."""
+    from s2h_viewer.io.corrections import is_corrections_file, load_corrections, sidecar_path
+    sidecar = sidecar_path(motion_path)
+    if shown.selected.corrections or not is_corrections_file(sidecar) or mode.fixing.holds(sidecar):
+        return None
+    try:
+        held = load_corrections(sidecar)
+    except S2HError:  # a damaged sidecar holds nothing that could be loaded back
+        return None
+    if not held.corrections:
+        return None
+    return (f"{sidecar.name} beside it holds {counted(held.corrections.n_keys, 'correction key')} "
+            f"({held.corrections.describe()}) made on "
+            f"{METHODS[held.method].label if held.method in METHODS else held.method} -> {held.target}; "
+            f"this export has none, so it would be removed")
 
 
 def export_corrections(mode: CompareMode, shown: Shown, motion_path: str | Path, frames: range | None = None

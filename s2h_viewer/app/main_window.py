@@ -845,6 +845,14 @@ class MainWindow(QMainWindow):
         except S2HError as exc:
             self.error(str(exc))
             return None
+        lost = exports.corrections_to_remove(self.compare, shown, path)
+        if lost is not None and ask(self, "s2h-viewer: corrections beside the file", f"{Path(path).name}: {lost}.",
+                                    [("Export and remove them", QMessageBox.ButtonRole.DestructiveRole),
+                                     ("Cancel", QMessageBox.ButtonRole.RejectRole)],
+                                    "They were exported with that file in an earlier session: the sidecar is all that "
+                                    "holds them. Cancel, then Fix > Load corrections to bring them onto a retarget, "
+                                    "or export under another name to keep them.", default=1) != 0:
+            return None
         frames = self._ask_frames(path, "motion", shown) if asked else self.timeline.marked
         if asked and frames is None:
             return None

@@ -475,6 +475,10 @@ class RetargetFixing(QObject):
             self._saved[key] = corrections
             self._files[path] = key
 
+    def holds(self, path: str | Path) -> bool:
+        """Whether ``path`` holds corrections this session saved or loaded (they count as unsaved once it is gone)."""
+        return Path(path).resolve() in self._files
+
     def removed(self, path: str | Path) -> str | None:
         """A sidecar an export took away: the retarget whose saved corrections it held counts as unsaved again;
         returns its name for the status line (None if it held none of this session's)."""
