@@ -342,6 +342,11 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
         keys = fixes.corrections.n_keys
         print(f"applied {counted(keys, 'correction key')} ({fixes.corrections.describe()}); "
               f"recorded in {record}")
+    else:
+        from s2h_viewer.io.corrections import is_corrections_file, sidecar_path
+        if is_corrections_file(sidecar_path(path)):  # an earlier export's: kept (it may be their only record)
+            print(f"{sidecar_path(path).name} beside it is an earlier export's corrections, left as it was: this "
+                  f"motion has none of them (--corrections {sidecar_path(path).name} applies them)")
     return 0
 
 

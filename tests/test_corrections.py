@@ -224,6 +224,11 @@ def test_s2h_retarget_applies_a_sidecar_and_records_it_beside_its_output(tmp_pat
     record = load_corrections(tmp_path / "fixed.npz.corrections.json")
     assert (record.target, record.method) == ("iris", "tbs_copy") and record.corrections.n_keys == 1
     assert not list(tmp_path.glob("plain*.corrections.json"))
+    # written again without corrections: the earlier export's sidecar is kept, and said to be not this motion's
+    assert main(args + ["--out", str(tmp_path / "fixed.npz")]) == 0
+    said = capsys.readouterr().out
+    assert "fixed.npz.corrections.json beside it is an earlier export's corrections, left as it was" in said
+    assert load_corrections(tmp_path / "fixed.npz.corrections.json").corrections.n_keys == 1
     short = save_corrections(tmp_path / "short.corrections.json", CorrectionsFile(
         fixes, "clip", motion.n_frames + 5, motion.fps, "birch", "iris", "tbs_copy"))
     assert main(args + ["--out", str(tmp_path / "never.npz"), "--corrections", str(short)]) != 0
