@@ -335,18 +335,17 @@ def _cmd_retarget(args: argparse.Namespace) -> int:
     sidecar = export_sidecar(path, target)
     print(f"{motion.name}: {motion.n_frames} frames, {source.name} -> {target.name} ({args.method}) -> {path}"
           + (f" (TBS frames: {sidecar})" if sidecar else ""))
+    from s2h_viewer.io.corrections import is_corrections_file, save_corrections, sidecar_path
+    beside = sidecar_path(path)
     if fixes is not None:
-        from s2h_viewer.io.corrections import save_corrections, sidecar_path
-        record = save_corrections(sidecar_path(path), dataclasses.replace(
+        record = save_corrections(beside, dataclasses.replace(
             fixes, clip=motion.name, fps=motion.fps, source=source.name, target=target.name, method=args.method))
         keys = fixes.corrections.n_keys
         print(f"applied {counted(keys, 'correction key')} ({fixes.corrections.describe()}); "
               f"recorded in {record}")
-    else:
-        from s2h_viewer.io.corrections import is_corrections_file, sidecar_path
-        if is_corrections_file(sidecar_path(path)):  # an earlier export's: kept (it may be their only record)
-            print(f"{sidecar_path(path).name} beside it is an earlier export's corrections, left as it was: this "
-                  f"motion has none of them (--corrections {sidecar_path(path).name} applies them)")
+    elif is_corrections_file(beside):  # an earlier export's: kept (it may be their only record)
+        print(f"{beside.name} beside it is an earlier export's corrections, left as it was: this motion has none of "
+              f"them (--corrections {beside.name} applies them)")
     return 0
 
 
