@@ -631,3 +631,22 @@ def test_the_fix_bar_says_its_hint_whole_on_two_lines_in_a_1000_pixel_window(win
     lines = bar.readout.text().split("\n")
     assert len(lines) == 2 and lines[1].endswith("…") and bar.readout.toolTip() == long
     assert bar.readout.height() == height
+
+
+def test_the_windows_keys_work_with_an_ease_box_focused_and_digits_still_type_into_it(window, qtbot):
+    """A fresh-eyes user clicked into the fix bar's ease box, then pressed F to fill the view with the hand: nothing
+    (the box's line edit claimed the key to type it). F, R and the worst-frame keys stay the window's; digits the box's."""
+    win, bar = window, window.compare.fixing.bar
+    camera = win.view.plotter.camera
+    before = (camera.position, camera.focal_point)
+    bar.ease_in.setFocus()
+    qtbot.waitUntil(bar.ease_in.hasFocus, timeout=5000)
+    box = bar.ease_in.lineEdit()
+    qtbot.keyClick(box, Qt.Key.Key_F)  # View > Frame the hand shown alone
+    assert (camera.position, camera.focal_point) != before
+    qtbot.keyClick(box, Qt.Key.Key_R)  # Fix > Next ring axis
+    assert bar.axis == "splay"
+    assert bar.ease_in.hasFocus() and bar.ease_in.value() == 10
+    box.selectAll()
+    qtbot.keyClicks(box, "4")
+    assert bar.ease_in.value() == 4

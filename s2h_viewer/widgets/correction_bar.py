@@ -10,6 +10,7 @@ from PySide6.QtWidgets import (QComboBox, QHBoxLayout, QLabel, QSizePolicy, QSpi
                                QWidget)
 
 from s2h_viewer.retarget.corrections import AXES
+from s2h_viewer.widgets.shortcut_keys import leave_shortcut_keys
 
 #: frames a new key eases in over before it and out over after it, unless a marked range holds the frame
 DEFAULT_EASE = 10
@@ -65,6 +66,7 @@ class CorrectionBar(QWidget):
             box.setValue(DEFAULT_EASE)
             box.setToolTip(f"a new key {text} (unless the marked range holds its frame: then over the range); on a "
                            f"pose the clip holds, the key holds over the pose and eases only between poses")
+        self._key_filter = leave_shortcut_keys(self, self.ease_in, self.ease_out)
         buttons = []
         for text, signal, tip in (("Delete key", self.delete_key, "the joint's key at this frame (Shift+K)"),
                                   ("Clear joint", self.clear_joint, "every correction of the joint (Ctrl+Shift+K)")):

@@ -17,28 +17,16 @@ from __future__ import annotations
 
 import time
 
-from PySide6.QtCore import QEvent, QObject, Qt, QTimer, Signal
+from PySide6.QtCore import Qt, QTimer, Signal
 from PySide6.QtWidgets import (QCheckBox, QComboBox, QHBoxLayout, QLabel, QProxyStyle, QPushButton, QSlider, QSpinBox,
                                QStyle, QWidget)
 
 from s2h_viewer.render.caption import frame_readout
+from s2h_viewer.widgets.shortcut_keys import leave_shortcut_keys
 
 SPEEDS = (0.25, 0.5, 1.0, 2.0, 4.0)
 WIDGET_RATE = 30.0  # refreshes per second of the slider, the frame box and the readouts while playing
 MAX_DRAW_WAIT = 0.2  # seconds a tick waits for the view to draw the frame asked before asking anew
-PASSED_KEYS = (Qt.Key.Key_Space, Qt.Key.Key_Left, Qt.Key.Key_Right, Qt.Key.Key_Home, Qt.Key.Key_End,
-               Qt.Key.Key_BracketLeft, Qt.Key.Key_BracketRight,  # the worst-frame keys
-               Qt.Key.Key_I, Qt.Key.Key_O,  # the in and out points
-               Qt.Key.Key_F, Qt.Key.Key_R, Qt.Key.Key_K)  # frame the hand; fixing: the ring's axis, its keys
-
-
-class _LeaveShortcutKeys(QObject):
-    """Refuses the frame box's claim (ShortcutOverride) on the playback keys and Ctrl combinations: the
-    window's shortcuts get them (a Ctrl key no shortcut takes still reaches the box)."""
-
-    def eventFilter(self, watched: QObject, event: QEvent) -> bool:
-        return event.type() == QEvent.Type.ShortcutOverride and (
-            event.key() in PASSED_KEYS or bool(event.modifiers() & Qt.KeyboardModifier.ControlModifier))
 
 
 class _ClickJumps(QProxyStyle):
@@ -74,10 +62,7 @@ class Timeline(QWidget):
         self._slider_style.setParent(self.slider)
         self.slider.setStyle(self._slider_style)
         self.spin = QSpinBox()
-        self._key_filter = _LeaveShortcutKeys(self)
-        self.spin.installEventFilter(self._key_filter)
-        self.spin.lineEdit().installEventFilter(self._key_filter)
-        self.slider.installEventFilter(self._key_filter)
+        self._key_filter = leave_shortcut_keys(self, self.spin, self.slider)
         self.readout = QLabel()
         self.pose_label = QLabel()
         self.pose_label.setToolTip("the pose the clip holds at this frame")
