@@ -21,7 +21,8 @@ whose rest thumb lies along the fingers, the network held it in front of the pal
 source rests on its curled fingers, the horns' and the V sign's, brought back onto them: the network lifted it off
 on every real rig), a thumb-across term (a thumb the source folds across the palm, a four's, brought back
 across: the network left it at the palm's side on every real rig; its metacarpal stays slowed, as swinging it for
-one pose made the thumb follow the source's less), and a sideways term: no
+one pose made the thumb follow the source's less), a palm term (a fingertip on the palm in the source and in the
+retarget stays there: closing the thumb's touches lifted the ring finger off the palm in fists), and a sideways term: no
 flexed PIP/DIP bent more than `SIDEWAYS_FREE` out of the curl plane (on the Godot hand, opening the ring-pinky
 touch of fists bent the pinky DIP 45 deg sideways without it). The angles are read with the twist within +-90
 deg (`quat_to_tbs_euler_past_lock`): a knuckle of a fist bent past 90 read as twisted 160 deg, and the anatomy
@@ -43,13 +44,14 @@ import numpy as np
 import torch
 
 from s2h_viewer.hand.chunks import frame_chunks
+from s2h_viewer.hand.topology import N_FINGERS
 from s2h_viewer.hand.kinematics import joint_positions
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.rotations import quat_to_tbs_euler_past_lock, tbs_euler_to_quat
 from s2h_viewer.retarget.progress import report, stage
 from s2h_viewer.retarget.threads import torch_threads
 from s2h_viewer.semantics.anatomy import angle_excess, clamp_angles, limits_reaching
-from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, contact_loss, pad_pair_gaps
+from s2h_viewer.semantics.contacts import CONTACT_TOLERANCE, contact_loss, pad_pair_gaps, palm_gaps
 from s2h_viewer.semantics.flexion import hinge_flexion_and_alignment, thumb_across, thumb_out
 from s2h_viewer.semantics.signature import (CURL_CHAINS, CURL_MARGIN, SIDEWAYS_FLEXION, SIDEWAYS_LIMIT,
                                             THUMB_ACROSS_MARGIN, THUMB_ON_MARGIN, THUMB_OUT_ABOVE, THUMB_PAIRS,
@@ -94,6 +96,7 @@ class ContactFitConfig:
     thumb_out_weight: float = 1e3  # the thumb out to its side as the source's (`_thumb_out_allowed`)
     thumb_rest_weight: float = 1e3  # the thumb back on the curled fingers the source's rests on (`_thumb_resting`)
     thumb_across_weight: float = 1e3  # the thumb back across the palm where the source's lies across it (a four)
+    palm_weight: float = 1e4  # a fingertip on the palm where the source's is and the retarget's was (`_on_palm_around`)
     reach: int = 4  # frames either side of a disagreement over which the correction fades in and out
     batch_frames: int = 4096  # frames optimised at once (memory of one batch)
 
@@ -160,6 +163,28 @@ def _thumb_resting(source: SourceFrames, source_gaps: torch.Tensor) -> torch.Ten
     it 0.2-0.4 hand lengths off the authored horns' and V sign's curled fingers on every real rig)."""
     return torch.as_tensor(thumb_resting(np.degrees(source.curls.numpy()), source.thumb_rest.numpy(),
                                          _thumb_at_tips(source_gaps).numpy()))
+
+
+#: a fingertip the fit keeps on the palm stays within this share of the contact tolerance of it
+PALM_HOLD = 0.8
+
+
+def _on_palm_around(hand: HandModel, q_tbs: np.ndarray, frames: np.ndarray, reach: int) -> np.ndarray:
+    """(T, 5) bool: the fingertips on the palm (the metric's tolerance) of ``q_tbs`` in the runs the fit changes
+    (``reach`` frames around the true ``frames``), False elsewhere. The fit keeps those the source has there too:
+    closing a thumb's touch, it lifted the ring finger off the palm in the fists of the gestures clip on the robot
+    and the mitten avatar (their fingertip-palm recall 1.00 -> 0.52, TBS Copy's 1.00)."""
+    out = np.zeros((len(q_tbs), N_FINGERS), dtype=bool)
+    around = np.zeros(len(q_tbs), dtype=bool)
+    for first, end in runs_around(frames, reach):
+        around[first:end] = True
+    fitted = np.flatnonzero(around)
+    for first, end in frame_chunks(len(fitted)):
+        idx = fitted[first:end]
+        with torch.no_grad():
+            gaps = palm_gaps(hand, joint_positions(hand, torch.as_tensor(q_tbs[idx], dtype=torch.float32)))
+        out[idx] = gaps.numpy() < CONTACT_TOLERANCE * hand.hand_length
+    return out
 
 
 def _pose_pad_gaps(hand: HandModel, positions: torch.Tensor) -> torch.Tensor:
@@ -246,14 +271,17 @@ def fit_contacts(source_q: np.ndarray, source_hand: HandModel, target_hand: Hand
     source_q = np.asarray(source_q)
     out = np.asarray(target_q, dtype=np.float32)
     frames = disagreement(source_hand, source_q, target_hand, out)
+    on_palm = _on_palm_around(target_hand, out, frames, config.reach)  # before any pass moves them
 
     def source_at(idx: np.ndarray) -> SourceFrames:
         with torch.no_grad():
             positions = joint_positions(source_hand, torch.as_tensor(source_q[idx], dtype=torch.float32))
             # read as the target's
+            source_on_palm = palm_gaps(source_hand, positions).numpy() < CONTACT_TOLERANCE * source_hand.hand_length
             return SourceFrames(_pose_pad_gaps(source_hand, positions), pose_curls(positions), thumb_out(positions),
                                 thumb_rest_distances(positions, source_hand.hand_length), thumb_across(positions),
-                                quat_to_tbs_euler_past_lock(torch.as_tensor(source_q[idx], dtype=torch.float32)))
+                                quat_to_tbs_euler_past_lock(torch.as_tensor(source_q[idx], dtype=torch.float32)),
+                                torch.as_tensor(source_on_palm & on_palm[idx]))
     return _fit_frames(out, frames, source_at, target_hand, config)
 
 
@@ -280,6 +308,8 @@ class SourceFrames:
     thumb_rest: torch.Tensor | None = None  # (F, 4) `semantics.signature.thumb_rest_distances`
     thumb_across: torch.Tensor | None = None  # (F,) palm widths, `semantics.flexion.thumb_across`
     angles: torch.Tensor | None = None  # (F, 15, 3) its TBS angles: the fit may reach as far past the limits
+    #: (F, 5) bool: fingertips on the palm here and in the retarget the fit starts from, which it keeps there
+    palm_held: torch.Tensor | None = None
 
 
 def _fit_frames(out: np.ndarray, disagree: np.ndarray, source_at, hand: HandModel, config: ContactFitConfig
@@ -423,6 +453,9 @@ def _fit_runs(q: np.ndarray, source_frames: SourceFrames, lengths: list[int], ha
         if source_frames.thumb_across is not None:
             miss = torch.relu(source_frames.thumb_across - 0.5 * THUMB_ACROSS_MARGIN - thumb_across(positions))
             loss = loss + config.thumb_across_weight * (miss * across_lost).square().mean()
+        if source_frames.palm_held is not None:
+            miss = torch.relu(palm_gaps(hand, positions) / hand.hand_length - PALM_HOLD * CONTACT_TOLERANCE)
+            loss = loss + config.palm_weight * (miss * source_frames.palm_held).square().sum(-1).mean()
         optimiser.zero_grad()
         loss.backward()
         optimiser.step()

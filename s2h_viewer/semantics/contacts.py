@@ -122,8 +122,13 @@ def _nearest_approach(p0: torch.Tensor, p1: torch.Tensor, q0: torch.Tensor, q1: 
 def contact_gaps(hand: HandModel, pose: HandPose, thumb_tips: bool = True) -> torch.Tensor:
     """(T, 15) surface gaps in metres for ``CONTACT_PAIRS`` (negative = interpenetrating); ``thumb_tips`` as in
     `pad_pair_gaps`."""
-    dtype = pose.positions.dtype
-    pads = pad_centres(pose.positions)
+    return torch.cat([pad_pair_gaps(hand, pose.positions, thumb_tips), palm_gaps(hand, pose.positions)], -1)
+
+
+def palm_gaps(hand: HandModel, positions: torch.Tensor) -> torch.Tensor:
+    """(T, 5) surface gaps in metres of each fingertip with the palm (``CONTACT_PAIRS[PALM_PAIRS]``) of (T, 21, 3)
+    joint positions: the nearer of its pad and its tip to the palm's thickened rectangle."""
+    dtype = positions.dtype
     radii, pad_r = _pad_radii(hand, dtype)
     frame, lower, upper = (torch.as_tensor(a, dtype=dtype) for a in _palm_box(hand))
 
@@ -132,9 +137,8 @@ def contact_gaps(hand: HandModel, pose: HandPose, thumb_tips: bool = True) -> to
         nearest = torch.maximum(torch.minimum(local, upper), lower)
         return (local - nearest).norm(dim=-1) - point_r - radii[0]
 
-    tips = pose.positions[:, topo.TIP_JOINTS]
-    palm = torch.minimum(palm_gap(pads, pad_r), palm_gap(tips, radii[topo.TIP_JOINTS]))
-    return torch.cat([pad_pair_gaps(hand, pose.positions, thumb_tips), palm], -1)
+    return torch.minimum(palm_gap(pad_centres(positions), pad_r), palm_gap(positions[:, topo.TIP_JOINTS],
+                                                                           radii[topo.TIP_JOINTS]))
 
 
 def contact_loss(gaps: torch.Tensor, source_gaps: torch.Tensor, tolerance: float = CONTACT_TOLERANCE) -> torch.Tensor:
