@@ -44,10 +44,10 @@ import numpy as np
 import torch
 
 from s2h_viewer.hand.chunks import frame_chunks
-from s2h_viewer.hand.topology import N_FINGERS
 from s2h_viewer.hand.kinematics import joint_positions
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.rotations import quat_to_tbs_euler_past_lock, tbs_euler_to_quat
+from s2h_viewer.hand.topology import N_FINGERS
 from s2h_viewer.retarget.progress import report, stage
 from s2h_viewer.retarget.threads import torch_threads
 from s2h_viewer.semantics.anatomy import angle_excess, clamp_angles, limits_reaching
@@ -173,7 +173,7 @@ def _on_palm_around(hand: HandModel, q_tbs: np.ndarray, frames: np.ndarray, reac
     """(T, 5) bool: the fingertips on the palm (the metric's tolerance) of ``q_tbs`` in the runs the fit changes
     (``reach`` frames around the true ``frames``), False elsewhere. The fit keeps those the source has there too:
     closing a thumb's touch, it lifted the ring finger off the palm in the fists of the gestures clip on the robot
-    and the mitten avatar (their fingertip-palm recall 1.00 -> 0.52, TBS Copy's 1.00)."""
+    and the mitten avatar (the ring fingertip's palm recall 1.00 -> 0.52, TBS Copy's 1.00)."""
     out = np.zeros((len(q_tbs), N_FINGERS), dtype=bool)
     around = np.zeros(len(q_tbs), dtype=bool)
     for first, end in runs_around(frames, reach):
