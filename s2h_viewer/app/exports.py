@@ -31,11 +31,14 @@ from s2h_viewer.wording import counted
 def wrote_text(path: Path, what: str, metrics: QFontMetrics, room: int) -> str:
     """"wrote PATH WHAT" in ``room`` pixels: where it does not fit, the file's name with what came with it, then
     its folder elided in the middle (a motion's message named three files, and the window's edge cut off all
-    but the first)."""
+    but the first); where even the names do not fit, the sidecars named after the file in ``what`` say "…" for
+    its stem (a suggested name 61 characters long cut off the corrections file's name at 1400 pixels)."""
     whole = f"wrote {path}{what}"
     if metrics.horizontalAdvance(whole) <= room:
         return whole
     head = f"wrote {Path(path).name}{what} in "
+    if metrics.horizontalAdvance(head + "/...//") > room:
+        head = f"wrote {Path(path).name}{what.replace(Path(path).stem, chr(0x2026))} in "
     folder = metrics.elidedText(str(Path(path).parent), Qt.TextElideMode.ElideMiddle,
                                 max(room - metrics.horizontalAdvance(head), metrics.horizontalAdvance("/...//")))
     return metrics.elidedText(head + folder, Qt.TextElideMode.ElideRight, room)

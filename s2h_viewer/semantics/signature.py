@@ -64,6 +64,9 @@ class PoseSignature:
     #: (4,) hand lengths from the thumb's tip to index..pinky's first two bones (`thumb_rest_distances`)
     thumb_rest: np.ndarray = None  # type: ignore[assignment]
     thumb_across: float = 0.0  # palm widths its tip lies across the palm (`semantics.flexion.thumb_across`)
+    #: (4,) hand lengths from the thumb's fingertip to index..pinky's (`contacts.thumb_pair_gaps`): a touch under
+    #: `THUMB_TOUCH`, looser than the contact metric's (what the words of a lost or invented touch give)
+    thumb_gaps: np.ndarray = None  # type: ignore[assignment]
 
     @property
     def states(self) -> list[str]:
@@ -120,7 +123,9 @@ def signatures(hand: HandModel, q_tbs: np.ndarray) -> list[PoseSignature]:
     with torch.no_grad():
         pose = forward_kinematics(hand, torch.as_tensor(np.asarray(q_tbs), dtype=torch.float64))
     positions = pose.positions.numpy()
-    contacts = contact_gaps(hand, pose).numpy()[:, list(THUMB_PAIRS)] < THUMB_TOUCH * hand.hand_length
+    gaps = contact_gaps(hand, pose).numpy()[:, list(THUMB_PAIRS)]
+    contacts = gaps < THUMB_TOUCH * hand.hand_length
+    gaps = gaps / hand.hand_length
     curls = finger_curls(positions)
     out = np.degrees(thumb_out(pose.positions).numpy())
     flexion, sideways = flexion_and_sideways(positions)
@@ -131,7 +136,7 @@ def signatures(hand: HandModel, q_tbs: np.ndarray) -> list[PoseSignature]:
     rest = thumb_rest_distances(pose.positions, hand.hand_length).numpy()
     across = thumb_across(pose.positions).numpy()
     return [PoseSignature(curls[t], contacts[t], float(worst[t]), "" if none[t] else HINGE_JOINTS[which[t]][0],
-                          float(out[t]), rest[t], float(across[t])) for t in range(len(positions))]
+                          float(out[t]), rest[t], float(across[t]), gaps[t]) for t in range(len(positions))]
 
 
 def differences(source: PoseSignature, target: PoseSignature) -> list[str]:
@@ -142,7 +147,9 @@ def differences(source: PoseSignature, target: PoseSignature) -> list[str]:
             out.append(f"{topo.FINGERS[f + 1]} {sb}, not {sa}")
     for f, (a, b) in enumerate(zip(source.thumb_contacts, target.thumb_contacts)):
         if a != b:
-            out.append(f"thumb-{topo.FINGERS[f + 1]} contact {'lost' if a else 'invented'}")
+            # a touch, not a contact: the scores' contacts (and the view's links) are the metric's 1.5%, this 3.5%
+            out.append(f"thumb-{topo.FINGERS[f + 1]} touch {'lost' if a else 'invented'} (fingertips "
+                       f"{target.thumb_gaps[f]:.3f} hand lengths apart, the source's {source.thumb_gaps[f]:.3f})")
     if thumb_out_lost(source.thumb_out, target.thumb_out, source.thumb_contacts.any()):
         out.append(f"thumb not out to its side ({target.thumb_out:.0f} deg, the source: {source.thumb_out:.0f})")
     if thumb_rest_lost(source.curl[None], source.thumb_rest[None], target.thumb_rest[None],
