@@ -329,7 +329,8 @@ def test_a_mitten_avatars_bones_are_drawn_over_its_skin(sample_hands, tmp_path):
 
     from s2h_viewer.annotate.trust import frame_warning
     from s2h_viewer.io.files import RigOptions, load_hand_file
-    from s2h_viewer.render.compare_scene import SKELETON_OPACITY, ViewOptions, apply_options, grid_layout, populate
+    from s2h_viewer.render.compare_scene import (SKELETON_OPACITY, ViewOptions, apply_options, grid_layout, populate,
+                                                 result_label)
     from s2h_viewer.retarget.comparison import build_comparison
     from s2h_viewer.samples import ASSETS_DIR
 
@@ -348,3 +349,5 @@ def test_a_mitten_avatars_bones_are_drawn_over_its_skin(sample_hands, tmp_path):
     plotter.close()
     assert drawn[mitten.name] == (True, pytest.approx(SKELETON_OPACITY))
     assert drawn["iris"] == (False, 1.0) and drawn["birch"] == (False, 1.0)
+    labels = {r.target.name: result_label(r) for r in comparison.results}  # the cell says why its skin is see-through
+    assert labels[mitten.name].endswith(", a mitten: bones shown") and "mitten" not in labels["iris"]

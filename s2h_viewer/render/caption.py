@@ -6,6 +6,8 @@ from __future__ import annotations
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
+from s2h_viewer.wording import counted
+
 BAND = 28  # pixels
 FONT_PX = 15  # the caption's text in a band of BAND pixels; a taller band's is as much larger
 MIN_FONT_SHARE = 0.6  # the smallest a caption's text is made to fit a narrow picture (9 pixels in a BAND band)
@@ -41,7 +43,7 @@ def add_caption(image: np.ndarray, text: str, band: int = BAND) -> np.ndarray:
 def frame_readout(frame: int, n_frames: int, fps: float) -> str:
     """Frame index over the last index with the frame count, then the frame's time over the clip's length:
     '0/509 (510 frames)  0.00 s / 17.00 s' (indices from 0, as the frame box, the curve and file names)."""
-    return f"{frame}/{n_frames - 1} ({n_frames} frames)  {frame / fps:.2f} s / {n_frames / fps:.2f} s"
+    return f"{frame}/{n_frames - 1} ({counted(n_frames, 'frame')})  {frame / fps:.2f} s / {n_frames / fps:.2f} s"
 
 
 def clip_at(name: str, labels, frame: int) -> str:

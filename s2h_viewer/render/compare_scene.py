@@ -437,10 +437,13 @@ def result_label(result: MethodResult) -> str:
     """A retarget's cell text: method and target, its S_finger and kept scores (and the poses kept, of a clip of
     poses); a corrected one's method starred
     (a start of line that survives eliding) and its keys counted; a target with no skin says its bones are drawn
-    uncoloured (a fresh-eyes user saw grey sticks and no colour bar, and nothing said why)."""
+    uncoloured (a fresh-eyes user saw grey sticks and no colour bar, and nothing said why), and a mitten's skin
+    that its bones are drawn through it (`apply_options`: another read its see-through skin against the View
+    menu's unticked "Semi-transparent skin")."""
     keys = result.corrections.n_keys
     star, fixed = ("*", f", {counted(keys, 'fix', 'fixes')}") if keys else ("", "")
-    bones = ", no skin: bones" if result.target.mesh is None else ""
+    bones = (", no skin: bones" if result.target.mesh is None else
+             ", a mitten: bones shown" if result.target.meta.get("unparted_fingers") else "")
     poses = f" ({result.poses_held - len(result.poses_lost)}/{result.poses_held} poses)" if result.poses_held else ""
     return (f"{METHODS[result.method].label}{star} -> {result.target.name}\nS_finger {result.scores.s_finger:.3f}\n"
             f"kept {result.scores.signature_kept:.3f}{poses}{fixed}{bones}")
