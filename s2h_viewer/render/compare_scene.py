@@ -443,7 +443,7 @@ def result_label(result: MethodResult) -> str:
     keys = result.corrections.n_keys
     star, fixed = ("*", f", {counted(keys, 'fix', 'fixes')}") if keys else ("", "")
     bones = (", no skin: bones" if result.target.mesh is None else
-             ", a mitten: bones shown" if result.target.meta.get("unparted_fingers") else "")
+             ", mitten: bones" if result.target.meta.get("unparted_fingers") else "")
     poses = f" ({result.poses_held - len(result.poses_lost)}/{result.poses_held} poses)" if result.poses_held else ""
     return (f"{METHODS[result.method].label}{star} -> {result.target.name}\nS_finger {result.scores.s_finger:.3f}\n"
             f"kept {result.scores.signature_kept:.3f}{poses}{fixed}{bones}")
