@@ -88,7 +88,8 @@ def test_batches_hold_at_most_their_frames_and_cover_every_run():
 
 def test_the_fit_keeps_on_the_palm_the_fingertips_the_network_and_the_source_have_there():
     """Closing the thumb's touches in the gestures clip's fists, the fit lifted the ring finger off the palm on the
-    VRM robot and the mitten avatar (their fingertip-palm recall 1.00 -> 0.52, TBS Copy's 1.00); it may not."""
+    VRM robot and the mitten avatar (their ring fingertip-palm recall 1.00 -> 0.52, TBS Copy's 1.00); it may not. And
+    where the network lost one that TBS Copy keeps (the mitten's index: 0.42), the fit brings it back."""
     import torch
 
     from s2h_viewer import samples
@@ -114,5 +115,8 @@ def test_the_fit_keeps_on_the_palm_the_fingertips_the_network_and_the_source_hav
         assert not np.array_equal(fitted, network)  # the fit did change the clip (its touches)
         lost = held & ~on_palm(hand, fitted)
         assert held.sum() > 300 and lost.sum() <= 0.01 * held.sum(), (rig, lost.sum(), held.sum())
-    asrn = score_retarget(source, gestures.q_tbs, hand, retarget(gestures, source, hand, "asrn").q_tbs)
-    assert asrn.palm_contact_recall >= 0.99  # the robot: TBS Copy's 1.000
+    for rig in ("cryptovoxels.vrm", "debug_robot.vrm"):
+        hand = load_hand_file(ASSETS_DIR / "hands" / "real" / rig, RigOptions(side="right"))
+        scores = {method: score_retarget(source, gestures.q_tbs, hand, retarget(gestures, source, hand, method).q_tbs)
+                  for method in ("tbs_copy", "asrn")}
+        assert scores["asrn"].palm_contact_recall >= scores["tbs_copy"].palm_contact_recall - 0.01, (rig, scores)

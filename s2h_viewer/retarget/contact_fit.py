@@ -22,7 +22,8 @@ source rests on its curled fingers, the horns' and the V sign's, brought back on
 on every real rig), a thumb-across term (a thumb the source folds across the palm, a four's, brought back
 across: the network left it at the palm's side on every real rig; its metacarpal stays slowed, as swinging it for
 one pose made the thumb follow the source's less), a palm term (a fingertip on the palm in the source and in the
-retarget stays there: closing the thumb's touches lifted the ring finger off the palm in fists), and a sideways term: no
+retarget or TBS Copy stays or comes there: closing the thumb's touches lifted the ring finger off the palm in fists,
+and the network left the mitten avatar's index finger off it), and a sideways term: no
 flexed PIP/DIP bent more than `SIDEWAYS_FREE` out of the curl plane (on the Godot hand, opening the ring-pinky
 touch of fists bent the pinky DIP 45 deg sideways without it). The angles are read with the twist within +-90
 deg (`quat_to_tbs_euler_past_lock`): a knuckle of a fist bent past 90 read as twisted 160 deg, and the anatomy
@@ -96,7 +97,7 @@ class ContactFitConfig:
     thumb_out_weight: float = 1e3  # the thumb out to its side as the source's (`_thumb_out_allowed`)
     thumb_rest_weight: float = 1e3  # the thumb back on the curled fingers the source's rests on (`_thumb_resting`)
     thumb_across_weight: float = 1e3  # the thumb back across the palm where the source's lies across it (a four)
-    palm_weight: float = 1e4  # a fingertip on the palm where the source's is and the retarget's was (`_on_palm_around`)
+    palm_weight: float = 1e4  # a fingertip on the palm where the source's is and the retarget's or TBS Copy's was
     reach: int = 4  # frames either side of a disagreement over which the correction fades in and out
     batch_frames: int = 4096  # frames optimised at once (memory of one batch)
 
@@ -271,7 +272,9 @@ def fit_contacts(source_q: np.ndarray, source_hand: HandModel, target_hand: Hand
     source_q = np.asarray(source_q)
     out = np.asarray(target_q, dtype=np.float32)
     frames = disagreement(source_hand, source_q, target_hand, out)
-    on_palm = _on_palm_around(target_hand, out, frames, config.reach)  # before any pass moves them
+    # before any pass moves them; and where TBS Copy (the source's own TBS rotations) has them there
+    on_palm = (_on_palm_around(target_hand, out, frames, config.reach)
+               | _on_palm_around(target_hand, source_q, frames, config.reach))
 
     def source_at(idx: np.ndarray) -> SourceFrames:
         with torch.no_grad():
@@ -308,7 +311,8 @@ class SourceFrames:
     thumb_rest: torch.Tensor | None = None  # (F, 4) `semantics.signature.thumb_rest_distances`
     thumb_across: torch.Tensor | None = None  # (F,) palm widths, `semantics.flexion.thumb_across`
     angles: torch.Tensor | None = None  # (F, 15, 3) its TBS angles: the fit may reach as far past the limits
-    #: (F, 5) bool: fingertips on the palm here and in the retarget the fit starts from, which it keeps there
+    #: (F, 5) bool: fingertips on the palm here and in the retarget the fit starts from or in TBS Copy (the source's
+    #: TBS rotations on the target), which it keeps or brings there
     palm_held: torch.Tensor | None = None
 
 
