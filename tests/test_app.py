@@ -309,3 +309,13 @@ def test_bracket_keys_jump_between_the_worst_frames_of_the_error_curve(window, q
     lines = window.shortcut_lines()
     assert "]: Playback > Next worst frame (error curve)" in lines
     assert "[: Playback > Previous worst frame (error curve)" in lines
+
+
+def test_numpys_blas_runs_one_thread_in_the_app():
+    """A video export while the timeline played froze the window for good: its thread and the GUI's both in OpenBLAS's
+    threaded matrix product (one spinning in exec_blas, the other blocked on its lock). The app runs it on one."""
+    from threadpoolctl import threadpool_info
+
+    import s2h_viewer.app  # noqa: F401
+    blas = [lib for lib in threadpool_info() if lib["user_api"] == "blas"]
+    assert blas and all(lib["num_threads"] == 1 for lib in blas), blas
