@@ -1646,24 +1646,3 @@ def test_a_backwards_range_cannot_be_exported_and_cancel_writes_nothing(window, 
     assert window.timeline.playing
     qtbot.waitUntil(window.isActiveWindow, timeout=5000)
 
-
-def test_the_add_target_dialog_starts_beside_a_hand_named_at_launch_a_shipped_real_rig_too(qtbot, sample_hands, tmp_path):
-    """A fresh-eyes user launched on --target assets/hands/real/cryptovoxels.vrm; File > Add target hand then opened
-    in assets/hands (shipped files were taken for sample hands). A sample hand leaves the folder where it was."""
-    from compare_window import open_window, short_clip
-    from s2h_viewer.app.main_window import CompareSetup
-    from s2h_viewer.io.files import load_hand_file
-    from s2h_viewer.samples import ASSETS_DIR
-
-    real = ASSETS_DIR / "hands" / "real" / "godot_hand_r.gltf"
-    birch = sample_hands["birch"]
-    setup = CompareSetup(short_clip(birch), birch, [sample_hands["iris"], load_hand_file(real)], ["tbs_copy"])
-    win = open_window(qtbot, setup, tmp_path, compute=False)
-    assert Path(win._hand_dir()) == real.parent.resolve()
-    settings_dir = tmp_path / "samples_only"
-    settings_dir.mkdir()
-    sample = load_hand_file(ASSETS_DIR / "hands" / "iris.npz")  # a sample hand named by its file
-    win = open_window(qtbot, CompareSetup(short_clip(birch), birch, [sample], ["tbs_copy"]), settings_dir,
-                      compute=False)
-    assert Path(win.settings.value("files/hand_dir", "")) == Path()  # not remembered: the dialog starts in the shipped
-    assert Path(win._hand_dir()) == ASSETS_DIR / "hands"

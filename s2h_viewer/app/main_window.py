@@ -66,9 +66,7 @@ class MainWindow(QMainWindow):
         self.settings = settings or QSettings("s2h-viewer", "s2h-viewer")
         from s2h_viewer.samples import ASSETS_DIR
         given = [Path(h.source).resolve() for h in setup.targets if h.source and Path(h.source).is_file()]
-        # not a sample hand (assets/hands/*.npz, where the dialog starts anyway): a shipped real rig is a file named
-        # like any other (a fresh-eyes user's --target assets/hands/real/cryptovoxels.vrm, then the dialog in hands/)
-        given = [path for path in given if path.parent != (ASSETS_DIR / "hands").resolve()]
+        given = [path for path in given if not path.is_relative_to(ASSETS_DIR.resolve())]  # not a sample hand
         if given:  # a hand file named at launch (`s2h view --target`): the next hand is likely beside it
             self.settings.setValue("files/hand_dir", str(given[-1].parent))
         self.runner = TaskRunner(self, self.error, self.statusBar().showMessage)
