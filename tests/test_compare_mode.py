@@ -1645,4 +1645,3 @@ def test_a_backwards_range_cannot_be_exported_and_cancel_writes_nothing(window, 
     assert window.statusBar().currentMessage() == "video export cancelled: no file written (short_iris_tbs_copy.mp4)"
     assert window.timeline.playing
     qtbot.waitUntil(window.isActiveWindow, timeout=5000)
-

@@ -170,21 +170,23 @@ def _thumb_resting(source: SourceFrames, source_gaps: torch.Tensor) -> torch.Ten
 PALM_HOLD = 0.8
 
 
-def _on_palm_around(hand: HandModel, q_tbs: np.ndarray, frames: np.ndarray, reach: int) -> np.ndarray:
-    """(T, 5) bool: the fingertips on the palm (the metric's tolerance) of ``q_tbs`` in the runs the fit changes
-    (``reach`` frames around the true ``frames``), False elsewhere. The fit keeps those the source has there too:
-    closing a thumb's touch, it lifted the ring finger off the palm in the fists of the gestures clip on the robot
-    and the mitten avatar (the ring fingertip's palm recall 1.00 -> 0.52, TBS Copy's 1.00)."""
-    out = np.zeros((len(q_tbs), N_FINGERS), dtype=bool)
-    around = np.zeros(len(q_tbs), dtype=bool)
+def _on_palm_around(hand: HandModel, poses: tuple[np.ndarray, ...], frames: np.ndarray, reach: int) -> np.ndarray:
+    """(T, 5) bool: the fingertips on the palm (the metric's tolerance) in any of ``poses`` ((T, 15, 4) rotations
+    each) in the runs the fit changes (``reach`` frames around the true ``frames``), False elsewhere. The fit keeps
+    those the source has there too: closing a thumb's touch, it lifted the ring finger off the palm in the fists of
+    the gestures clip on the robot and the mitten avatar (the ring fingertip's palm recall 1.00 -> 0.52, TBS Copy's
+    1.00)."""
+    out = np.zeros((len(frames), N_FINGERS), dtype=bool)
+    around = np.zeros(len(frames), dtype=bool)
     for first, end in runs_around(frames, reach):
         around[first:end] = True
     fitted = np.flatnonzero(around)
     for first, end in frame_chunks(len(fitted)):
         idx = fitted[first:end]
-        with torch.no_grad():
-            gaps = palm_gaps(hand, joint_positions(hand, torch.as_tensor(q_tbs[idx], dtype=torch.float32)))
-        out[idx] = gaps.numpy() < CONTACT_TOLERANCE * hand.hand_length
+        for q_tbs in poses:
+            with torch.no_grad():
+                gaps = palm_gaps(hand, joint_positions(hand, torch.as_tensor(q_tbs[idx], dtype=torch.float32)))
+            out[idx] |= gaps.numpy() < CONTACT_TOLERANCE * hand.hand_length
     return out
 
 
@@ -273,14 +275,13 @@ def fit_contacts(source_q: np.ndarray, source_hand: HandModel, target_hand: Hand
     out = np.asarray(target_q, dtype=np.float32)
     frames = disagreement(source_hand, source_q, target_hand, out)
     # before any pass moves them; and where TBS Copy (the source's own TBS rotations) has them there
-    on_palm = (_on_palm_around(target_hand, out, frames, config.reach)
-               | _on_palm_around(target_hand, source_q, frames, config.reach))
+    on_palm = _on_palm_around(target_hand, (out, source_q), frames, config.reach)
 
     def source_at(idx: np.ndarray) -> SourceFrames:
         with torch.no_grad():
             positions = joint_positions(source_hand, torch.as_tensor(source_q[idx], dtype=torch.float32))
-            # read as the target's
             source_on_palm = palm_gaps(source_hand, positions).numpy() < CONTACT_TOLERANCE * source_hand.hand_length
+            # read as the target's
             return SourceFrames(_pose_pad_gaps(source_hand, positions), pose_curls(positions), thumb_out(positions),
                                 thumb_rest_distances(positions, source_hand.hand_length), thumb_across(positions),
                                 quat_to_tbs_euler_past_lock(torch.as_tensor(source_q[idx], dtype=torch.float32)),
