@@ -77,18 +77,20 @@ def test_sure_rays_the_bones_agree_with_stay_and_rays_outvoted_by_bones_and_palm
     curled and fanned at rest: its sure rays and its bones agree (within 5 deg), both 21-28 deg from the palm
     plane's axes, about which TBS Copy's fists bent the pinky 33 deg sideways: the rays stay (20). The Godot
     hand's pinky: the rays 12-14 deg from bones and palm plane at the DIP, which agree: the bones win (28 -> 20).
-    A re-rolled copy of the avatar, whose bones carry no hinge, keeps the palm plane, as before."""
+    A copy of the avatar with its bones rolled 40 deg, whose bones carry no hinge, keeps the rays too: the pinky's
+    curl plane at rest agrees with them (with the palm plane's axes its fists bent 33 deg sideways, and ASRN's
+    contact fit lifted its fingertip off the palm to undo that: the gestures' palm recall 0.71, TBS Copy's 1.00)."""
     source = sample_hands[gestures.hand_name]
     rpm, godot = load_hand_file(RPM, RigOptions(side="right")), load_hand_file(GODOT_R)
-    rolled = load_hand_file(rerolled_glb(RPM, tmp_path / "rolled.glb", 25.0), RigOptions(side="right"))
+    rolled = load_hand_file(rerolled_glb(RPM, tmp_path / "rolled.glb", 40.0), RigOptions(side="right"))
     assert solve_tbs_frames(rpm).basis[12:15] == ["rays"] * 3
     godot_solution = solve_tbs_frames(godot)
     assert godot_solution.basis[12:15] == ["rig bone axis"] * 3
     assert any(line.startswith("pinky: ") and "disagree with the rig's bone axes" in line
                for line in godot_solution.diagnostics)
-    assert solve_tbs_frames(rolled).basis[12:15] == ["palm plane"] * 3
-    assert _pinky_sideways(source, gestures, rpm) < 24.0 and _pinky_sideways(source, gestures, godot) < 24.0
-    assert _pinky_sideways(source, gestures, rolled) > 30.0
+    assert solve_tbs_frames(rolled).basis[12:15] == ["rays"] * 3
+    for hand in (rpm, godot, rolled):
+        assert _pinky_sideways(source, gestures, hand) < 24.0, hand.name
 
 
 def test_a_procedural_hand_keeps_its_rays(sample_hands):

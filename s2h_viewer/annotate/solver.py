@@ -57,6 +57,12 @@ RIG_AXIS_DEGREES = 12.0
 #: both the bones' axis and the palm plane's than those two lie from each other, and the bones agree with the palm
 #: plane (`RIG_AXIS_DEGREES`) at every joint: two readings against one (the Godot pinky DIPs: 10.4 and 11.4 deg)
 ODD_ONE_OUT_DEGREES = 8.0
+#: sure rays also stay where the finger is curled at rest this much (`_curl_bend_axes`' strength, 1 at
+#: `FULL_CURL_DEGREES`) and its curl plane's normal lies within `RIG_AXIS_DEGREES` of them at every joint: two
+#: readings of the mesh, neither a rig's roll (the Ready Player Me pinky, curled 20+ deg at rest: rays 6-9 deg
+#: from its curl plane's normal, 27-30 from the palm plane's; re-rolled by another exporter, its bones no longer
+#: vouched for the rays and a fist about the palm plane's axes bent it 33 deg sideways)
+CURL_EVIDENCE = 0.8
 #: a finger's PIP or DIP section measured wider, side to side, than this fraction of the way to the nearest
 #: neighbouring finger's bone is not the finger's own: the mesh does not part the fingers (a low-poly mitten,
 #: cryptovoxels.vrm: 0.81-1.35), so its rays and widths say nothing of the finger. Separate fingers read
@@ -283,7 +289,9 @@ def solve_tbs_frames(hand: HandModel, n_angles: int = N_ANGLES, bone_axes: np.nd
     across = palm_axes(positions)[:, 1]  # toward the thumb: a finger's bend axis when it curls toward the palm
     palm_bend = across - twist * (twist @ across)[:, None]
     palm_bend /= np.linalg.norm(palm_bend, axis=1, keepdims=True)
-    _overrule_unsure_rays(frames, confidence, basis, diagnostics, palm_bend, guess[:, :, 2], bone_axes, fallback)
+    curled = np.where((curl_strength >= CURL_EVIDENCE)[:, None], curl_axis, np.nan)
+    _overrule_unsure_rays(frames, confidence, basis, diagnostics, palm_bend, guess[:, :, 2], bone_axes, curled,
+                          fallback)
     frames[0] = guess[0]  # the thumb CMC: `thumb_cmc_frame`, whatever its rays or its rig read
     if not fallback[0]:
         basis[0] = THUMB_CONVENTION
@@ -329,7 +337,7 @@ def _nearest_bone_axis(bone_frame: np.ndarray, reference: np.ndarray, twist: np.
 
 def _overrule_unsure_rays(frames: np.ndarray, confidence: np.ndarray, basis: list[str], diagnostics: list[str],
                           palm_bend: np.ndarray, back: np.ndarray, bone_axes: np.ndarray | None,
-                          fallback: np.ndarray) -> None:
+                          curled: np.ndarray, fallback: np.ndarray) -> None:
     """Per finger, in place: the rays' bend axes stay where all its joints are `TRUST_RAYS` sure and (but for
     the thumb, which the palm plane does not predict) within `AGREE_DEGREES` of the palm plane's; else the
     rig's own bone axes where they lie within `RIG_AXIS_DEGREES` of the palm plane's (the thumb: of the
@@ -340,7 +348,9 @@ def _overrule_unsure_rays(frames: np.ndarray, confidence: np.ndarray, basis: lis
     each other, 21-28 deg from the palm plane's axes, about which a fist bent it 31 deg sideways). Where the
     bones agree with the palm plane and the sure rays are the odd one out at a joint (`ODD_ONE_OUT_DEGREES`), the
     bones win, two readings against one (the Godot hand's pinky DIP: rays 12-15 deg from both, bones and palm plane
-    2 deg apart; a fist about the rays' axes bent the pinky 27 deg sideways, about the bones' 20).
+    2 deg apart; a fist about the rays' axes bent the pinky 27 deg sideways, about the bones' 20). Sure rays a
+    finger's curl plane at rest agrees with (``curled`` (5, 3), NaN for a finger not `CURL_EVIDENCE` curled)
+    stay as those the bones agree with, whatever the rig's roll.
     A frame the rays did not decide gets confidence `PALM_EVIDENCE` at most and a line saying why."""
     for f in range(topo.N_FINGERS):
         members = [3 * f + level for level in range(3)]
@@ -363,7 +373,8 @@ def _overrule_unsure_rays(frames: np.ndarray, confidence: np.ndarray, basis: lis
                 outvoted = bool((np.minimum(rays_off_palm, rays_off_rig) - rig_off >= ODD_ONE_OUT_DEGREES).any())
         sure = bool((confidence[members] >= TRUST_RAYS).all())
         near = f == 0 or bool((rays_off_palm <= AGREE_DEGREES).all())
-        if sure and (near or rays_on_bones) and not outvoted:
+        rays_on_curl = bool((_angle_between_lines(rays, curled[f]) <= RIG_AXIS_DEGREES).all())  # False for NaN
+        if sure and (near or rays_on_bones or rays_on_curl) and not outvoted:
             continue
         if rig is not None:
             chosen, label = rig, "rig bone axis"
