@@ -1343,6 +1343,32 @@ def test_a_hand_file_named_at_launch_is_where_the_next_hand_is_looked_for(qtbot,
     assert folder_offered(again.add_target) == avatars.resolve()
 
 
+def test_a_shipped_real_rig_named_at_launch_is_where_the_next_hand_is_looked_for_if_no_folder_is_remembered(
+        qtbot, sample_hands, tmp_path):
+    """A fresh-eyes user launched on --target assets/hands/real/cryptovoxels.vrm; Add target hand then opened in the
+    sample hands' folder. It starts beside the shipped rig now, but only where no folder of the user's is remembered
+    (the test above), and it is not remembered; a sample hand named by its file leaves the sample hands' folder."""
+    from compare_window import open_window, short_clip
+    from s2h_viewer.app.compare_mode import CompareSetup
+    from s2h_viewer.io.files import load_hand_file
+
+    real = ASSETS_DIR / "hands" / "real" / "godot_hand_r.gltf"
+    birch = sample_hands["birch"]
+    fresh = tmp_path / "fresh"
+    fresh.mkdir()
+    win = open_window(qtbot, CompareSetup(short_clip(birch), birch, [sample_hands["iris"], load_hand_file(real)],
+                                          ["tbs_copy"]), fresh, compute=False)
+    assert folder_offered(win.add_target) == real.parent.resolve()
+    assert folder_offered(win.open_hand_to_annotate) == real.parent.resolve()
+    assert win.settings.value("files/hand_dir", "") == ""
+    samples_only = tmp_path / "samples_only"
+    samples_only.mkdir()
+    sample = load_hand_file(ASSETS_DIR / "hands" / "iris.npz")
+    win = open_window(qtbot, CompareSetup(short_clip(birch), birch, [sample], ["tbs_copy"]), samples_only,
+                      compute=False)
+    assert folder_offered(win.add_target) == (ASSETS_DIR / "hands").resolve()
+
+
 def test_open_motion_opens_in_the_last_motion_folder_not_the_last_hand_folder(window, qtbot, tmp_path):
     import shutil
 

@@ -66,9 +66,14 @@ class MainWindow(QMainWindow):
         self.settings = settings or QSettings("s2h-viewer", "s2h-viewer")
         from s2h_viewer.samples import ASSETS_DIR
         given = [Path(h.source).resolve() for h in setup.targets if h.source and Path(h.source).is_file()]
-        given = [path for path in given if not path.is_relative_to(ASSETS_DIR.resolve())]  # not a sample hand
-        if given:  # a hand file named at launch (`s2h view --target`): the next hand is likely beside it
-            self.settings.setValue("files/hand_dir", str(given[-1].parent))
+        own = [path for path in given if not path.is_relative_to(ASSETS_DIR.resolve())]  # not a shipped file
+        if own:  # a hand file named at launch (`s2h view --target`): the next hand is likely beside it
+            self.settings.setValue("files/hand_dir", str(own[-1].parent))
+        #: a shipped real rig named at launch (`--target assets/hands/real/cryptovoxels.vrm`): the dialogs start
+        #: beside it where no folder of the user's is remembered (a fresh-eyes user's Add target opened in the
+        #: sample hands' folder), but it is not remembered over the user's own
+        self._launch_hand_dir = next((str(path.parent) for path in reversed(given)
+                                      if path.parent != (ASSETS_DIR / "hands").resolve()), "")
         self.runner = TaskRunner(self, self.error, self.statusBar().showMessage)
         self.compare = CompareMode(setup, self.error, lambda text: self.statusBar().showMessage(text, 5000))
         self.video_export: exports.VideoExport | None = None
@@ -709,14 +714,15 @@ class MainWindow(QMainWindow):
             self._remember(str(Path(path).resolve()), "batch")
 
     def _hand_dir(self) -> str:
-        return self._start_dir("files/hand_dir", "hands")
+        return self._start_dir("files/hand_dir", "hands", self._launch_hand_dir)
 
-    def _start_dir(self, setting: str, shipped: str) -> str:
-        """Where an open dialog starts: the folder in ``setting`` (the last hand's, the last motion's), else the
-        shipped ``assets/<shipped>``, else the working directory."""
+    def _start_dir(self, setting: str, shipped: str, launched: str = "") -> str:
+        """Where an open dialog starts: the folder in ``setting`` (the last hand's, the last motion's), else
+        ``launched`` (a shipped file's named at launch), else the shipped ``assets/<shipped>``, else the working
+        directory."""
         from s2h_viewer.samples import ASSETS_DIR
         last = Path(str(self.settings.value(setting, "")))
-        for folder in (last, ASSETS_DIR / shipped):
+        for folder in (last, Path(launched), ASSETS_DIR / shipped):
             if str(folder) not in ("", ".") and folder.is_dir():
                 return str(folder)
         return str(Path.cwd())
