@@ -180,6 +180,13 @@ def _accessor_floats(gltf: pygltflib.GLTF2, blob: bytearray, index: int, width: 
     return np.ndarray((count, width), dtype="<f4", buffer=blob, offset=start, strides=(stride, 4))
 
 
+def _load(source: Path) -> pygltflib.GLTF2:
+    """A glTF by its bytes, not its suffix: a .vrm is a binary glTF that pygltflib reads as JSON by its name."""
+    with open(source, "rb") as file:
+        binary = file.read(4) == b"glTF"
+    return pygltflib.GLTF2().load_binary(str(source)) if binary else pygltflib.GLTF2().load_json(str(source))
+
+
 def rerolled_glb(source: Path, out: Path, degrees: float, pattern: str = r"(?i)thumb|index|middle|ring|pinky|little"
                  ) -> Path:
     """The same skinned avatar with every finger bone (a skin joint whose name matches ``pattern`` and that has a
@@ -188,7 +195,7 @@ def rerolled_glb(source: Path, out: Path, degrees: float, pattern: str = r"(?i)t
     or two riggers' roll settings, leave them). Animations are dropped (their keys hold the old axes)."""
     from scipy.spatial.transform import Rotation
 
-    gltf = pygltflib.GLTF2().load(str(source))
+    gltf = _load(source)
     gltf.convert_buffers(pygltflib.BufferFormat.BINARYBLOB)  # a .gltf's embedded buffers into one blob
     blob = bytearray(gltf.binary_blob())
     skin = gltf.skins[0]
@@ -223,7 +230,7 @@ def centimetre_glb(source: Path, out: Path) -> Path:
     mesh position and the inverse bind matrices' translations 100 times larger, under a new root node scaled 0.01
     (as Blender's and Maya's FBX-to-glTF exports of a cm scene leave it). In world units it is the same avatar.
     Animations are dropped (their translation keys would need the same factor)."""
-    gltf = pygltflib.GLTF2().load(str(source))
+    gltf = _load(source)
     gltf.convert_buffers(pygltflib.BufferFormat.BINARYBLOB)
     blob = bytearray(gltf.binary_blob())
 
@@ -257,7 +264,7 @@ def mirrored_glb(source: Path, out: Path) -> Path:
     (x, -y, -z, w)), inverse bind matrices conjugated by the reflection, triangles wound the other way so their
     normals still point out, and the sides in the node names swapped (``Thumb_Proximal_L`` -> ``_R``, ``hand_l``
     -> ``hand_r``, ``Left`` -> ``Right``). Animations are dropped (their keys would need the same reflection)."""
-    gltf = pygltflib.GLTF2().load(str(source))
+    gltf = _load(source)
     swap = {"l": "r", "r": "l", "L": "R", "R": "L", "Left": "Right", "Right": "Left", "left": "right", "right": "left"}
     for node in gltf.nodes:
         if node.name:
@@ -305,7 +312,7 @@ def rested_in_pose_gltf(source: Path, out: Path, animation: str) -> Path:
     exporter that bakes a key into the nodes leaves a clip: the animations are the same, only the rest moves."""
     import base64
 
-    gltf = pygltflib.GLTF2().load(str(source))
+    gltf = _load(source)
     uri = gltf.buffers[0].uri
     blob = bytearray(base64.b64decode(uri.split(",", 1)[1]))
     chosen = next(a for a in gltf.animations if a.name == animation)
