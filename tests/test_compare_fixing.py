@@ -149,6 +149,7 @@ def test_a_ring_drag_in_solo_keys_the_joint_live_and_undo_brings_back_the_method
     drag(qtbot, win, 40.0, while_held)
     angle, curve, s_finger, method_cell, said = live[0]
     assert said.startswith("index PIP: bend +") and "deg (curls it in) at frame 40" in said  # which way: said
+    assert "in all" not in said  # the first key: the drag's turn is the joint's whole offset
     assert ", held over the fist pose (frames 40-66), blended over frames 30-76; kept " in said
     # the scores a user ranks by, the method's then the fix's: a turn off the source says it is worse
     assert f"S_finger {method.scores.s_finger:.3f} -> {s_finger:.3f}" in said and "(worse than before: Ctrl+Z" in said
@@ -190,6 +191,10 @@ def test_a_ring_drag_in_solo_keys_the_joint_live_and_undo_brings_back_the_method
     np.testing.assert_allclose(mode.curve.error, method.frame_error)
     QTest.keyClick(win, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier | Qt.KeyboardModifier.ShiftModifier)
     assert mode.selected_result() is fixed
+    # a second drag at the key's frame turns the key further: the bar says this drag's turn and the joint's in all
+    second = []
+    drag(qtbot, win, -30.0, lambda: second.append(mode.fixing.bar.readout.toolTip()))
+    assert second[0].startswith("index PIP: bend -") and "deg off the method's in all) at frame 40" in second[0]
 
 
 def test_a_key_blends_over_the_marked_range_and_the_fix_keys_delete_and_clear(window, qtbot):

@@ -352,10 +352,14 @@ class RetargetFixing(QObject):
             way = {"bend": (" (curls it in)", " (opens it out)")}.get(drag.axis, ("", ""))[turn < 0]
             held = "" if drag.hold is None else (f"held over the {self.mode.comparison.motion.labels[drag.frame]} "
                                                  f"pose (frames {drag.hold[0]}-{drag.hold[1]}), ")
+            # a key already there is turned further: the joint's whole offset, which the bar says after the drag,
+            # is not this drag's turn (a fresh-eyes user read +36 while dragging, 28 after)
+            total = np.degrees(now.corrections.offset_at(drag.joint, drag.frame).magnitude())
+            in_all = f" ({total:.0f} deg off the method's in all)" if abs(total - abs(turn)) >= 1.0 else ""
             # the frames first: at the end, a 1000-pixel bar cut them off (a fresh-eyes user)
-            self.bar.say(f"{topo.joint_label(topo.ARTICULATED_NAMES[drag.joint])}: {drag.axis} {turn:+.0f} deg{way} "
-                         f"at frame {drag.frame}, {held}blended over frames {drag.frames[0]}-{drag.frames[1]}; "
-                         f"{score_change(drag.before, now)}")
+            self.bar.say(f"{topo.joint_label(topo.ARTICULATED_NAMES[drag.joint])}: {drag.axis} {turn:+.0f} deg{way}"
+                         f"{in_all} at frame {drag.frame}, {held}blended over frames {drag.frames[0]}-"
+                         f"{drag.frames[1]}; {score_change(drag.before, now)}")
 
     def _end(self) -> None:
         drag, self._drag = self._drag, None
