@@ -19,7 +19,7 @@ from PySide6.QtCore import QRect  # noqa: E402
 from PySide6.QtWidgets import QScrollArea  # noqa: E402
 
 from compare_window import open_compare_window  # noqa: E402
-from s2h_viewer.app.main_window import MIN_SIZE  # noqa: E402
+from s2h_viewer.app.main_window import FIRST_SIZE, MIN_SIZE, first_size  # noqa: E402
 from s2h_viewer.render.caption import BAND, band_within  # noqa: E402
 from s2h_viewer.render.compare_scene import SELECTED_COLOUR  # noqa: E402
 
@@ -268,3 +268,13 @@ def test_a_last_page_keeps_the_row_height_and_a_new_result_keeps_the_page(qtbot,
         window.method_actions["dm"].trigger()
     assert view.page == 1 and [r.target.name for r in view.comparison.results] == ["kale", "kale"]
     window.close()
+
+
+def test_the_first_launch_fits_the_window_to_the_screen():
+    """1400 x 900 on a 1280 x 1024 screen cut the heatmap and the speed box off at the window's right edge: the
+    first size stays within the screen's free area less its frame, and never under the smallest that holds."""
+    assert first_size((2560, 1400)) == FIRST_SIZE
+    width, height = first_size((1280, 1024))
+    assert width <= 1280 - 16 and height == FIRST_SIZE[1]
+    assert first_size((1366, 728)) == (1366 - 16, MIN_SIZE[1])  # a laptop's free area: the smallest that holds
+    assert first_size((800, 600)) == MIN_SIZE
