@@ -7,12 +7,12 @@ Runs where `.venv-blender` exists (CI builds it: `make test` with CI=true); skip
 
 from __future__ import annotations
 
-import subprocess
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from rigify_character import BLENDER_PYTHON, rigify_character
 from s2h_viewer import samples
 from s2h_viewer.io.files import RigOptions, load_hand_file, load_motion_file, read_rig_skeleton
 from s2h_viewer.retarget.methods import retarget
@@ -20,7 +20,6 @@ from s2h_viewer.semantics.metrics import score_retarget
 from s2h_viewer.semantics.signature import pose_differences
 
 ROOT = Path(__file__).resolve().parents[1]
-BLENDER_PYTHON = ROOT / ".venv-blender" / "bin" / "python"
 POSES = ROOT / "assets/motions/real/godot_hand_poses_r.gltf"
 POSED_RIG = ROOT / "assets/motions/real/godot_hand_r_posed_rig.gltf"
 
@@ -32,13 +31,7 @@ pytestmark = [pytest.mark.blender,
 def rigify_files(tmp_path_factory) -> dict[str, Path]:
     """The Rigify character written by Blender as GLB and as FBX."""
     out = tmp_path_factory.mktemp("rigify")
-    files = {}
-    for suffix in ("glb", "fbx"):
-        path = out / f"rigify_character.{suffix}"
-        done = subprocess.run([str(BLENDER_PYTHON), str(ROOT / "scripts" / "rigify_hands.py"), str(path)],
-                              capture_output=True, text=True, timeout=600)
-        assert done.returncode == 0 and path.exists(), done.stderr[-2000:]
-        files[suffix] = path
+    files = {suffix: rigify_character(out, suffix) for suffix in ("glb", "fbx")}
     return files
 
 
