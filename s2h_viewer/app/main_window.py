@@ -37,14 +37,6 @@ MIN_SIZE = (1000, 700)  # the smallest window whose panels all hold (the heatmap
 FIRST_SIZE = (1400, 900)
 #: room left on the screen for the window's title bar and frame, which its size does not count
 FRAME_ROOM = (16, 48)
-
-
-def first_size(available: tuple[int, int]) -> tuple[int, int]:
-    """The window's size at its first launch on a screen whose free area is ``available`` (pixels): `FIRST_SIZE`
-    within it, never under `MIN_SIZE` (at 1400 x 900 on a 1280 x 1024 screen, the heatmap and the speed box were
-    cut off at its right edge)."""
-    return (max(MIN_SIZE[0], min(FIRST_SIZE[0], available[0] - FRAME_ROOM[0])),
-            max(MIN_SIZE[1], min(FIRST_SIZE[1], available[1] - FRAME_ROOM[1])))
 STATUS_MS_EXPORT = 15_000  # a written or cancelled export says so this long in the status bar
 MESSAGE_MARGIN = 24  # pixels of the status bar a message leaves free: its grip and padding
 #: hand files a target can be (a BVH holds a motion on a skeleton, no mesh to colour: not offered)
@@ -59,6 +51,14 @@ MOUSE_SECTIONS = (("Mouse, in the 3D views of both tabs", vtk_widget.MOUSE),
 
 
 WRAPPED = "Wrapped round"  # the status bar's word when ] or [ wraps round the clip or the marked range
+
+
+def first_size(available: tuple[int, int]) -> tuple[int, int]:
+    """The window's size at its first launch on a screen whose free area is ``available`` (pixels): `FIRST_SIZE`
+    within it, never under `MIN_SIZE` (at 1400 x 900 on a 1280 x 1024 screen, the heatmap and the speed box were
+    cut off at its right edge)."""
+    return (max(MIN_SIZE[0], min(FIRST_SIZE[0], available[0] - FRAME_ROOM[0])),
+            max(MIN_SIZE[1], min(FIRST_SIZE[1], available[1] - FRAME_ROOM[1])))
 
 
 class MainWindow(QMainWindow):
