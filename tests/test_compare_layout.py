@@ -68,6 +68,15 @@ def test_the_selected_retarget_is_framed_in_the_grid(window):
     height, width = blue.shape
     inside = blue[round((1 - y1) * height):round((1 - y0) * height), round(x0 * width):round(x1 * width)]
     assert inside.sum() > 0.8 * blue.sum() > 200  # the frame is that cell's
+    # its label clear of the frame: no dark text pixel within 2 pixels of it (at a pad of 4 the first line touched it)
+    cell = image[round((1 - y1) * height):round((1 - y0) * height), round(x0 * width):round(x1 * width)]
+    dark = cell.max(-1) < 120
+    near_frame = np.zeros_like(inside)
+    for dy in range(-2, 3):
+        for dx in range(-2, 3):
+            near_frame |= np.roll(inside, (dy, dx), axis=(0, 1))
+    assert dark[:40, :200].sum() > 50  # the label's first line is there
+    assert not (dark & near_frame).any(), np.argwhere(dark & near_frame)[:5]
     window.heatmap_choice.setCurrentIndex(0)
     assert [i for i, h in enumerate(view._hands[1:]) if h.border is not None and h.border.GetVisibility()] == [0]
 

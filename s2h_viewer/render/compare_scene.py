@@ -41,7 +41,9 @@ LABEL_PX = 13  # the grid's labels' font size, in pixels, where their cell has r
 MIN_LABEL_PX = 9  # and at least, in small cells: smaller glyphs are no longer read at a glance
 #: the picture height LABEL_PX was chosen for: a taller export (2160 pixels) draws its labels larger in proportion
 LABEL_REFERENCE_HEIGHT = 1000
-LABEL_PAD = 4  # pixels between a label and its cell's top and left edges (and the band's bottom)
+#: pixels between a label and its cell's top and left edges (and the band's bottom): clear of the selected cell's
+#: 3-pixel frame (at 4 its first line touched it, in the grid and in an exported picture: a fresh-eyes user)
+LABEL_PAD = 7
 BAND_SHARE = 0.35  # of a cell's height: the font shrinks until the labels' band fits in it
 MAX_BAND_SHARE = 0.45  # at most: a cell too short for every line even at MIN_LABEL_PX leaves out the last ones
 LABEL_LINES = 3  # a retarget's label: method -> target, S_finger, the share of frames keeping the signature
