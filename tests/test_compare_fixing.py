@@ -194,7 +194,8 @@ def test_a_ring_drag_in_solo_keys_the_joint_live_and_undo_brings_back_the_method
     # a second drag at the key's frame turns the key further: the bar says this drag's turn and the joint's in all
     second = []
     drag(qtbot, win, -30.0, lambda: second.append(mode.fixing.bar.readout.toolTip()))
-    assert second[0].startswith("index PIP: bend -") and "deg off the method's in all) at frame 40" in second[0]
+    assert second[0].startswith("index PIP: bend -") and "(opens it out; " in second[0]
+    assert "deg off the method's in all) at frame 40" in second[0]
 
 
 def test_a_key_blends_over_the_marked_range_and_the_fix_keys_delete_and_clear(window, qtbot):

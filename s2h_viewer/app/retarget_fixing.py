@@ -349,16 +349,18 @@ class RetargetFixing(QObject):
             now = self.mode.corrected(drag.before, drag.corrections())
             self.mode.show_result(drag.key, now)
             turn = drag.sense * drag.degrees
-            way = {"bend": (" (curls it in)", " (opens it out)")}.get(drag.axis, ("", ""))[turn < 0]
-            held = "" if drag.hold is None else (f"held over the {self.mode.comparison.motion.labels[drag.frame]} "
-                                                 f"pose (frames {drag.hold[0]}-{drag.hold[1]}), ")
+            way = {"bend": ("curls it in", "opens it out")}.get(drag.axis, ("", ""))[turn < 0]
             # a key already there is turned further: the joint's whole offset, which the bar says after the drag,
             # is not this drag's turn (a fresh-eyes user read +36 while dragging, 28 after)
             total = np.degrees(now.corrections.offset_at(drag.joint, drag.frame).magnitude())
-            in_all = f" ({total:.0f} deg off the method's in all)" if abs(total - abs(turn)) >= 1.0 else ""
+            notes = [note for note in (way, f"{total:.0f} deg off the method's in all"
+                                       if abs(total - abs(turn)) >= 1.0 else "") if note]
+            held = "" if drag.hold is None else (f"held over the {self.mode.comparison.motion.labels[drag.frame]} "
+                                                 f"pose (frames {drag.hold[0]}-{drag.hold[1]}), ")
+            said_notes = f" ({'; '.join(notes)})" if notes else ""
             # the frames first: at the end, a 1000-pixel bar cut them off (a fresh-eyes user)
-            self.bar.say(f"{topo.joint_label(topo.ARTICULATED_NAMES[drag.joint])}: {drag.axis} {turn:+.0f} deg{way}"
-                         f"{in_all} at frame {drag.frame}, {held}blended over frames {drag.frames[0]}-"
+            self.bar.say(f"{topo.joint_label(topo.ARTICULATED_NAMES[drag.joint])}: {drag.axis} {turn:+.0f} deg"
+                         f"{said_notes} at frame {drag.frame}, {held}blended over frames {drag.frames[0]}-"
                          f"{drag.frames[1]}; {score_change(drag.before, now)}")
 
     def _end(self) -> None:
