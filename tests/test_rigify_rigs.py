@@ -2,14 +2,18 @@
 a skinned mesh on both hands, written by Blender's glTF and FBX exporters with deform bones only
 (scripts/rigify_hands.py). Rigify's names (``DEF-f_index.01.R``) were tested only as lists of names before.
 
+Also renamed as the Unreal 5 mannequin's and Mixamo's bones, over the same Blender-made hierarchy.
+
 Runs where `.venv-blender` exists (CI builds it: `make test` with CI=true); skipped elsewhere, saying how to make it.
 """
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
+import pygltflib
 import pytest
 
 from rigify_character import BLENDER_PYTHON, rigify_character
@@ -85,3 +89,47 @@ def test_asrn_keeps_every_authored_pose_on_a_rigify_character_left_and_right_ali
                                      retarget(gestures, gestures_source, hand, "asrn").q_tbs)
         sideways[side] = on_gestures.sideways_deg
     assert max(sideways.values()) <= 25.0 and abs(sideways["right"] - sideways["left"]) <= 2.0, sideways
+
+
+def _unreal_name(name: str) -> str:
+    """A Rigify deform bone's name as the Unreal 5 mannequin's (``DEF-f_index.01.R`` -> ``index_01_r``, the palm
+    bones its metacarpals)."""
+    finger = re.fullmatch(r"DEF-(?:f_)?(thumb|index|middle|ring|pinky)\.0(\d)\.([LR])", name)
+    if finger:
+        return f"{finger[1]}_0{finger[2]}_{finger[3].lower()}"
+    palm = re.fullmatch(r"DEF-palm\.0(\d)\.([LR])", name)
+    if palm:
+        return f"{('index', 'middle', 'ring', 'pinky')[int(palm[1]) - 1]}_metacarpal_{palm[2].lower()}"
+    wrist = re.fullmatch(r"DEF-hand\.([LR])", name)
+    return f"hand_{wrist[1].lower()}" if wrist else name
+
+
+def _mixamo_name(name: str) -> str:
+    """As Mixamo's (``mixamorig:RightHandIndex1``); the palm bones, which Mixamo has not, keep Rigify's names."""
+    side = {"L": "Left", "R": "Right"}
+    finger = re.fullmatch(r"DEF-(?:f_)?(thumb|index|middle|ring|pinky)\.0(\d)\.([LR])", name)
+    if finger:
+        return f"mixamorig:{side[finger[3]]}Hand{finger[1].capitalize()}{finger[2]}"
+    wrist = re.fullmatch(r"DEF-hand\.([LR])", name)
+    return f"mixamorig:{side[wrist[1]]}Hand" if wrist else name
+
+
+@pytest.mark.parametrize("scheme, rename", [("unreal", _unreal_name), ("mixamo", _mixamo_name)])
+def test_the_rigify_character_renamed_as_unreals_or_mixamos_reads_as_the_same_hands(rigify_files, hands, scheme,
+                                                                                   rename, tmp_path):
+    """Blender's hierarchy with another scheme's names (the same character sent through a renaming step, as users
+    do to retarget in Unreal or to match Mixamo clips): recognised as that scheme, both hands the same as under
+    Rigify's names, the metacarpals (Unreal) or the unnamed palm bones (Mixamo) moving with the wrist."""
+    gltf = pygltflib.GLTF2().load_binary(str(rigify_files["glb"]))
+    for node in gltf.nodes:
+        node.name = rename(node.name or "")
+    renamed = tmp_path / f"{scheme}.glb"
+    gltf.save_binary(str(renamed))
+    for side in ("right", "left"):
+        hand = load_hand_file(renamed, RigOptions(side=side))
+        rigify = hands[("glb", side)]
+        assert hand.meta["rig_scheme"] == scheme
+        assert hand.meta["rig_joints"]["index_mcp"] == rename(f"DEF-f_index.01.{side[0].upper()}")
+        np.testing.assert_allclose(hand.rest_positions, rigify.rest_positions, atol=1e-6)
+        np.testing.assert_allclose(hand.rest_frames, rigify.rest_frames, atol=1e-4)
+        np.testing.assert_allclose(hand.mesh.vertices, rigify.mesh.vertices, atol=1e-6)
