@@ -1671,3 +1671,33 @@ def test_a_backwards_range_cannot_be_exported_and_cancel_writes_nothing(window, 
     assert window.statusBar().currentMessage() == "video export cancelled: no file written (short_iris_tbs_copy.mp4)"
     assert window.timeline.playing
     qtbot.waitUntil(window.isActiveWindow, timeout=5000)
+
+
+def test_both_hands_of_a_character_are_told_apart_in_the_grid_table_and_export_names(qtbot, sample_hands, tmp_path):
+    """`s2h view --target human-female.glb --side right` and its left hand added: both read "human-female" (the
+    file's stem) in every cell, row and export name. The left one is "human-female (left)" now, and adding it again
+    is refused as the same hand."""
+    from compare_window import open_window, short_clip
+    from s2h_viewer.app.compare_mode import CompareSetup
+    from s2h_viewer.io.files import RigOptions, load_hand_file
+
+    female = ASSETS_DIR / "hands" / "real" / "human-female.glb"
+    right, left = (load_hand_file(female, RigOptions(side=side)) for side in ("right", "left"))
+    birch = sample_hands["birch"]
+    win = open_window(qtbot, CompareSetup(short_clip(birch), birch, [right], ["tbs_copy"]), tmp_path)
+    with qtbot.waitSignal(win.comparison_ready, timeout=120_000):
+        added = win.compare.add_target(left)
+    assert added is not left and added.name == "human-female (left)" and left.name == "human-female"
+    table = win.scores
+    rows = [table.item(row, 1).text().removeprefix("! ") for row in range(table.rowCount())]  # "!": a warning
+    assert rows == ["human-female", "human-female (left)"]
+    assert [hand.label.text.split("\n")[0] for hand in win.view._hands[1:]] == [
+        "TBS Copy -> human-female", "TBS Copy -> human-female (left)"]
+    table.selectRow(1)
+    from s2h_viewer.app.exports import Shown
+    assert Shown.of(win.compare).name(".glb") == "short_human-female-left_tbs_copy.glb"
+    from PySide6.QtWidgets import QMessageBox
+    shown = []
+    when_shown(QMessageBox, lambda box: (shown.append(box.text()), box.accept()))
+    assert win.compare.add_target(load_hand_file(female, RigOptions(side="left"))) is None
+    assert "is a target already" in shown[0] and len(win.compare.state.targets) == 2

@@ -504,3 +504,25 @@ def test_real_rigs_ship_with_their_licences():
     assert (REAL / "godot-xr-tools-hands-License.md").exists() and (REAL / "mesh2motion-LICENSE-CC0.MD").exists()
     assert "Facebook Technologies" in (REAL / "Oculus-SampleFramework-license.txt").read_text()
     assert not (REAL / "human-female.glb").is_symlink()  # a copy in the project, not a link to /work/shared
+
+
+def test_targets_named_alike_are_told_apart_by_side_then_format_then_number(tmp_path):
+    """Both hands of a character, or one avatar as GLB and as FBX, are named alike (the file's stem): each later
+    one is named apart from those before it, by what differs; the hand given is left as it is."""
+    from s2h_viewer.retarget.comparison import with_distinct_names
+
+    right, left = (load_hand_file(REAL / "human-female.glb", RigOptions(side=side)) for side in ("right", "left"))
+    glb = load_hand_file(WEBXR / "generic-hand-right.glb")
+    (tmp_path / "webxr").mkdir()
+    as_gltf = tmp_path / "webxr" / "generic-hand-right.gltf"  # the same hand, another format
+    document = pygltflib.GLTF2().load_binary(str(WEBXR / "generic-hand-right.glb"))
+    document.convert_buffers(pygltflib.BufferFormat.DATAURI)
+    document.save_json(str(as_gltf))
+    gltf = load_hand_file(as_gltf)
+    again = load_hand_file(WEBXR / "generic-hand-right.glb")
+    named = with_distinct_names([right, left, glb, gltf, again])
+    assert [hand.name for hand in named] == ["human-female", "human-female (left)", "generic-hand-right",
+                                             "generic-hand-right (gltf)", "generic-hand-right #2"]
+    assert left.name == "human-female" and named[1] is not left and named[1].mesh is left.mesh
+    assert named[0] is right and named[1].same_as(left)
+    assert with_distinct_names([left], [right])[0].name == "human-female (left)"  # a target added later

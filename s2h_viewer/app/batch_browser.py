@@ -87,10 +87,10 @@ class BatchBrowser(QObject):
             self._rows[(id(motion), id(target), row["method"])] = row
             compare.replace_comparison(motion, source, [target], [row["method"]])
         else:  # the clip shown: the row's retarget joins the grid, to compare with the others of the clip
+            if all(t is not target for t in compare.state.targets):
+                target = compare.add_target(target) or target  # perhaps a copy, named apart from the others
             self._pending = (target, row["method"], frame)
             self._rows[(id(compare.state.motion), id(target), row["method"])] = row
-            if all(t is not target for t in compare.state.targets):
-                compare.add_target(target)
             if row["method"] not in compare.state.methods:
                 compare.set_methods([*compare.state.methods, row["method"]])
         if not compare.state.missing():

@@ -38,7 +38,7 @@ from s2h_viewer.hand.motion import Motion
 from s2h_viewer.io.files import RigOptions, load_motion_file
 from s2h_viewer.render.compare_scene import BANNER_COLOUR
 from s2h_viewer.retarget.compare_state import CompareState, ResultKey
-from s2h_viewer.retarget.comparison import Comparison, MethodResult, corrected_result
+from s2h_viewer.retarget.comparison import Comparison, MethodResult, corrected_result, with_distinct_names
 from s2h_viewer.retarget.corrections import Corrections
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.semantics.flexion import SidewaysPeak, bend_angles
@@ -184,7 +184,7 @@ class CompareMode(QWidget):
                  parent: QWidget | None = None):
         super().__init__(parent)
         self.error, self.status = error, status
-        self.state = CompareState(setup.motion, setup.source, list(setup.targets), list(setup.methods))
+        self.state = CompareState(setup.motion, setup.source, with_distinct_names(setup.targets), list(setup.methods))
         #: the methods are a batch's rows' (`replace_comparison`) until the user chooses some or opens a motion: not
         #: remembered for the next session
         self.methods_from_batch = False
@@ -307,14 +307,17 @@ class CompareMode(QWidget):
         self.state.methods = list(methods)
         self._sync()
 
-    def add_target(self, hand: HandModel) -> None:
-        """One more target, the last row (undoable); a hand that is a target already is refused, saying so
-        (two identical rows compare nothing)."""
+    def add_target(self, hand: HandModel) -> HandModel | None:
+        """One more target, the last row (undoable), and the hand added: ``hand``, or a copy named apart from the
+        other targets (`retarget.comparison.distinct_name`); a hand that is a target already is refused, saying so
+        (two identical rows compare nothing), and None returned."""
         if any(target.same_as(hand) for target in self.state.targets):
             self.error(f"{hand.name} is a target already (the same hand: skeleton, frames and mesh); "
                        f"nothing was added")
-            return
-        self.undo_stack.push(AddTargetCommand(self, hand))
+            return None
+        added = with_distinct_names([hand], self.state.targets)[0]
+        self.undo_stack.push(AddTargetCommand(self, added))
+        return added
 
     def remove_target(self, index: int) -> None:
         """Drop one target and its results (undoable); the rest stay as computed."""
@@ -355,7 +358,7 @@ class CompareMode(QWidget):
         the grid had kept every earlier target and method, and computed retargets nobody asked for). Its undo
         history starts afresh: the earlier one's commands name targets this one does not have."""
         self.undo_stack.clear()
-        self.state.targets, self.state.methods = list(targets), [m for m in METHODS if m in methods]
+        self.state.targets, self.state.methods = with_distinct_names(targets), [m for m in METHODS if m in methods]
         self.methods_from_batch = True
         self.load(motion, source)
 

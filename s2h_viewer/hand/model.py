@@ -70,11 +70,12 @@ class HandModel:
         self.validate()
 
     def same_as(self, other: "HandModel") -> bool:
-        """The same hand as ``other``: name, skeleton, TBS frames and mesh all equal (one file loaded twice)."""
+        """The same hand as ``other``: skeleton, TBS frames and mesh all equal (one file loaded twice, or a copy
+        renamed to tell it from another target's name, `retarget.comparison.distinct_name`)."""
         meshes = (self.mesh, other.mesh)
         same_mesh = meshes[0] is meshes[1] or (None not in meshes and all(
             np.array_equal(getattr(meshes[0], a), getattr(meshes[1], a)) for a in ("vertices", "faces", "weights")))
-        return (self.name == other.name and same_mesh and np.array_equal(self.offsets, other.offsets)
+        return (same_mesh and np.array_equal(self.offsets, other.offsets)
                 and np.array_equal(self.rest_frames, other.rest_frames))
 
     def validate(self) -> None:

@@ -7,7 +7,9 @@ Pure computation (no Qt): the app runs `build_comparison` off the GUI thread and
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Iterable
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import torch
@@ -70,6 +72,41 @@ class Comparison:
     @property
     def n_frames(self) -> int:
         return self.motion.n_frames
+
+
+def distinct_name(hand: HandModel, others: Iterable[HandModel]) -> str:
+    """``hand``'s name, or where one of ``others`` (the other targets) has it, that name with what tells the hand
+    apart from them: its side ("human-female (left)"), else its file's format ("r (fbx)"), else a number ("iris #2").
+    Both hands of a character, or two exports of one avatar, read as one name twice in every cell, row and file
+    name."""
+    others = list(others)
+    taken = {other.name for other in others}
+    if hand.name not in taken:
+        return hand.name
+    alike = [other for other in others if other.name == hand.name]
+    side = hand.meta.get("side")
+    suffix = _format(hand)
+    tellers = [f"{hand.name} ({side})" if side and all(o.meta.get("side") != side for o in alike) else "",
+               f"{hand.name} ({suffix})" if suffix and all(_format(o) != suffix for o in alike) else ""]
+    tellers += [f"{hand.name} #{k}" for k in range(2, len(others) + 3)]
+    return next(name for name in tellers if name and name not in taken)
+
+
+def _format(hand: HandModel) -> str:
+    """The suffix of the file ``hand`` was read from, lower case ("fbx"); "" where none."""
+    return Path(hand.source).suffix.lstrip(".").lower() if hand.source else ""
+
+
+def with_distinct_names(hands: Iterable[HandModel], others: Iterable[HandModel] = ()) -> list[HandModel]:
+    """``hands`` in order, each named apart from ``others`` and from those before it (`distinct_name`); a renamed
+    hand is a copy, the one given is left as it is."""
+    named = list(others)
+    out = []
+    for hand in hands:
+        name = distinct_name(hand, named)
+        out.append(hand if name == hand.name else dataclasses.replace(hand, name=name))
+        named.append(out[-1])
+    return out
 
 
 def source_semantics(motion: Motion, source: HandModel) -> tuple[HandPose, torch.Tensor]:
