@@ -82,7 +82,7 @@ def _render_comparison(args: argparse.Namespace) -> int:
     from s2h_viewer.render.caption import clip_at, page_caption
     from s2h_viewer.render.compare_scene import ViewOptions, render_comparison
     from s2h_viewer.render.video import VIDEO_SUFFIXES, frame_range
-    from s2h_viewer.retarget.comparison import build_comparison
+    from s2h_viewer.retarget.comparison import build_comparison, with_distinct_names
 
     motion, source = _performed(args.motion, args.source, _rig_options(args))
     if Path(args.out).suffix.lower() in VIDEO_SUFFIXES:
@@ -95,6 +95,7 @@ def _render_comparison(args: argparse.Namespace) -> int:
     names = args.target or ["iris", "laurel"]
     targets = [load_hand_file(t, _rig_options(args)) for t in names]
     _say_hand_notes([(source, args.source or args.motion), *zip(targets, names)])
+    targets = with_distinct_names(targets)  # named as the viewer names them (its corrections sidecars say them)
     methods = _method_names(args.methods or "tbs_copy,asrn")
     options = ViewOptions(camera="default" if args.view == "three_quarter" else args.view, skeleton=args.skeleton,
                           contacts=args.contacts)
@@ -140,6 +141,12 @@ def _cmd_render(args: argparse.Namespace) -> int:
         return _render_comparison(args)
     if args.source:
         raise S2HError(NO_MOTION_FOR_SOURCE)
+    # a retarget's options without the motion drew the sample hands' gallery, saying nothing of them
+    given = [f"--{name}" for name in ("target", "methods", "corrections", "frame", "start", "end", "contacts")
+             if getattr(args, name) not in (None, False)]
+    if given:
+        raise S2HError(f"{', '.join(given)} draw retargets of a motion: give the --motion too (without it, s2h render "
+                       f"draws sample hands in one gesture: --hands, --gesture)")
     import numpy as np
     import torch
 

@@ -53,6 +53,17 @@ def test_frame_counts_say_one_frame_and_ranges_their_ends():
     assert frames_text(range(1, 2), 2) == "1 frame: 1"  # was "1 frames: 1 to 1" (a fresh-eyes user)
 
 
+def test_render_refuses_a_retargets_options_without_the_motion(tmp_path, capsys):
+    """`s2h render --target a.glb --methods tbs_copy` drew the sample hands' gallery and said nothing of the target:
+    one error line naming the options that need --motion, and nothing written."""
+    out = tmp_path / "grid.png"
+    assert main(["render", "--target", "iris", "--methods", "tbs_copy", "--frame", "3", "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--target, --methods, --frame draw retargets of a motion: give the --motion" in err
+    assert not out.exists()
+    assert main(["render", "--hands", "iris", "--out", str(out)]) == 0 and out.exists()  # the gallery as before
+
+
 def test_render_compare_takes_the_camera_and_the_overlays_asked_for(sample_hands, tmp_path):
     """`--view` and `--skeleton` were read for hands in one gesture only: a compare picture always came from the
     three-quarter camera, where a pinch's touch hides behind the fingers; now they and `--contacts` act on it."""
