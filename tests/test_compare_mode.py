@@ -1701,3 +1701,46 @@ def test_both_hands_of_a_character_are_told_apart_in_the_grid_table_and_export_n
     when_shown(QMessageBox, lambda box: (shown.append(box.text()), box.accept()))
     assert win.compare.add_target(load_hand_file(female, RigOptions(side="left"))) is None
     assert "is a target already" in shown[0] and len(win.compare.state.targets) == 2
+
+
+def test_add_target_asks_which_hand_of_a_character_and_both_adds_each_named_by_its_side(qtbot, sample_hands,
+                                                                                       tmp_path):
+    """File > Add target hand on a character's file (both hands) took its right hand, and the left only came from
+    launching with --side left: it asks which, and "Both hands" adds the two, the left one named so; the right one
+    alone adds it alone, and Cancel adds nothing."""
+    from PySide6.QtWidgets import QMessageBox
+
+    from compare_window import open_window, short_clip
+    from s2h_viewer.app.compare_mode import CompareSetup
+
+    birch = sample_hands["birch"]
+    win = open_window(qtbot, CompareSetup(short_clip(birch), birch, [sample_hands["iris"]], ["tbs_copy"]), tmp_path,
+                      compute=False)
+    asked = []
+
+    def answer(label: str):
+        def click(box: QMessageBox) -> None:
+            asked.append((box.text(), [button.text() for button in box.buttons()]))
+            next(button for button in box.buttons() if button.text() == label).click()
+        when_shown(QMessageBox, click)
+
+    character = ASSETS_DIR / "hands" / "real" / "human-female.glb"
+    answer("Cancel")
+    win.add_target_file(str(character))
+    assert len(win.compare.state.targets) == 1
+    answer("Both hands")
+    win.add_target_file(str(character))
+    assert asked[-1][0] == "human-female.glb has both hands."
+    assert set(asked[-1][1]) == {"Right hand", "Left hand", "Both hands", "Cancel"}
+    targets = win.compare.state.targets
+    assert [(t.name, t.meta.get("side")) for t in targets] == [
+        ("iris", None), ("human-female", "right"), ("human-female (left)", "left")]
+    assert not targets[1].same_as(targets[2])
+    answer("Right hand")  # the right one again: the same hand, refused
+    said = []
+    win.error = said.append
+    win.compare.error = said.append
+    win.add_target_file(str(character))
+    assert len(win.compare.state.targets) == 3 and "is a target already" in said[0]
+    win.add_target_file(str(ASSETS_DIR / "hands" / "real" / "godot_hand_l.gltf"))  # a lone hand: no question
+    assert len(asked) == 3 and win.compare.state.targets[-1].name == "godot_hand_l"

@@ -526,3 +526,13 @@ def test_targets_named_alike_are_told_apart_by_side_then_format_then_number(tmp_
     assert left.name == "human-female" and named[1] is not left and named[1].mesh is left.mesh
     assert named[0] is right and named[1].same_as(left)
     assert with_distinct_names([left], [right])[0].name == "human-female (left)"  # a target added later
+
+
+def test_a_characters_file_says_it_has_both_hands_and_a_lone_hand_does_not():
+    """What Add target asks from: the other hand named (a glTF character) or in the humanoid map (VRM), whichever
+    side was taken; a lone hand's file has one."""
+    assert load_hand_file(REAL / "human-female.glb").meta["both_hands"]
+    assert load_hand_file(REAL / "human-female.glb", RigOptions(side="left")).meta["both_hands"]
+    assert load_hand_file(REAL / "cryptovoxels.vrm").meta["both_hands"]
+    assert not load_hand_file(REAL / "godot_hand_r.gltf").meta["both_hands"]
+    assert not load_hand_file(WEBXR / "generic-hand-left.glb").meta["both_hands"]

@@ -474,15 +474,15 @@ class MainWindow(QMainWindow):
         if path:
             then(path)
 
-    def _load_hand(self, path: str, map_joints: bool = False) -> HandModel | None:
+    def _load_hand(self, path: str, map_joints: bool = False, side: str | None = None) -> HandModel | None:
         """The hand in ``path`` (its folder remembered), or None after an error dialog or a cancel; with
-        ``map_joints`` the user maps its bones first (the joint map dialog)."""
+        ``map_joints`` the user maps its bones first (the joint map dialog); ``side``: that hand of a character."""
         try:
-            hand = self._map_and_load(path) if map_joints else self._load_or_map(path)
+            hand = self._map_and_load(path) if map_joints else self._load_or_map(path, side)
             unit = self._chosen_unit(path, hand) if hand is not None else None
             if unit:
                 from s2h_viewer.io.files import load_hand_file
-                hand = load_hand_file(path, replace(self.open_options, unit=unit))
+                hand = load_hand_file(path, replace(self.open_options, unit=unit, side=side or self.open_options.side))
             elif unit is None:
                 return None
         except S2HError as exc:
@@ -517,13 +517,14 @@ class MainWindow(QMainWindow):
             return None
         return "" if choice == 0 else units[choice]
 
-    def _load_or_map(self, path: str) -> HandModel | None:
-        """The hand in ``path``; where s2h does not recognise its bones (and a joint map can make it a hand: not
-        for four fingers), the hand the user maps in the joint map dialog if they want to, else None."""
+    def _load_or_map(self, path: str, side: str | None = None) -> HandModel | None:
+        """The hand in ``path`` (its ``side``, if given); where s2h does not recognise its bones (and a joint map
+        can make it a hand: not for four fingers), the hand the user maps in the joint map dialog if they want to,
+        else None."""
         from s2h_viewer.hand.rig_recognition import TEMPLATE_HINT
-        from s2h_viewer.io.files import joint_map_sidecar, load_hand_file
+        from s2h_viewer.io.files import RigOptions, joint_map_sidecar, load_hand_file
         try:
-            return load_hand_file(path)
+            return load_hand_file(path, RigOptions(side=side))
         except UnrecognisedRigError as exc:
             if isinstance(exc, TooFewBonesError):
                 raise
@@ -744,11 +745,30 @@ class MainWindow(QMainWindow):
         self._ask_to_open("Add target hand", TARGET_HAND_FILTER, self.add_target_file, self._hand_dir())
 
     def add_target_file(self, path: str) -> None:
+        """The hand in ``path`` as one more target; of a character's file (both hands), the hand the user picks,
+        or both (the right one alone was all Add target could give, the left only by launching with --side left)."""
         hand = self._load_hand(path)
         if hand is None:
             return
-        self._loading.append(("target", path, hand))
-        self.compare.add_target(hand)
+        hands = [hand]
+        if hand.meta.get("both_hands") and self.open_options.side is None:
+            other = "left" if hand.meta["side"] == "right" else "right"
+            accept = QMessageBox.ButtonRole.AcceptRole
+            choice = ask(self, "s2h-viewer: which hand", f"{Path(path).name} has both hands.",
+                         [(f"{hand.meta['side'].capitalize()} hand", accept), (f"{other.capitalize()} hand", accept),
+                          ("Both hands", accept), ("Cancel", QMessageBox.ButtonRole.RejectRole)],
+                         "Which to add as a target? (s2h view --side left opens every file's left hand.)")
+            if choice == 3:
+                return
+            if choice > 0:
+                second = self._load_hand(path, side=other)
+                if second is None:
+                    return
+                hands = [second] if choice == 1 else [hand, second]
+        for target in hands:
+            added = self.compare.add_target(target)  # perhaps a copy, named apart from the other targets
+            if added is not None:  # a new hand: computed later, never at once
+                self._loading.append(("target", path, added))
 
     # --- exports ---
     def _export_dir(self) -> Path:

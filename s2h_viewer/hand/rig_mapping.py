@@ -153,6 +153,7 @@ class RigMapping:
     side_from: str = "names"
     confidence: float = 1.0
     notes: list[str] = field(default_factory=list)
+    both_hands: bool = False  # the rig has the other hand too (a character), named or in its humanoid map
 
     @property
     def missing_tips(self) -> list[str]:

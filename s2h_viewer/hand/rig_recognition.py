@@ -304,13 +304,15 @@ def recognise_rig(skeleton: Skeleton, source: str | Path, side: str | None = Non
         joints, notes = complete_humanoid_map(skeleton, humanoid[chosen], chosen, source)
         mapping = map_user(names, source, joints, chosen, "the file's humanoid map")
         mapping.scheme, mapping.side_from, mapping.notes = "vrm", "humanoid map", notes
+        mapping.both_hands = {"right", "left"} <= set(humanoid)
         _add_leaf_tips(skeleton, mapping)
         return mapping
     chosen = side or ("right" if "right" in named or not named else "left")
     by_name = best_name_match(names, chosen, scheme)
     if by_name.joints and not by_name.missing:
         hand_sides = sides_named([by_name.joints[n] for n in by_name.joints])
-        if len(named) == 2 and side is None:
+        by_name.both_hands = len(named) == 2
+        if by_name.both_hands and side is None:
             by_name.notes.append("the rig has both hands; the right one is taken (--side left for the other)")
         _add_leaf_tips(skeleton, by_name, tails_only=True)  # a Blender export's ``Index3_end``, Rigify's kind
         return _settle_side(skeleton, by_name, side, hand_sides)

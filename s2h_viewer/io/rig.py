@@ -155,6 +155,7 @@ def build_hand(source: str | Path, skeleton: RigSkeleton, mapping: RigMapping, m
                          meta={"side": side, "side_from": mapping.side_from, "rig_scheme": mapping.scheme,
                                "rig_joints": mapping.joints, "rig_confidence": mapping.confidence,
                                "rig_notes": mapping.notes, "palm_bones": mapping.palm_bones,
+                               "both_hands": mapping.both_hands,
                                "extrapolated_tips": mapping.missing_tips, "to_metres": to_metres,
                                "unit": unit_choice.unit, "unit_note": unit_note, "unit_guess": unit_guess})
         if side == "left":
