@@ -209,6 +209,18 @@ def test_a_line_too_wide_is_elided_to_its_longest_start_that_fits():
         assert text_extent(line[:len(short)] + ELLIPSIS, 11)[0] > width  # a letter more would not fit
 
 
+def test_an_elided_title_keeps_what_tells_its_target_apart():
+    """Both hands of a character in narrow cells read "TBS Copy -> human-female…" twice (a fresh-eyes user): the
+    end that tells the target apart stays after the ellipsis; a poses count is no such end."""
+    from s2h_viewer.render.compare_scene import ELLIPSIS, elide, text_extent
+    for line, end in (("TBS Copy -> human-female (left)", " (left)"), ("ASM-Opt -> rigify_character (fbx)", " (fbx)"),
+                      ("TBS Copy -> generic-hand-right #2", " #2")):
+        short = elide(line, 11, 120)
+        assert short.endswith(ELLIPSIS + end) and text_extent(short, 11)[0] <= 120, short
+        assert line.startswith(short[:-len(ELLIPSIS + end)])
+    assert elide("kept 0.902 (10/11 poses)", 11, 60).endswith(ELLIPSIS)
+
+
 def test_a_caption_fits_its_pictures_width():
     """A fresh-eyes user's 926-pixel PNG of a pose of the authored poses read as one clip cut its caption at
     "RPM_Templat": a caption shrinks to fit (no smaller than 60% of its size), past that its end is elided; a

@@ -8,6 +8,7 @@ draws triangles slowly). Every camera is linked.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from functools import lru_cache
@@ -388,15 +389,25 @@ def text_band(width: int, height: int, largest: int = LABEL_PX) -> int:
     return band_height(lines, px)
 
 
+#: what ends a target's name told apart from another's (`retarget.comparison.distinct_name`): " (left)", " (fbx)",
+#: " #2"; an elided line keeps it (two cells read "TBS Copy -> human-female…" for both hands: a fresh-eyes user)
+_TELLER = re.compile(r" (\([a-z0-9]{1,6}\)|#\d+)$")
+
+
 def elide(line: str, px: int, width: int) -> str:
-    """``line`` whole if it fits ``width`` pixels at ``px``, else its longest start that fits with an ellipsis."""
+    """``line`` whole if it fits ``width`` pixels at ``px``, else its longest start that fits with an ellipsis,
+    and the end that tells a target from another's if the line has one (`_TELLER`) and there is room for it."""
     if text_extent(line, px)[0] <= width:
         return line
+    teller = _TELLER.search(line)
+    end = teller.group(0) if teller and text_extent(ELLIPSIS + teller.group(0), px)[0] < width / 2 else ""
+    line = line[:len(line) - len(end)]
     low, high = 0, len(line)  # the longest start that fits with the ellipsis: binary search on its length
     while low < high:
         mid = (low + high + 1) // 2
-        low, high = (mid, high) if text_extent(line[:mid].rstrip() + ELLIPSIS, px)[0] <= width else (low, mid - 1)
-    return line[:low].rstrip() + ELLIPSIS
+        fits = text_extent(line[:mid].rstrip() + ELLIPSIS + end, px)[0] <= width
+        low, high = (mid, high) if fits else (low, mid - 1)
+    return line[:low].rstrip() + ELLIPSIS + end
 
 
 def cell_pixels(plotter: pv.Plotter, renderer: pv.Renderer) -> tuple[int, int]:
