@@ -1707,7 +1707,7 @@ def test_add_target_asks_which_hand_of_a_character_and_both_adds_each_named_by_i
                                                                                        tmp_path):
     """File > Add target hand on a character's file (both hands) took its right hand, and the left only came from
     launching with --side left: it asks which, and "Both hands" adds the two, the left one named so; the right one
-    alone adds it alone, and Cancel adds nothing."""
+    alone adds it alone, and Cancel adds nothing. Added together, each is named by its side."""
     from PySide6.QtWidgets import QMessageBox
 
     from compare_window import open_window, short_clip
@@ -1734,7 +1734,7 @@ def test_add_target_asks_which_hand_of_a_character_and_both_adds_each_named_by_i
     assert set(asked[-1][1]) == {"Right hand", "Left hand", "Both hands", "Cancel"}
     targets = win.compare.state.targets
     assert [(t.name, t.meta.get("side")) for t in targets] == [
-        ("iris", None), ("human-female", "right"), ("human-female (left)", "left")]
+        ("iris", None), ("human-female (right)", "right"), ("human-female (left)", "left")]
     assert not targets[1].same_as(targets[2])
     answer("Right hand")  # the right one again: the same hand, refused
     said = []

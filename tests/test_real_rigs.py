@@ -507,8 +507,9 @@ def test_real_rigs_ship_with_their_licences():
 
 
 def test_targets_named_alike_are_told_apart_by_side_then_format_then_number(tmp_path):
-    """Both hands of a character, or one avatar as GLB and as FBX, are named alike (the file's stem): each later
-    one is named apart from those before it, by what differs; the hand given is left as it is."""
+    """Both hands of a character, or one avatar as GLB and as FBX, are named alike (the file's stem): hands given
+    together that are each of its own side are named by it, else each later one apart from those before it, by what
+    differs; the hand given is left as it is."""
     from s2h_viewer.retarget.comparison import with_distinct_names
 
     right, left = (load_hand_file(REAL / "human-female.glb", RigOptions(side=side)) for side in ("right", "left"))
@@ -521,11 +522,13 @@ def test_targets_named_alike_are_told_apart_by_side_then_format_then_number(tmp_
     gltf = load_hand_file(as_gltf)
     again = load_hand_file(WEBXR / "generic-hand-right.glb")
     named = with_distinct_names([right, left, glb, gltf, again])
-    assert [hand.name for hand in named] == ["human-female", "human-female (left)", "generic-hand-right",
+    assert [hand.name for hand in named] == ["human-female (right)", "human-female (left)", "generic-hand-right",
                                              "generic-hand-right (gltf)", "generic-hand-right #2"]
     assert left.name == "human-female" and named[1] is not left and named[1].mesh is left.mesh
-    assert named[0] is right and named[1].same_as(left)
+    assert named[2] is glb and named[1].same_as(left)
     assert with_distinct_names([left], [right])[0].name == "human-female (left)"  # a target added later
+    assert [h.name for h in with_distinct_names([right, left, right])] == [  # not each of its own side: in turn
+        "human-female", "human-female (left)", "human-female #2"]
 
 
 def test_a_characters_file_says_it_has_both_hands_and_a_lone_hand_does_not():

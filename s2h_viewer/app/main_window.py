@@ -26,6 +26,7 @@ from s2h_viewer.errors import S2HError, TooFewBonesError, UnrecognisedRigError, 
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.io.annotation import hand_side
 from s2h_viewer.io.files import check_motion_export, export_sidecar
+from s2h_viewer.retarget.comparison import with_distinct_names
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.widgets import annotation_view, asm_heatmap, compare_view, error_curve, vtk_widget
 
@@ -764,7 +765,7 @@ class MainWindow(QMainWindow):
                 second = self._load_hand(path, side=other)
                 if second is None:
                     return
-                hands = [second] if choice == 1 else [hand, second]
+                hands = [second] if choice == 1 else with_distinct_names([hand, second])  # each named by its side
         for target in hands:
             added = self.compare.add_target(target)  # perhaps a copy, named apart from the other targets
             if added is not None:  # a new hand: computed later, never at once

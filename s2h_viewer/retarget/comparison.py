@@ -98,12 +98,22 @@ def _format(hand: HandModel) -> str:
 
 
 def with_distinct_names(hands: Iterable[HandModel], others: Iterable[HandModel] = ()) -> list[HandModel]:
-    """``hands`` in order, each named apart from ``others`` and from those before it (`distinct_name`); a renamed
-    hand is a copy, the one given is left as it is."""
+    """``hands`` in order, each named apart from ``others`` and from those before it (`distinct_name`); hands of
+    one name among ``hands`` that are each of another side are all named by it ("human-female (right)", "(left)":
+    with the right one's name bare, a fresh-eyes user could not tell which it was). A renamed hand is a copy, the
+    one given is left as it is."""
+    hands = list(hands)
+    sides: dict[str, list[str | None]] = {}
+    for hand in hands:
+        sides.setdefault(hand.name, []).append(hand.meta.get("side"))
     named = list(others)
     out = []
     for hand in hands:
-        name = distinct_name(hand, named)
+        alike = sides[hand.name]
+        by_side = len(alike) > 1 and None not in alike and len(set(alike)) == len(alike)
+        name = f"{hand.name} ({hand.meta['side']})" if by_side else hand.name
+        if name in {other.name for other in named}:
+            name = distinct_name(hand, named)
         out.append(hand if name == hand.name else dataclasses.replace(hand, name=name))
         named.append(out[-1])
     return out
