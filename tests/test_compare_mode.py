@@ -1744,3 +1744,7 @@ def test_add_target_asks_which_hand_of_a_character_and_both_adds_each_named_by_i
     assert len(win.compare.state.targets) == 3 and "is a target already" in said[0]
     win.add_target_file(str(ASSETS_DIR / "hands" / "real" / "godot_hand_l.gltf"))  # a lone hand: no question
     assert len(asked) == 3 and win.compare.state.targets[-1].name == "godot_hand_l"
+    from dataclasses import replace
+    win.open_options = replace(win.open_options, side="left")  # `s2h view --side left`: its hand, asking nothing
+    win.add_target_file(str(ASSETS_DIR / "hands" / "real" / "RPM_Template_Mesh_XR.glb"))
+    assert len(asked) == 3 and win.compare.state.targets[-1].meta["side"] == "left"

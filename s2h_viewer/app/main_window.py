@@ -477,13 +477,15 @@ class MainWindow(QMainWindow):
 
     def _load_hand(self, path: str, map_joints: bool = False, side: str | None = None) -> HandModel | None:
         """The hand in ``path`` (its folder remembered), or None after an error dialog or a cancel; with
-        ``map_joints`` the user maps its bones first (the joint map dialog); ``side``: that hand of a character."""
+        ``map_joints`` the user maps its bones first (the joint map dialog); ``side``: that hand of a character, else
+        the one `s2h view --side` named (an Add target on a character took its right hand whatever --side said)."""
+        side = side or self.open_options.side
         try:
             hand = self._map_and_load(path) if map_joints else self._load_or_map(path, side)
             unit = self._chosen_unit(path, hand) if hand is not None else None
             if unit:
                 from s2h_viewer.io.files import load_hand_file
-                hand = load_hand_file(path, replace(self.open_options, unit=unit, side=side or self.open_options.side))
+                hand = load_hand_file(path, replace(self.open_options, unit=unit, side=side))
             elif unit is None:
                 return None
         except S2HError as exc:
