@@ -16,6 +16,7 @@ from s2h_viewer.annotate.solver import PALM_EVIDENCE, frame_angle_errors, solve_
 from s2h_viewer.cli import main
 from s2h_viewer.hand.kinematics import forward_kinematics
 from s2h_viewer.io.files import RigOptions, load_hand_file, load_motion_file
+from s2h_viewer.retarget.asrn.inference import network_retarget
 from s2h_viewer.retarget.contact_fit import fit_contacts
 from s2h_viewer.retarget.evaluation import evaluate, format_markdown, summarise
 from s2h_viewer.retarget.guard import guarded
@@ -186,7 +187,7 @@ def test_the_guard_never_adds_a_loss(poses):
     """Guarding a retarget by another only ever removes signature losses, frame by frame."""
     motion, rig = poses
     target = load_hand_file(GODOT_R)
-    candidate = retarget(motion, rig, target, "dm").q_tbs
+    candidate = network_retarget("dm", motion.q_tbs, rig, target)  # the network alone, unguarded
     out, weight = guarded(rig, motion.q_tbs, target, candidate, motion.q_tbs)
     before = loss_masks(rig, motion.q_tbs, target, candidate)
     after = loss_masks(rig, motion.q_tbs, target, out)
@@ -195,6 +196,18 @@ def test_the_guard_never_adds_a_loss(poses):
     assert np.count_nonzero(after) < np.count_nonzero(before)
     np.testing.assert_array_equal(out[weight == 0], candidate[weight == 0])
 
+
+def test_dm_runs_asrns_pipeline_and_curls_toward_the_palm_on_a_real_rig(gestures, sample_hands):
+    """Issue 26's sideways goal holds for every method but Copy: DM's network alone bends the pinky DIP of the
+    gestures' fists 31 deg sideways on the cryptovoxels avatar (26 the index PIP on the Godot hand). DM runs ASRN's
+    pipeline with its own network (limits, contact fit, guard; DESIGN section 6): 24, no violation added."""
+    source = sample_hands[gestures.hand_name]
+    hand = load_hand_file(ROOT / "assets/hands/real/cryptovoxels.vrm", RigOptions(side="right"))
+    alone = score_retarget(source, gestures.q_tbs, hand, network_retarget("dm", gestures.q_tbs, source, hand))
+    scores = score_retarget(source, gestures.q_tbs, hand, retarget(gestures, source, hand, "dm").q_tbs)
+    assert alone.sideways_deg > 28.0, alone.sideways_at
+    assert scores.sideways_deg <= 25.0, scores.sideways_at
+    assert scores.added_violation_rate == 0.0
 
 def test_evaluate_reports_sideways_flexion_and_poses_kept(poses, sample_hands):
     motion, rig = poses

@@ -75,18 +75,13 @@ def network_retarget(kind: str, source_q: np.ndarray, source_hand: HandModel, ta
                        overlap=config.window // 4)
 
 
-@register("dm", "DM", "the network on distance matrices (Zhang et al. 2023) instead of the ASM")
-def retarget_dm(motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
-    return on_target(motion, target_hand, network_retarget("dm", motion.q_tbs, source_hand, target_hand), "dm")
-
-
-@register("asrn", "ASRN", "the anatomy-based semantic retargeting network (trained, shipped), its fingertip "
-                          "contacts then fitted to the source's, guarded frame by frame by TBS Copy")
-def retarget_asrn(motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
+def guarded_pipeline(kind: str, motion: Motion, source_hand: HandModel, target_hand: HandModel) -> np.ndarray:
+    """(T, 15, 4) target TBS rotations from the shipped network ``kind`` kept within the anatomical limits, its
+    fingertip contacts fitted to the source's and guarded frame by frame by TBS Copy: the one pipeline both
+    networks run, so DM and ASRN differ only in what their network reads (DESIGN section 6)."""
     with stage(0.0, 0.1, "network"):
         # the network's angles within the anatomical limits the source keeps (L_ana trains toward them, not to them)
-        network = within_source_limits(motion.q_tbs,
-                                       network_retarget("asrn", motion.q_tbs, source_hand, target_hand))
+        network = within_source_limits(motion.q_tbs, network_retarget(kind, motion.q_tbs, source_hand, target_hand))
     with stage(0.1, 0.85, "contact fit"):
         q = fit_contacts(motion.q_tbs, source_hand, target_hand, network.copy())
     with stage(0.85, 1.0, "guard"):
@@ -95,4 +90,16 @@ def retarget_asrn(motion: Motion, source_hand: HandModel, target_hand: HandModel
         q, _ = guarded(source_hand, motion.q_tbs, target_hand, q, network)
         q, _ = guarded(source_hand, motion.q_tbs, target_hand, q, motion.q_tbs)
         report(1.0)
-    return on_target(motion, target_hand, q, "asrn")
+    return q
+
+
+@register("dm", "DM", "the paper's baseline: a network trained on distance matrices (Zhang et al. 2023) instead of "
+                      "the ASM, in ASRN's pipeline (contacts fitted, guarded by TBS Copy)")
+def retarget_dm(motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
+    return on_target(motion, target_hand, guarded_pipeline("dm", motion, source_hand, target_hand), "dm")
+
+
+@register("asrn", "ASRN", "the anatomy-based semantic retargeting network (trained, shipped), its fingertip "
+                          "contacts then fitted to the source's, guarded frame by frame by TBS Copy")
+def retarget_asrn(motion: Motion, source_hand: HandModel, target_hand: HandModel) -> Motion:
+    return on_target(motion, target_hand, guarded_pipeline("asrn", motion, source_hand, target_hand), "asrn")
