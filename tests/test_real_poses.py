@@ -471,13 +471,14 @@ def test_a_thumb_out_to_its_side_is_read_and_kept(poses):
 def test_a_left_hand_and_its_mirrored_right_twin_curl_alike(gestures, sample_hands, left, side, tmp_path):
     """Issue 26: the same motion on a left hand and on its mirror image made a right hand (`wild_rigs.mirrored_glb`:
     the file reflected, its names' sides swapped) bends every PIP/DIP equally far sideways, frame by frame, within
-    2 deg (measured: 0.00 for TBS Copy, 0.04-0.75 for ASRN), whichever hand the rays and the network see."""
+    2 deg (measured: 0.00 for TBS Copy, 0.00-0.13 for ASRN, 0.02-0.04 for DM, 0.14-0.37 for ASM-Opt), whichever
+    hand the rays and the network see."""
     from s2h_viewer.semantics.flexion import flexion_and_sideways
     source = sample_hands[gestures.hand_name]
     hand = load_hand_file(left, RigOptions(side=side))
     twin = load_hand_file(mirrored_glb(left, tmp_path / "twin.glb"), RigOptions(side=None if side is None else "right"))
     assert hand.meta.get("side") == "left" and twin.meta.get("side") == "right"
-    for method in ("tbs_copy", "asrn"):
+    for method in ("tbs_copy", "dm", "asrn", "asm_opt"):
         sideways = [flexion_and_sideways(forward_kinematics(h, torch.as_tensor(retarget(gestures, source, h, method)
                                                                                 .q_tbs, dtype=torch.float64))
                                          .positions.numpy())[1] for h in (hand, twin)]
