@@ -13,7 +13,7 @@ from pathlib import Path
 
 from s2h_viewer.io.files import RigOptions, load_hand_file, load_motion_file
 from s2h_viewer.render.compare_scene import render_comparison
-from s2h_viewer.retarget.comparison import build_comparison
+from s2h_viewer.retarget.comparison import build_comparison, with_distinct_names
 from s2h_viewer.semantics.signature import held_poses
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -51,7 +51,7 @@ def main() -> None:
             path = path if path.exists() else args.shared / "real-rigs" / file
             if path.exists():
                 targets.append(load_hand_file(path, RigOptions(side=side)))
-        comparison = build_comparison(motion, source, targets, args.methods.split(","))
+        comparison = build_comparison(motion, source, with_distinct_names(targets), args.methods.split(","))
         for name, pose in shown.items():
             frame = starts[pose]  # the middle of its held frames
             print(render_comparison(comparison, args.out / f"{name}_{group}.png", frame=frame, size=(1600, 1000)))
