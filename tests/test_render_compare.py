@@ -199,6 +199,47 @@ def test_off_screen_labels_stay_in_their_cells_above_the_hands(sample_hands, tar
         plotter.close()
 
 
+@pytest.fixture(scope="module")
+def five_methods(sample_hands):
+    """A thumbs-up between a relaxed and a spread hand, onto laurel by every method."""
+    from s2h_viewer.retarget.comparison import build_comparison
+    motion = synthesize(["relaxed", "thumbs_up", "spread"], sample_hands["birch"], seed=2, name="thumb")
+    return build_comparison(motion, sample_hands["birch"], [sample_hands["laurel"]],
+                            ["copy", "tbs_copy", "dm", "asrn", "asm_opt"])
+
+
+@pytest.mark.parametrize("camera", ["palm", "side"])
+def test_a_thumb_held_out_stays_in_the_narrow_cells_of_five_methods(five_methods, camera):
+    """Five methods across a 790-pixel view (a fresh-eyes user's window): seen from the palm, the source's
+    thumbs-up thumb ran past its cell's side and was cut, in the window and in the pictures and videos exported
+    from it. The view angle is widened as far as every hand reaches over the clip, seen from the camera: no
+    skin in the 4 pixels inside any cell's sides (its frame is 3 wide), on every other frame."""
+    import pyvista as pv
+
+    from s2h_viewer.render.compare_scene import ViewOptions, apply_options, fit_cells, grid_layout, populate
+    plotter = pv.Plotter(off_screen=True, window_size=(790, 480), **grid_layout(five_methods))
+    try:
+        posed, labels = populate(plotter, five_methods)
+        apply_options(plotter, posed, ViewOptions(camera=camera))
+        fit_cells(plotter, posed, labels)
+        closest = 1.0  # the least room, over hands and frames, between skin and a cell's side, of the cell's width
+        for frame in range(0, five_methods.n_frames, 2):
+            for hand in posed:
+                hand.show(frame)
+            plotter.render()
+            image = np.asarray(plotter.screenshot(return_img=True))[..., :3].astype(int)
+            for hand in posed:
+                cell = cell_pixels(image, hand.renderer)
+                middle = cell[cell.shape[0] // 5:-cell.shape[0] // 8]  # under the label, over a banner
+                skin = (middle.max(-1) - middle.min(-1) > 60) & (middle.min(-1) < 200)  # coloured, not text
+                assert not skin[:, 3:7].any() and not skin[:, -7:-3].any(), (frame, hand.hand.name)
+                columns = np.flatnonzero(skin.any(0))
+                closest = min(closest, min(columns[0], len(skin[0]) - 1 - columns[-1]) / len(skin[0]))
+        assert closest < 0.1  # and no smaller than it must be: some hand comes near a side
+    finally:
+        plotter.close()
+
+
 def test_a_line_too_wide_is_elided_to_its_longest_start_that_fits():
     from s2h_viewer.render.compare_scene import ELLIPSIS, elide, text_extent
     line = "TBS Copy -> generic-hand-left"

@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 import pyvista as pv
 import trimesh
+from scipy.spatial import ConvexHull, QhullError
 from vtkmodules.vtkRenderingCore import vtkActor2D, vtkCellPicker, vtkMapper, vtkTextProperty, vtkTextRenderer
 
 from s2h_viewer.annotate.trust import frame_warning
@@ -121,6 +122,7 @@ class PosedHand:
         self.border: vtkActor2D | None = None
         self.frame, self.playing = 0, False
         self.levels: list[Skin] = []  # the full skin, then the one drawn while playing (if any)
+        self._reach: np.ndarray | None = None
         if hand.mesh is not None:
             models = [hand] + ([playing_hand] if playing_hand is not None and playing_hand is not hand else [])
             self.levels = [self._add_skin(plotter, model) for model in models]
@@ -142,6 +144,29 @@ class PosedHand:
             actor.mapper.SetInputData(mesh)  # between them that runs on every changed frame (~1 ms a frame)
         error = np.asarray(mesh.point_data["error"]) if self.joint_error is not None else None
         return Skin(hand, mesh, actor, is_closed_outward(mesh), np.asarray(mesh.points), error)
+
+    @property
+    def reach(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """What the hand's cell must show whichever frame is drawn (`fit_view_angle`), in view space: the corners
+        of the hull of every joint in every frame of the clip, how far the skin reaches past each of them (the
+        thickness of the bones either side of its joint: a finger's, a mitten's far more), and the skin the wrist
+        alone moves (the palm's heel, a forearm's stub: still in the view, past the wrist joint)."""
+        if self._reach is None:
+            joints = to_view(self.hand, self.pose.positions.reshape(-1, 3).numpy().astype(np.float64))
+            around = np.full(topo.N_JOINTS, BONE_MARGIN * self.hand.hand_length)  # per joint
+            rigid = np.zeros((0, 3))
+            if self.hand.mesh is not None:
+                skin = to_view(self.hand, skin_vertices(self.hand, self.pose, 0))
+                bone = np.argmax(np.asarray(self.hand.mesh.weights), axis=1)  # 0: the wrist, k: rotating joint k's
+                rigid = skin[bone == 0][_hull_corners(skin[bone == 0])]
+                for k in range(1, topo.N_ROTATING):  # how far its skin lies from each bone, at the first frame
+                    start = topo.ARTICULATED_JOINTS[k - 1]
+                    if (bone == k).any():
+                        far = float(_from_segments(skin[bone == k], joints[start], joints[start + 1]).max())
+                        around[[start, start + 1]] = np.maximum(around[[start, start + 1]], far)
+            corners = _hull_corners(joints)
+            self._reach = (joints[corners], around[corners % topo.N_JOINTS], rigid)
+        return self._reach
 
     @property
     def skin(self) -> Skin | None:
@@ -443,7 +468,7 @@ def fit_cells(plotter: pv.Plotter, hands: list["PosedHand"], labels: list[CellLa
     if legend is not None:
         legend.fit(*cell_pixels(plotter, legend.renderer))
     if shown:
-        fit_view_angle(plotter, shown[0].renderer, largest)
+        fit_view_angle(plotter, shown[0].renderer, largest, shown)
 
 
 def result_label(result: MethodResult) -> str:
@@ -571,19 +596,74 @@ CAMERA_PRESETS = {"default" if name == "three_quarter" else name: direction
 
 VIEW_ANGLE = 30.0  # degrees, vertical
 FIT_ASPECT = 0.65  # width / height of a cell's hand part under which a hand's width would not fit at VIEW_ANGLE
+#: the camera's distance from the palm centre, in lengths of the largest hand (`set_camera`)
+CAMERA_DISTANCE = 3.0
+#: a skeleton's drawn bones' reach beyond its joints, in lengths of the hand
+BONE_MARGIN = 0.02
+#: room kept around the hands' reach, as a share of it: a hand reaching furthest keeps clear of its cell's frame
+REACH_ROOM = 1.08
 
 
-def fit_view_angle(plotter: pv.Plotter, renderer, largest: int = LABEL_PX) -> None:
+def fit_view_angle(plotter: pv.Plotter, renderer, largest: int = LABEL_PX,
+                   hands: list[PosedHand] | None = None) -> None:
     """Fit the shared camera to ``renderer``'s cell (every hand's cell has its size): the hand drawn below the
     cell's text band (`text_band`), the picture moved down by the band (the camera's window centre up) and the
     view angle widened so the part below it shows what the whole cell showed at VIEW_ANGLE; more where that
-    part is narrower than FIT_ASPECT (one target: tall cells), so a hand's width stays in view. Zooming moves
-    the camera, not the angle, so calling this before every render keeps the user's zoom."""
+    part is narrower than FIT_ASPECT (one target: tall cells), and more where one of ``hands`` reaches past the
+    part's sides or ends in some frame of its clip, seen from the camera's side at its preset distance (five
+    methods' narrow cells cut the thumb of a thumbs-up seen from the palm). Zooming moves the camera, not the
+    angle, so calling this before every render keeps the user's zoom."""
     width, height = cell_pixels(plotter, renderer)
     band = min(text_band(width, height, largest), height - 1) / height  # of the cell's height
     widen = max(1.0, FIT_ASPECT * (1.0 - band) * height / width) / (1.0 - band)
+    if hands:  # tangents: the hands' reach against what the view shows at VIEW_ANGLE
+        across, along = _reach_from_camera(plotter.camera, hands,
+                                           CAMERA_DISTANCE * max(h.hand.hand_length for h in hands))
+        seen = np.tan(np.radians(VIEW_ANGLE / 2)) / REACH_ROOM
+        widen = max(widen, across * height / (seen * width), along / (seen * (1.0 - band)))
     plotter.camera.view_angle = 2.0 * np.degrees(np.arctan(np.tan(np.radians(VIEW_ANGLE / 2)) * widen))
     plotter.camera.SetWindowCenter(0.0, band)  # in [-1, 1] over the cell: the hand's part's middle at its centre
+
+
+def _from_segments(points: np.ndarray, start: np.ndarray, end: np.ndarray) -> np.ndarray:
+    """(N,) distances from each of (N, 3) ``points`` to the segment ``start`` -> ``end``."""
+    along = end - start
+    t = np.clip((points - start) @ along / max(float(along @ along), 1e-18), 0.0, 1.0)
+    return np.linalg.norm(points - (start + t[:, None] * along), axis=-1)
+
+
+def _hull_corners(points: np.ndarray) -> np.ndarray:
+    """The indices of the corners of the convex hull of (N, 3) ``points`` (all where they span no volume)."""
+    if len(points) >= 5:
+        try:
+            return ConvexHull(points).vertices
+        except QhullError:  # flat, or a single pose of a skeleton on a line
+            pass
+    return np.arange(len(points))
+
+
+def _reach_from_camera(camera: pv.Camera, hands: list[PosedHand], distance: float) -> tuple[float, float]:
+    """How far ``hands`` reach from the middle of the view, across it and along its up axis, as the tangents of
+    their angles seen from the camera's direction at ``distance`` from its focal point (perspective: a thumb
+    held toward the camera looks longer), over their clips, skin included."""
+    position, focal, up = (np.asarray(v, dtype=np.float64) for v in (camera.position, camera.focal_point, camera.up))
+    forward = focal - position
+    forward /= max(np.linalg.norm(forward), 1e-12)
+    up = up - forward * (up @ forward)
+    up /= max(np.linalg.norm(up), 1e-12)
+    right = np.cross(forward, up)
+    eye = focal - forward * distance
+    across = along = 0.0
+    for hand in hands:
+        joints, around, rigid = hand.reach
+        for points, margin in ((joints, around), (rigid, 0.0)):
+            if not len(points):
+                continue
+            offsets = points - eye
+            depth = np.maximum(offsets @ forward, 1e-6)
+            across = max(across, float(((np.abs(offsets @ right) + margin) / depth).max()))
+            along = max(along, float(((np.abs(offsets @ up) + margin) / depth).max()))
+    return across, along
 
 
 def set_camera(plotter: pv.Plotter, preset: str, hands: list[HandModel]) -> None:
@@ -595,7 +675,7 @@ def set_camera(plotter: pv.Plotter, preset: str, hands: list[HandModel]) -> None
     centre = np.array([0.4, 0.0, 0.0]) * extent  # the palm frame's origin is the wrist; fingers along x
     camera = plotter.camera
     camera.focal_point = centre
-    camera.position = centre + d * extent * 3.0
+    camera.position = centre + d * extent * CAMERA_DISTANCE
     camera.up = up
     fit_view_angle(plotter, plotter.renderers[0])  # the source's cell: the size of every hand's
     for renderer in plotter.renderers:
