@@ -147,3 +147,27 @@ def test_letters_typed_in_the_batch_table_find_a_row_and_fire_no_shortcut(qtbot,
     assert view.item(view.currentRow(), 1).text() == "broken"
     QTest.keyClick(view, Qt.Key.Key_M, Qt.KeyboardModifier.ControlModifier)  # a Ctrl shortcut: still the window's
     assert win.view.solo >= 0
+
+
+def test_a_row_of_the_clip_launched_joins_its_grid(qtbot, sample_hands, tmp_path):
+    """A fresh-eyes user launched the viewer on gestures.npz, ran a batch of that file and double-clicked a row:
+    the whole grid gave way to that one retarget (only a clip opened from the summary counted as the one shown).
+    A row of the file the grid shows, read the same way, joins it: its target added, its method ticked."""
+    from compare_window import open_window, short_clip
+    from s2h_viewer.app.main_window import CompareSetup
+    from s2h_viewer.io.files import load_motion_file
+    from s2h_viewer.io.npz import save_motion
+    clip = save_motion(short_clip(sample_hands["birch"]), tmp_path / "short.npz")
+    tasks = plan_batch([str(clip)], ["laurel"], ["copy"], tmp_path / "out", TaskOptions(format="npz", render=False))
+    summary = write_summary([run_task(t) for t in tasks], tmp_path / "out" / "summary.csv")
+    motion = load_motion_file(clip)[0]
+    setup = CompareSetup(motion, sample_hands["birch"], [sample_hands["iris"]], ["tbs_copy"], path=clip)
+    win = open_window(qtbot, setup, tmp_path)
+    (row,) = win.batch_browser.open(str(summary)).rows
+    with qtbot.waitSignal(win.comparison_ready, timeout=120_000):
+        win.batch_browser.show_row(row)
+    assert win.compare.state.motion is motion
+    assert [t.name for t in win.compare.state.targets] == ["iris", "laurel"]
+    assert set(win.compare.state.methods) == {"tbs_copy", "copy"}
+    qtbot.waitUntil(lambda: win.compare.selected_result().method == "copy", timeout=30_000)
+    assert win.compare.selected_result().target.name == "laurel"

@@ -11,6 +11,7 @@ from pathlib import Path
 from PySide6.QtCore import QObject, Qt
 from PySide6.QtWidgets import QDockWidget
 
+from s2h_viewer.app.opened_clips import OpenedClips
 from s2h_viewer.errors import S2HError
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.widgets.batch_table import BatchTable
@@ -67,9 +68,11 @@ class BatchBrowser(QObject):
         compare = self.window.compare
         try:
             read = (row["motion_path"], row.get("animation") or "", row.get("source_path") or "")
-            if self._motion_read != read or compare.state.motion is not self._motion:
+            shown = compare.state.motion
+            if not ((self._motion_read == read and shown is self._motion)
+                    or self.window.opened_clips.origin(shown) == OpenedClips.origin_of(*read)):
                 motion, source = self._read_motion(*read)
-            else:
+            else:  # the clip shown, whether from this summary or opened (or launched) on the same file
                 motion = None
             target = self._target(row["target_path"], compare.state.targets)
         except (S2HError, KeyError) as exc:

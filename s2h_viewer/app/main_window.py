@@ -72,7 +72,8 @@ class MainWindow(QMainWindow):
         self.opened_clips = OpenedClips()  # a file opened again unchanged: the same clip, its results cached
         if setup.path is not None:  # the clip shown at launch too
             self.opened_clips.remember(OpenedClips.key(setup.path, (setup.options, setup.rig_file)), setup.motion,
-                                        setup.source)
+                                        setup.source, OpenedClips.origin_of(setup.path, setup.options.animation,
+                                                                            setup.rig_file))
         self.open_options = open_options or RigOptions()  # `s2h view`'s --side, --fps ...: for every file opened
         self._methods_named = setup.methods_named  # `s2h view --methods`: over the ones last ticked
         self.setWindowTitle("s2h-viewer[*]")
@@ -673,7 +674,8 @@ class MainWindow(QMainWindow):
         self._remember(path)
         self.settings.setValue("files/motion_dir", str(Path(path).resolve().parent))
         self._loading.append(("motion", path, motion))
-        self.opened_clips.remember(clip_key, motion, source)
+        self.opened_clips.remember(clip_key, motion, source,
+                                   OpenedClips.origin_of(path, self.open_options.animation, rig_file))
         self.compare.load(motion, source)
 
     def _choose_clip_rig(self, path: str, note: str, shown: bool = False) -> bool:

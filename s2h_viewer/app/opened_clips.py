@@ -19,6 +19,19 @@ class OpenedClips:
 
     def __init__(self) -> None:
         self._clips: OrderedDict[tuple, tuple[Motion, HandModel]] = OrderedDict()
+        self._origins: dict[int, tuple[str, str, str]] = {}  # per remembered motion's id: `origin`
+
+    @staticmethod
+    def origin_of(path: str | Path, animation: object = None, rig_file: str | Path | None = None
+                  ) -> tuple[str, str, str]:
+        """What a clip was read from: its file (resolved), its animation ("" for the file's first), the hand file
+        it was read onto ("" for its own skeleton or sample), comparable with a batch row's."""
+        return (str(Path(path).resolve()), "" if animation is None else str(animation),
+                str(Path(rig_file).resolve()) if rig_file else "")
+
+    def origin(self, motion: Motion) -> tuple[str, str, str] | None:
+        """`origin_of` the remembered clip whose motion is ``motion``, or None."""
+        return self._origins.get(id(motion))
 
     @staticmethod
     def key(path: str | Path, options: object) -> tuple | None:
@@ -41,10 +54,16 @@ class OpenedClips:
         self._clips.move_to_end(key)
         return self._clips[key]
 
-    def remember(self, key: tuple | None, motion: Motion, source: HandModel) -> None:
+    def remember(self, key: tuple | None, motion: Motion, source: HandModel,
+                 origin: tuple[str, str, str] | None = None) -> None:
         if key is None:
             return
+        if key in self._clips:  # read again: the motion it held goes, with its origin (its id may be reused)
+            self._origins.pop(id(self._clips[key][0]), None)
         self._clips[key] = (motion, source)
         self._clips.move_to_end(key)
+        if origin is not None:
+            self._origins[id(motion)] = origin
         while len(self._clips) > REMEMBERED:
-            self._clips.popitem(last=False)
+            forgotten, _ = self._clips.popitem(last=False)[1]
+            self._origins.pop(id(forgotten), None)
