@@ -205,6 +205,17 @@ def test_the_table_counts_invented_contacts_and_the_frames_that_keep_the_signatu
                                                  for pair, frames, _ in scores.invented_pairs[:5])
 
 
+def test_the_table_says_how_closely_each_thumb_follows_the_sources(window):
+    """A fresh-eyes user saw DM's thumb stand out of the Meta hand's palm where the source's lies along the hand,
+    and only `s2h evaluate` said the thumb followed worse: the table has the figure, its worst angle in the tip."""
+    table = window.compare.scores
+    headers = [table.horizontalHeaderItem(c).text() for c in range(table.columnCount())]
+    thumb = headers.index("Thumb")
+    for row, result in enumerate(window.comparison.results):
+        assert table.item(row, thumb).text() == f"{result.scores.thumb_follow:.2f}"
+        assert f"at {result.scores.thumb_follow:.2f}, worst in its " in table.item(row, thumb).toolTip()
+
+
 def test_a_sideways_bend_past_the_limit_is_red_in_the_table(window):
     """A fresh-eyes user read TBS Copy's 52 deg sideways on the Meta hand in black beside ASRN's 23: a figure past
     the limit (and past the source's own + 5) is drawn red, as over the error curve."""

@@ -38,6 +38,9 @@ COLUMNS = (("Method", None, "retargeting method"), ("Target", None, "target hand
                                                      "authored past them stays past them: TBS Copy adds none)"),
            ("Side-\nways", "sideways_deg", "the worst sideways bend of a PIP/DIP at its tightest curls, degrees "
                                             "(0: a clean curl toward the palm; authored clips reach 8-22)"),
+           ("Thumb", "thumb_follow", "how closely the thumb follows the source's: the correlation over the clip of "
+                                     "each thumb angle (the metacarpal across and out of the palm, the MCP and IP "
+                                     "bends) with the source's, the worst of them (1: it does what the source's does)"),
            ("Kept", "signature_kept", KEPT_TIP),
            ("Inv-\nented", "invented_contacts", "frames where the retarget makes a contact the source does not "
                                                "come near (within 3% of the hand; drawn blue by the contact "
@@ -49,12 +52,17 @@ SHOWN_ROWS, MIN_ROWS = 6, 2  # rows the table asks room for, and keeps in view a
 NAME_WIDTH = 140  # pixels: widest a name column starts (drag the header edge for more)
 #: a sideways bend past the limit, in the table and over the error curve (in the table on this background)
 SIDEWAYS_RED, SIDEWAYS_BACKGROUND = "#c62828", "#ffcdd2"
+#: the thumb angles `semantics.flexion.thumb_follow` reads, as the Thumb cell's tooltip names them
+THUMB_ANGLE_NAMES = {"thumb_cmc_across": "its metacarpal's swing across the palm",
+                     "thumb_cmc_lift": "its metacarpal's lift out of the palm", "thumb_mcp": "its MCP's bend",
+                     "thumb_ip": "its IP's bend"}
 #: invented pairs the Invented cell's tooltip names (most frames first), and poses lost the Kept cell's names
 INVENTED_LISTED, POSES_LISTED = 5, 8
 #: why a score is n/a (NaN), per score key
 UNDEFINED = {"sideways_deg": "n/a: no finger curls", "contact_precision": "n/a: the retarget makes no pad contact, so no precision to measure",
              "contact_recall": "n/a: the source makes no pad contact, so no recall to measure",
-             "palm_contact_recall": "n/a: the source puts no fingertip on the palm, so no recall to measure"}
+             "palm_contact_recall": "n/a: the source puts no fingertip on the palm, so no recall to measure",
+             "thumb_follow": "n/a: the source's thumb barely moves, so no motion to follow"}
 
 
 def _cell(key: str, values: dict) -> tuple[str, str | None]:
@@ -78,6 +86,10 @@ def _cell(key: str, values: dict) -> tuple[str, str | None]:
         joint, _, frame = values["sideways_at"].partition("@")
         return f"{value:.0f}", SidewaysPeak(value, joint, int(frame)).describe() + f" (the source: " \
             f"{values['source_sideways_deg']:.0f})"
+    if key == "thumb_follow":
+        angle = THUMB_ANGLE_NAMES.get(values["thumb_follow_at"], values["thumb_follow_at"])
+        return f"{value:.2f}", f"the thumb follows the source's at {value:.2f}, worst in {angle}" + \
+            (" (under 0.9: it moves otherwise than the source's)" if value < 0.9 else "")
     return f"{value:.3f}", None
 
 
