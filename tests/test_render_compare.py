@@ -240,6 +240,33 @@ def test_a_thumb_held_out_stays_in_the_narrow_cells_of_five_methods(five_methods
         plotter.close()
 
 
+def test_a_corrected_retarget_is_fitted_where_its_frames_now_reach(sample_hands):
+    """The reach a cell is fitted to is its retarget's: a correction that moves the hand moves it too."""
+    import pyvista as pv
+    import torch
+
+    from s2h_viewer.hand.kinematics import forward_kinematics
+    from s2h_viewer.render.compare_scene import grid_layout, populate
+    from s2h_viewer.render.scene import to_view
+    from s2h_viewer.retarget.comparison import build_comparison
+    motion = synthesize(["fist"], sample_hands["birch"], seed=1, name="fist")
+    comparison = build_comparison(motion, sample_hands["birch"], [sample_hands["laurel"]], ["tbs_copy"])
+    plotter = pv.Plotter(off_screen=True, window_size=(400, 300), **grid_layout(comparison))
+    try:
+        posed, _ = populate(plotter, comparison)
+        hand = posed[1]
+        fist = hand.reach[0]
+        canonical = np.zeros((motion.n_frames, 15, 4), dtype=np.float32)
+        canonical[..., 0] = 1.0  # every joint at the canonical pose: fingers straight
+        flat = forward_kinematics(hand.hand, torch.as_tensor(canonical))
+        hand.set_result(flat, None, "flat")
+        furthest = to_view(hand.hand, flat.positions[0].numpy().astype(np.float64)).max(0)
+        assert np.allclose(hand.reach[0].max(0), furthest)  # the straight fingers' tips, not the fist's clip
+        assert not np.allclose(fist.max(0), furthest)
+    finally:
+        plotter.close()
+
+
 def test_a_line_too_wide_is_elided_to_its_longest_start_that_fits():
     from s2h_viewer.render.compare_scene import ELLIPSIS, elide, text_extent
     line = "TBS Copy -> generic-hand-left"

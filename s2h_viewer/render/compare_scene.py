@@ -233,6 +233,7 @@ class PosedHand:
     def set_result(self, pose: HandPose, joint_error: np.ndarray | None, text: str) -> None:
         """Another motion on the same hand (a corrected retarget): posed, coloured and labelled from it now."""
         self.pose, self.joint_error = pose, joint_error
+        self._reach = None  # its frames reach elsewhere now
         if self.overlay is not None:
             self.overlay.set_pose(pose)
         if self.label is not None:
