@@ -21,6 +21,7 @@ import numpy as np
 import trimesh
 
 from s2h_viewer.errors import InvalidHandError
+from s2h_viewer.geometry import distance_to_segments
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.model import HandModel, palm_axes
 
@@ -311,16 +312,11 @@ def _unparted_fingers(positions: np.ndarray, width: np.ndarray) -> list[tuple[in
             if not np.isfinite(width[j]):
                 continue
             centre = 0.5 * (bones[j][0] + bones[j][1])
-            gap = min(_distance_to_segment(centre, *bones[3 * g + level]) for g in (f - 1, f + 1) if 1 <= g <= 4)
+            gap = min(float(distance_to_segments(centre, *bones[3 * g + level])) for g in (f - 1, f + 1) if 1 <= g <= 4)
             ratios.append(width[j] / max(gap, 1e-12))
         if ratios and max(ratios) >= PARTED_FRACTION:
             unparted.append((f, max(ratios)))
     return unparted
-
-
-def _distance_to_segment(point: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
-    t = np.clip((point - a) @ (b - a) / max((b - a) @ (b - a), 1e-24), 0.0, 1.0)
-    return float(np.linalg.norm(point - (a + t * (b - a))))
 
 
 def _angle_between_lines(a: np.ndarray, b: np.ndarray) -> np.ndarray:

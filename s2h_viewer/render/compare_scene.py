@@ -21,6 +21,7 @@ from scipy.spatial import ConvexHull, QhullError
 from vtkmodules.vtkRenderingCore import vtkActor2D, vtkCellPicker, vtkMapper, vtkTextProperty, vtkTextRenderer
 
 from s2h_viewer.annotate.trust import frame_warning
+from s2h_viewer.geometry import distance_to_segments
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.kinematics import HandPose
 from s2h_viewer.hand.model import HandModel
@@ -162,7 +163,7 @@ class PosedHand:
                 for k in range(1, topo.N_ROTATING):  # how far its skin lies from each bone, at the first frame
                     start = topo.ARTICULATED_JOINTS[k - 1]
                     if (bone == k).any():
-                        far = float(_from_segments(skin[bone == k], joints[start], joints[start + 1]).max())
+                        far = float(distance_to_segments(skin[bone == k], joints[start], joints[start + 1]).max())
                         around[[start, start + 1]] = np.maximum(around[[start, start + 1]], far)
             corners = _hull_corners(joints)
             self._reach = (joints[corners], around[corners % topo.N_JOINTS], rigid)
@@ -624,13 +625,6 @@ def fit_view_angle(plotter: pv.Plotter, renderer, largest: int = LABEL_PX,
         widen = max(widen, across * height / (seen * width), along / (seen * (1.0 - band)))
     plotter.camera.view_angle = 2.0 * np.degrees(np.arctan(np.tan(np.radians(VIEW_ANGLE / 2)) * widen))
     plotter.camera.SetWindowCenter(0.0, band)  # in [-1, 1] over the cell: the hand's part's middle at its centre
-
-
-def _from_segments(points: np.ndarray, start: np.ndarray, end: np.ndarray) -> np.ndarray:
-    """(N,) distances from each of (N, 3) ``points`` to the segment ``start`` -> ``end``."""
-    along = end - start
-    t = np.clip((points - start) @ along / max(float(along @ along), 1e-18), 0.0, 1.0)
-    return np.linalg.norm(points - (start + t[:, None] * along), axis=-1)
 
 
 def _hull_corners(points: np.ndarray) -> np.ndarray:

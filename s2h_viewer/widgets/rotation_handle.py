@@ -19,6 +19,7 @@ from PySide6.QtCore import QEvent, QObject, Qt
 from vtkmodules.vtkRenderingCore import vtkCellPicker
 
 from s2h_viewer.annotate.editing import ray_plane_point, ring_polyline, signed_angle_about, unwrap_degrees
+from s2h_viewer.geometry import distance_to_segments
 
 RING_COLOUR = "#e8a317"
 ACTIVE_COLOUR = "#ffe34d"
@@ -64,10 +65,8 @@ def nearest_segment_on_screen(renderer, starts: np.ndarray, ends: np.ndarray, x:
                               within: float = PICK_PIXELS) -> int | None:
     """The index of the view-space segment ``starts[i]`` - ``ends[i]`` drawn nearest to display pixel (x, y), if it
     is ``within`` pixels; else None (a click on a finger's bone, between its joints)."""
-    a, b = on_display(renderer, starts), on_display(renderer, ends)
-    along = b - a
-    share = np.clip(((np.array([x, y]) - a) * along).sum(1) / np.maximum((along * along).sum(1), 1e-9), 0.0, 1.0)
-    distance = np.linalg.norm(a + share[:, None] * along - (x, y), axis=1)
+    pixel = np.array([x, y], dtype=float)
+    distance = distance_to_segments(pixel, on_display(renderer, starts), on_display(renderer, ends))
     return int(distance.argmin()) if distance.min() <= within else None
 
 
