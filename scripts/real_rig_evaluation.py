@@ -1,6 +1,7 @@
 """Issue 26's tables: every method onto every real rig, on the authored poses of assets/motions/real
 (held one by one, `s2h evaluate --animation all`) and on the shipped gestures clip: poses whose signature
-is kept, contact precision, violations, the worst sideways flexion at the tightest curls.
+is kept, contact precision, violations, the worst sideways flexion at the tightest curls; and how closely the
+thumb follows the source's on a motion made of those poses that moves it (`THUMB_EXERCISE`).
 
     python scripts/real_rig_evaluation.py [--methods tbs_copy,dm,asrn] [--shared ../shared] [--side left] [--no-hinges]
 
@@ -16,6 +17,7 @@ from pathlib import Path
 
 from s2h_viewer import samples
 from s2h_viewer.io.files import RigOptions, load_hand_file, load_motion_file
+from s2h_viewer.motions.pose_clip import pose_sequence
 from s2h_viewer.retarget.evaluation import evaluate
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -26,6 +28,12 @@ RIGS = (("real/godot_hand_r.gltf", None), ("real/godot_hand_l.gltf", None), ("re
         ("webxr/generic-hand-right.glb", None), ("webxr/generic-hand-left.glb", None),
         ("real/debug_robot.vrm", "right"), ("real/debug_robot.vrm", "left"),
         ("real/cryptovoxels.vrm", "right"), ("real/cryptovoxels.vrm", "left"))
+
+#: the authored poses the thumb exercise goes through (`pose_sequence`): its tip to each fingertip and back, the
+#: thumbs-up, a grip, across the palm (Sign 4), out (Surfer): the poses clip's thumb barely moves between most of
+#: its poses (its CMC across the palm: 72-76 deg on 33 of 35), so its correlations are made by two or three
+THUMB_EXERCISE = ("Default", "Pinch Tight", "Default", "Pinch Middle", "Default", "Pinch Ring", "Default", "Thumb",
+                  "Grip", "Sign 4", "Surfer", "Default", "OK", "Pinky", "Default")
 
 
 def main() -> None:
@@ -58,15 +66,18 @@ def main() -> None:
     print(f"source: {pose_file.name} on {performer.source or performer.name} ({performer.meta.get('annotation')})")
     print("| rig | method | poses kept (of 35) | contact P (poses) | violations (poses) | violations added (poses) "
           "| sideways max, poses "
-          "| thumb follows, poses | sideways max, gestures | S_finger, gestures |")
-    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+          "| thumb follows, poses | thumb follows, thumb exercise | sideways max, gestures | S_finger, gestures |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     pose_rows = evaluate([poses], hands, labels, methods)
+    exercise = pose_sequence(poses, THUMB_EXERCISE, "thumb exercise", hold=10, blend=15)
+    exercise_rows = evaluate([exercise], hands, labels, methods)
     gesture_rows = evaluate([gestures], hands, labels, methods)
-    for p, g in zip(pose_rows, gesture_rows):
+    for p, e, g in zip(pose_rows, exercise_rows, gesture_rows):
         kept = sum(not lost for lost in p.poses.values())
         print(f"| {p.target} | {p.method} | {kept} | {p.scores.contact_precision:.2f} | {p.scores.violation_rate:.3f} "
               f"| {p.scores.added_violation_rate:.3f} | {p.scores.sideways_deg:.0f} "
               f"| {p.scores.thumb_follow:.2f} ({p.scores.thumb_follow_at}) "
+              f"| {e.scores.thumb_follow:.2f} ({e.scores.thumb_follow_at}) "
               f"| {g.scores.sideways_deg:.0f} ({g.scores.sideways_at}) "
               f"| {g.scores.s_finger:.3f} |", flush=True)
     print()

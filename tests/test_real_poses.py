@@ -612,3 +612,31 @@ def test_the_thumb_across_the_palm_is_part_of_the_signature_and_the_fit_brings_i
         fitted = fit_contacts(motion.q_tbs, rig, target, network.copy(), ContactFitConfig(thumb_across_weight=weight))
         kept[weight] = not pose_differences(rig, motion.q_tbs, target, fitted, motion.labels)["Sign 4"]
     assert kept == {0.0: False, ContactFitConfig().thumb_across_weight: True}, kept
+
+
+def test_a_motion_made_of_authored_poses_moves_the_thumb_and_asrn_follows_it(poses):
+    """The poses clip's thumb barely moves between most of its poses (its CMC across the palm: 72-76 deg on 33 of
+    35), so how closely a retarget's follows it is read off two or three poses. A motion through some of them in
+    an order of one's own (`pose_sequence`: to the ring fingertip and back, up, across the palm) moves every thumb
+    angle, holds each pose as authored and blends between them; ASRN's thumb on a real character follows it at 0.9
+    or better per angle. A pose the clip does not hold is named."""
+    from s2h_viewer.motions.pose_clip import pose_sequence
+    from s2h_viewer.semantics.flexion import thumb_angles
+    motion, source = poses
+    names = ("Default", "Pinch Ring", "Default", "Thumb", "Sign 4", "Default")
+    exercise = pose_sequence(motion, names, "thumb exercise", hold=10, blend=15)
+    assert exercise.n_frames == 6 * 10 + 5 * 15 and exercise.hand_name == motion.hand_name
+    held = held_poses(exercise.labels)
+    assert [n for n, _ in held] == list(names)
+    authored = dict(held_poses(motion.labels))
+    for n, frame in held:
+        np.testing.assert_array_equal(exercise.q_tbs[frame], motion.q_tbs[authored[n]])
+    positions = forward_kinematics(source, torch.as_tensor(exercise.q_tbs, dtype=torch.float64)).positions.numpy()
+    assert min(a.std() for a in thumb_angles(positions).values()) > 5.0
+    hand = load_hand_file(HUMAN, RigOptions(side="right"))
+    out = retarget(exercise, source, hand, "asrn").q_tbs
+    follow = thumb_follow(positions, forward_kinematics(hand, torch.as_tensor(out, dtype=torch.float64)
+                                                        ).positions.numpy())
+    assert min(follow.values()) >= 0.9, follow
+    with pytest.raises(ValueError, match="'Fist'"):
+        pose_sequence(motion, ("Default", "Fist"), "x")

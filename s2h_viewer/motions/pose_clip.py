@@ -1,12 +1,16 @@
 """One clip from many: every animation of a file in turn (a pose library's one-key poses held), labelled
-with its name, so a set of authored poses is one evaluation clip (`s2h evaluate --animation all`)."""
+with its name, so a set of authored poses is one evaluation clip (`s2h evaluate --animation all`); and a
+motion through some of those poses in an order of one's own (the thumb to each fingertip and back)."""
 
 from __future__ import annotations
+
+from collections.abc import Sequence
 
 import numpy as np
 
 from s2h_viewer.hand.motion import Motion
 from s2h_viewer.hand.rotations import slerp
+from s2h_viewer.semantics.signature import held_poses
 
 #: frames a one-key pose is held for (windowed methods see it as a held pose, not a one-frame flash)
 HOLD_FRAMES = 12
@@ -31,6 +35,20 @@ def concatenate_clips(clips: list[Motion], name: str, hold: int = HOLD_FRAMES, b
     first = clips[0]
     return Motion(np.concatenate(parts), fps=first.fps, name=name, hand_name=first.hand_name,
                   labels=np.concatenate(labels), meta={**first.meta, "clips": [c.name for c in clips]})
+
+
+def pose_sequence(clip: Motion, names: Sequence[str], name: str, hold: int = HOLD_FRAMES,
+                  blend: int = BLEND_FRAMES) -> Motion:
+    """A motion through the poses ``clip`` holds (`semantics.signature.held_poses`), in the order of ``names`` (a
+    pose may come back), each held ``hold`` frames and slerped into the next over ``blend``: authored poses made a
+    motion that moves what one wants to follow (a clip of poses moves its thumb little between most of them)."""
+    frames = dict(held_poses(clip.labels))
+    missing = [n for n in names if n not in frames]
+    if missing:
+        raise ValueError(f"{clip.name}: holds no pose named {', '.join(map(repr, missing))}")
+    poses = [Motion(clip.q_tbs[frames[n]:frames[n] + 1], fps=clip.fps, name=n, hand_name=clip.hand_name,
+                    meta=clip.meta) for n in names]
+    return concatenate_clips(poses, name, hold, blend)
 
 
 def is_pose(clip: Motion) -> bool:
