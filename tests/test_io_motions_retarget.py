@@ -117,6 +117,25 @@ def test_retarget_registry_and_copy_baselines(sample_hands):
         retarget(motion, source, target, "nope")
 
 
+def test_a_clip_cut_since_it_was_made_is_evaluated_without_a_ground_truth(tmp_path, capsys):
+    """The gestures clip's first 60 frames keep the script of all 378 in their meta: the ground truth performed
+    from it was compared with them, and `s2h evaluate` stopped on a traceback (found by the CLI fuzz). Now the
+    clip has no ground truth (the columns that need one read n/a) and the rest is scored."""
+    import dataclasses
+
+    from s2h_viewer.io.npz import load_motion, save_motion
+    from s2h_viewer.samples import ASSETS_DIR, load_sample_hand
+    clip = load_motion(ASSETS_DIR / "motions" / "gestures.npz")
+    cut = dataclasses.replace(clip, q_tbs=clip.q_tbs[:60], labels=clip.labels[:60])
+    target = load_sample_hand("iris")
+    assert resynthesize(clip, target).n_frames == clip.n_frames and resynthesize(cut, target) is None
+    path = save_motion(cut, tmp_path / "cut.npz")
+    assert main(["evaluate", "--motion", str(path), "--target", "iris", "--methods", "tbs_copy",
+                 "--out", str(tmp_path / "table"), "--quiet"]) == 0
+    row = next(line for line in capsys.readouterr().out.splitlines() if line.startswith("| TBS Copy |"))
+    assert "n/a" in row and any(c.strip()[:1].isdigit() for c in row.split("|")), row
+
+
 def test_cli_evaluate_writes_a_table(tmp_path, capsys):
     from s2h_viewer.samples import ASSETS_DIR  # one clip (each is re-synthesised on each target: the slow part)
     assert main(["evaluate", "--motion", str(ASSETS_DIR / "motions" / "counting.npz"), "--target", "iris",

@@ -77,12 +77,15 @@ def fit_library(hand: HandModel) -> dict[str, np.ndarray]:
 
 def resynthesize(motion: Motion, hand: HandModel) -> Motion | None:
     """The same gesture script, timing and noise performed by another hand (its contacts fitted to it):
-    the semantic ground truth a retarget of ``motion`` onto ``hand`` should match. None if unknown."""
+    the semantic ground truth a retarget of ``motion`` onto ``hand`` should match. None if unknown: no script, or
+    one that performs another number of frames than the clip holds (a clip cut since it was made: `s2h evaluate`
+    on the first 60 frames of the gestures clip stopped on a traceback, comparing them with 378)."""
     meta = motion.meta
     if "script" not in meta:
         return None
-    return synthesize(meta["script"], hand, fps=motion.fps, seed=meta["seed"], hold=tuple(meta["hold"]),
-                      transition=tuple(meta["transition"]), noise_deg=meta["noise_deg"], name=motion.name)
+    reference = synthesize(meta["script"], hand, fps=motion.fps, seed=meta["seed"], hold=tuple(meta["hold"]),
+                           transition=tuple(meta["transition"]), noise_deg=meta["noise_deg"], name=motion.name)
+    return reference if reference.n_frames == motion.n_frames else None
 
 
 def gesture_contacts(labels: np.ndarray) -> np.ndarray:
