@@ -417,6 +417,10 @@ def _fit_runs(q: np.ndarray, source_frames: SourceFrames, lengths: list[int], ha
             across_lost = torch.as_tensor(thumb_across_lost(
                 np.degrees(source_frames.curls.numpy()), source_frames.thumb_rest.numpy(), _thumb_at_tips(source).numpy(),
                 source_frames.thumb_across.numpy(), thumb_across(start_positions).numpy()))
+        out_term = source_frames.thumb_out is not None and bool(torch.isfinite(out_allowed).any())
+        rest_term = source_frames.thumb_rest is not None and bool(resting.any())
+        across_term = source_frames.thumb_across is not None and bool(across_lost.any())
+        palm_term = source_frames.palm_held is not None and bool(source_frames.palm_held.any())
     # each run's correction sits between two zero frames: second differences across them tie its ends
     # to zero, and no difference spans two runs
     offsets = np.cumsum([0] + [n + 2 for n in lengths[:-1]])
@@ -448,17 +452,18 @@ def _fit_runs(q: np.ndarray, source_frames: SourceFrames, lengths: list[int], ha
         if source_frames.curls is not None:
             loss = loss + config.curl_weight * _curl_excess(pose_curls(positions), source_frames.curls,
                                                             start_curls).square().sum(-1).mean()
-        if source_frames.thumb_out is not None:
+        # a term no frame of the batch needs is left out (it adds exact zeros, to the loss and to every gradient)
+        if out_term:
             miss = torch.relu(source_frames.thumb_out - thumb_out(positions) - out_allowed)
             loss = loss + config.thumb_out_weight * miss.square().mean()
-        if source_frames.thumb_rest is not None:
+        if rest_term:
             miss = torch.relu(thumb_rest_distances(positions, hand.hand_length) - source_frames.thumb_rest
                               - 0.75 * THUMB_ON_MARGIN)
             loss = loss + config.thumb_rest_weight * (miss * resting).square().sum(-1).mean()
-        if source_frames.thumb_across is not None:
+        if across_term:
             miss = torch.relu(source_frames.thumb_across - 0.5 * THUMB_ACROSS_MARGIN - thumb_across(positions))
             loss = loss + config.thumb_across_weight * (miss * across_lost).square().mean()
-        if source_frames.palm_held is not None:
+        if palm_term:
             miss = torch.relu(palm_gaps(hand, positions) / hand.hand_length - PALM_HOLD * CONTACT_TOLERANCE)
             loss = loss + config.palm_weight * (miss * source_frames.palm_held).square().sum(-1).mean()
         optimiser.zero_grad()
