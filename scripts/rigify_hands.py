@@ -5,7 +5,9 @@ tubes round each hand's deform bones (finger sections wider than deep, as a hand
 rig and mesh are exported with deform bones only, as Blender's exporters are used for Unity, Unreal and Godot.
 Used by tests/test_rigify_rigs.py to read a rig from Blender's own tools.
 
-    .venv-blender/bin/python scripts/rigify_hands.py OUT.glb|OUT.fbx
+    .venv-blender/bin/python scripts/rigify_hands.py OUT.glb|OUT.fbx [OUT.glb|OUT.fbx ...]
+
+The character is made once and written to each file named (Rigify's generation takes most of the run).
 """
 
 from __future__ import annotations
@@ -73,7 +75,7 @@ def skin_to_nearest_bones(obj, rig, bones: list) -> None:
     obj.parent = rig
 
 
-def main(out: str) -> None:
+def main(outs: list[str]) -> None:
     bpy.ops.wm.read_factory_settings(use_empty=True)
     addon_utils.enable("rigify", default_set=True)
     bpy.ops.object.armature_human_metarig_add()
@@ -87,12 +89,14 @@ def main(out: str) -> None:
     bpy.ops.object.select_all(action="DESELECT")
     hands.select_set(True)
     rig.select_set(True)
-    if out.endswith(".fbx"):
-        bpy.ops.export_scene.fbx(filepath=out, use_selection=True, use_armature_deform_only=True,
-                                 add_leaf_bones=False)
-    else:
-        bpy.ops.export_scene.gltf(filepath=out, use_selection=True, export_def_bones=True, export_animations=False)
+    for out in outs:
+        if out.endswith(".fbx"):
+            bpy.ops.export_scene.fbx(filepath=out, use_selection=True, use_armature_deform_only=True,
+                                     add_leaf_bones=False)
+        else:
+            bpy.ops.export_scene.gltf(filepath=out, use_selection=True, export_def_bones=True,
+                                      export_animations=False)
 
 
 if __name__ == "__main__":
-    main(sys.argv[-1])
+    main(sys.argv[1:])

@@ -26,6 +26,14 @@ def sample_hands() -> dict[str, HandModel]:
 
 
 @pytest.fixture(scope="session")
+def rigify_files(tmp_path_factory):
+    """The Rigify character Blender writes (tests/rigify_character.py) as GLB and as FBX, made once per test
+    process: the Blender tests of two modules read it."""
+    from rigify_character import rigify_characters
+    return rigify_characters(tmp_path_factory.mktemp("rigify"))
+
+
+@pytest.fixture(scope="session")
 def skeleton_hands() -> list[HandModel]:
     """Four procedural hands, one per rig convention, skeleton only (fast)."""
     return [generate_hand(seed, with_mesh=False, rig_convention=c)

@@ -19,7 +19,6 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from rigify_character import rigify_character
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.io.files import RigOptions, load_hand_file, read_rig_skeleton, save_motion_file
 from s2h_viewer.io.npz import load_motion
@@ -54,12 +53,12 @@ def quats(values) -> Rotation:
 
 
 @pytest.fixture(scope="module")
-def retargets(tmp_path_factory):
+def retargets(rigify_files):
     """The gestures clip TBS-copied onto each target hand: (avatar, hand, motion); last, both hands of a Rigify
     character Blender wrote (its deform bones' hierarchy is Blender's exporter's, not Rigify's control rig's)."""
     motion = load_motion(ASSETS_DIR / "motions" / "gestures.npz")
     source = load_sample_hand(motion.hand_name)
-    rigify = rigify_character(tmp_path_factory.mktemp("rigify"), "glb")
+    rigify = rigify_files["glb"]
     out = []
     for avatar, side in TARGETS + [(rigify, "right"), (rigify, "left")]:
         hand = load_hand_file(avatar, RigOptions(side=side))

@@ -16,7 +16,7 @@ import numpy as np
 import pygltflib
 import pytest
 
-from rigify_character import BLENDER_PYTHON, rigify_character
+from rigify_character import BLENDER_PYTHON
 from s2h_viewer import samples
 from s2h_viewer.io.files import RigOptions, load_hand_file, load_motion_file, read_rig_skeleton
 from s2h_viewer.retarget.methods import retarget
@@ -29,14 +29,6 @@ POSED_RIG = ROOT / "assets/motions/real/godot_hand_r_posed_rig.gltf"
 
 pytestmark = [pytest.mark.blender,
               pytest.mark.skipif(not BLENDER_PYTHON.exists(), reason="no Blender venv: `make blender` makes it")]
-
-
-@pytest.fixture(scope="module")
-def rigify_files(tmp_path_factory) -> dict[str, Path]:
-    """The Rigify character written by Blender as GLB and as FBX."""
-    out = tmp_path_factory.mktemp("rigify")
-    files = {suffix: rigify_character(out, suffix) for suffix in ("glb", "fbx")}
-    return files
 
 
 @pytest.fixture(scope="module")
