@@ -2,8 +2,9 @@
 FBX into an empty Blender scene, as a user's File > Import does, and write every armature bone's name, parent and
 world rotation per frame (quaternions w, x, y, z) at rest and over the animation to a JSON file.
 
-    .venv-blender/bin/python scripts/blender_readback.py IN.glb|IN.bvh|IN.fbx OUT.json [FPS]
+    .venv-blender/bin/python scripts/blender_readback.py [--fps FPS] IN.glb|IN.bvh|IN.fbx OUT.json [IN OUT ...]
 
+Each IN is imported into a scene of its own and written to the OUT after it (one Blender start for many files).
 FPS (default 30) is the scene's frame rate while a glTF is imported: its keys land on Blender frames at it.
 
 Imports bpy only: nothing of s2h_viewer (whose numpy is not Blender's).
@@ -58,8 +59,13 @@ def read_back(path: Path, fps: int) -> dict:
 
 
 def main(argv: list[str]) -> int:
-    source, out = Path(argv[0]), Path(argv[1])
-    out.write_text(json.dumps(read_back(source, int(argv[2]) if len(argv) > 2 else 30)))
+    fps = 30
+    if argv[:1] == ["--fps"]:
+        fps, argv = int(argv[1]), argv[2:]
+    if not argv or len(argv) % 2:
+        raise SystemExit("usage: blender_readback.py [--fps FPS] IN OUT [IN OUT ...]")
+    for source, out in zip(argv[::2], argv[1::2]):
+        Path(out).write_text(json.dumps(read_back(Path(source), fps)))
     return 0
 
 

@@ -40,12 +40,14 @@ pytestmark = [pytest.mark.blender,
               pytest.mark.skipif(not BLENDER_PYTHON.exists(), reason="no Blender venv: `make blender` makes it")]
 
 
-def blender_read_back(path: Path, fps: float) -> dict:
-    out = path.with_suffix(path.suffix + ".blender.json")
-    done = subprocess.run([str(BLENDER_PYTHON), str(ROOT / "scripts" / "blender_readback.py"), str(path), str(out),
-                           str(int(round(fps)))], capture_output=True, text=True, timeout=600)
+def blender_read_back(paths: list[Path], fps: float) -> list[dict]:
+    """What Blender reads of each of ``paths`` (one Blender run for them all)."""
+    outs = [path.with_suffix(path.suffix + ".blender.json") for path in paths]
+    done = subprocess.run([str(BLENDER_PYTHON), str(ROOT / "scripts" / "blender_readback.py"), "--fps",
+                           str(int(round(fps))), *(str(p) for pair in zip(paths, outs) for p in pair)],
+                          capture_output=True, text=True, timeout=600)
     assert done.returncode == 0, done.stderr[-2000:]
-    return json.loads(out.read_text())
+    return [json.loads(out.read_text()) for out in outs]
 
 
 def quats(values) -> Rotation:
@@ -68,12 +70,13 @@ def retargets(rigify_files):
 
 @pytest.mark.parametrize("suffix", [".glb", ".bvh", ".fbx"])
 def test_blender_reimports_our_exports_of_both_hands_within_half_a_degree(suffix, retargets, tmp_path):
-    for avatar, hand, motion in retargets:
+    paths = [save_motion_file(tmp_path / f"{avatar.stem}_{hand.meta['side']}{suffix}", motion, hand)
+             for avatar, hand, motion in retargets]
+    assert len({motion.fps for _, _, motion in retargets}) == 1
+    for (avatar, hand, motion), blender in zip(retargets, blender_read_back(paths, retargets[0][2].fps)):
         skeleton = read_rig_skeleton(avatar)
         lookup = {n: i for i, n in enumerate(skeleton.names)}
         side = hand.meta["side"]
-        path = save_motion_file(tmp_path / f"{avatar.stem}_{side}{suffix}", motion, hand)
-        blender = blender_read_back(path, motion.fps)
         bones = [hand.meta["rig_joints"][topo.JOINT_NAMES[j]] for j in topo.ROTATING_JOINTS]
         parents = dict(zip(blender["bones"], blender["parents"]))
         for bone in bones[1:]:  # the avatar's own names and hierarchy
