@@ -12,6 +12,7 @@ Imports bpy only: nothing of s2h_viewer (whose numpy is not Blender's).
 
 from __future__ import annotations
 
+import argparse
 import json
 import sys
 from pathlib import Path
@@ -59,13 +60,14 @@ def read_back(path: Path, fps: int) -> dict:
 
 
 def main(argv: list[str]) -> int:
-    fps = 30
-    if argv[:1] == ["--fps"]:
-        fps, argv = int(argv[1]), argv[2:]
-    if not argv or len(argv) % 2:
-        raise SystemExit("usage: blender_readback.py [--fps FPS] IN OUT [IN OUT ...]")
-    for source, out in zip(argv[::2], argv[1::2]):
-        Path(out).write_text(json.dumps(read_back(Path(source), fps)))
+    parser = argparse.ArgumentParser(description="Blender's reading of GLB, BVH and FBX files, as JSON")
+    parser.add_argument("--fps", type=int, default=30, help="the scene's frame rate while a glTF is imported")
+    parser.add_argument("files", nargs="+", type=Path, metavar="IN OUT", help="pairs: a file to import, its JSON")
+    args = parser.parse_args(argv)
+    if len(args.files) % 2:
+        parser.error("files come in pairs: IN OUT [IN OUT ...]")
+    for source, out in zip(args.files[::2], args.files[1::2]):
+        out.write_text(json.dumps(read_back(source, args.fps)))
     return 0
 
 

@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
+from rigify_character import BLENDER_PYTHON
 from s2h_viewer.hand import topology as topo
 from s2h_viewer.io.files import RigOptions, load_hand_file, read_rig_skeleton, save_motion_file
 from s2h_viewer.io.npz import load_motion
@@ -27,7 +28,6 @@ from s2h_viewer.retarget import retarget
 from s2h_viewer.samples import ASSETS_DIR, load_sample_hand
 
 ROOT = Path(__file__).resolve().parent.parent
-BLENDER_PYTHON = ROOT / ".venv-blender" / "bin" / "python"
 FEMALE = ASSETS_DIR / "hands" / "real" / "human-female.glb"
 OCULUS = ASSETS_DIR / "hands" / "real" / "r_hand_skeletal_lowres.fbx"
 #: (avatar, hand): both hands of a glTF character, the one hand of an FBX
