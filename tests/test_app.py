@@ -22,7 +22,9 @@ def window(qtbot, sample_hands, tmp_path):
     return open_compare_window(qtbot, sample_hands, tmp_path)
 
 
-def test_compare_mode_shows_two_methods_and_their_scores(window):
+def test_compare_mode_shows_two_methods_and_their_scores(qtbot, sample_hands, tmp_path):
+    window = open_compare_window(qtbot, sample_hands, tmp_path, computed_here=True)  # the window computes them
+    assert window.compare.queue.computed == window.compare.state.wanted()
     comparison = window.comparison
     assert [r.method for r in comparison.results] == ["tbs_copy", "asrn"]
     assert window.scores.rowCount() == 2 and window.scores.item(1, 0).text() == "ASRN"
