@@ -68,10 +68,19 @@ def retargets(rigify_files):
     return out
 
 
+@pytest.fixture(scope="module")
+def fbx_exports(retargets, tmp_path_factory) -> list[Path]:
+    """Each retarget written to FBX (through Blender's exporter, a Blender run each): read back by two tests."""
+    folder = tmp_path_factory.mktemp("fbx")
+    return [save_motion_file(folder / f"{avatar.stem}_{hand.meta['side']}.fbx", motion, hand)
+            for avatar, hand, motion in retargets]
+
+
 @pytest.mark.parametrize("suffix", [".glb", ".bvh", ".fbx"])
-def test_blender_reimports_our_exports_of_both_hands_within_half_a_degree(suffix, retargets, tmp_path):
-    paths = [save_motion_file(tmp_path / f"{avatar.stem}_{hand.meta['side']}{suffix}", motion, hand)
-             for avatar, hand, motion in retargets]
+def test_blender_reimports_our_exports_of_both_hands_within_half_a_degree(suffix, retargets, fbx_exports, tmp_path):
+    paths = fbx_exports if suffix == ".fbx" else [
+        save_motion_file(tmp_path / f"{avatar.stem}_{hand.meta['side']}{suffix}", motion, hand)
+        for avatar, hand, motion in retargets]
     assert len({motion.fps for _, _, motion in retargets}) == 1
     for (avatar, hand, motion), blender in zip(retargets, blender_read_back(paths, retargets[0][2].fps)):
         skeleton = read_rig_skeleton(avatar)
@@ -103,7 +112,7 @@ def test_blender_reimports_our_exports_of_both_hands_within_half_a_degree(suffix
         assert worst < TOLERANCE_DEG, (avatar.name, side, suffix, worst)
 
 
-def _female_fbx_exports(retargets, folder: Path) -> list[Path]:
+def _female_fbx_exports(retargets, fbx_exports: list[Path]) -> list[Path]:
     """Each hand of human-female.glb written to FBX (through Blender's exporter), checked as read back: the avatar's
     own names and every joint where the retarget put it."""
     import torch
@@ -111,9 +120,8 @@ def _female_fbx_exports(retargets, folder: Path) -> list[Path]:
     from s2h_viewer.hand.kinematics import forward_kinematics
     from s2h_viewer.io.files import load_motion_file
     written = []
-    for avatar, hand, motion in retargets[:2]:  # both hands of human-female.glb
+    for (avatar, hand, motion), path in zip(retargets[:2], fbx_exports):  # both hands of human-female.glb
         side = hand.meta["side"]
-        path = save_motion_file(folder / f"female_{side}.fbx", motion, hand)
         again, rig = load_motion_file(path, options=RigOptions(side=side))
         assert rig.meta["rig_joints"] == hand.meta["rig_joints"] and again.n_frames == motion.n_frames
         with torch.no_grad():
@@ -136,16 +144,17 @@ def _reads_of(path: Path, folder: Path, times: int) -> set:
     return outcomes
 
 
-def test_an_fbx_export_through_blender_reads_back_as_the_retarget_and_the_same_every_time(retargets, tmp_path):
+def test_an_fbx_export_through_blender_reads_back_as_the_retarget_and_the_same_every_time(retargets, fbx_exports,
+                                                                                        tmp_path):
     """`--out x.fbx` goes through Blender's FBX exporter: each hand of the character reads back (ufbx) with the
     avatar's own names and every joint where the retarget put it; and the FBX reader, which crashed at random on
     such a file (signal 11 in 3 of 40 reads before its objects were never freed), reads it the same 8 times (a read
     takes 2 s: `-m fuzz_long` reads it 40 times)."""
-    outcomes = _reads_of(_female_fbx_exports(retargets, tmp_path)[0], tmp_path, 8)
+    outcomes = _reads_of(_female_fbx_exports(retargets, fbx_exports)[0], tmp_path, 8)
     assert len(outcomes) == 1 and next(iter(outcomes))[0] == 0, outcomes
 
 
 @pytest.mark.fuzz_long
-def test_an_fbx_export_through_blender_reads_the_same_forty_times(retargets, tmp_path):
-    outcomes = _reads_of(_female_fbx_exports(retargets, tmp_path)[0], tmp_path, 40)
+def test_an_fbx_export_through_blender_reads_the_same_forty_times(retargets, fbx_exports, tmp_path):
+    outcomes = _reads_of(_female_fbx_exports(retargets, fbx_exports)[0], tmp_path, 40)
     assert len(outcomes) == 1 and next(iter(outcomes))[0] == 0, outcomes
