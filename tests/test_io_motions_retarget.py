@@ -19,6 +19,7 @@ from s2h_viewer.motions.synthesis import gesture_contacts, resynthesize, synthes
 from s2h_viewer.retarget import METHODS, retarget
 from s2h_viewer.semantics.contacts import detect_contacts
 from s2h_viewer.semantics.metrics import score_retarget
+from s2h_viewer.samples import ASSETS_DIR
 
 
 def test_motion_npz_round_trip(tmp_path, rng):
@@ -57,6 +58,22 @@ def test_corrupt_and_malformed_files_give_one_clear_error(tmp_path, rng):
         load_hand(nan_file)
     with pytest.raises(InputFileError, match="file not found"):
         load_hand(tmp_path / "missing.npz")
+
+
+@pytest.mark.parametrize("path", [ASSETS_DIR / "hands/iris.npz", ASSETS_DIR / "motions/gestures.npz"],
+                         ids=["hand", "motion"])
+def test_an_npz_whose_zip_version_field_is_damaged_is_one_line_from_every_reader(path, tmp_path):
+    """The long fuzz run flipped the "version needed to extract" byte of an npz's central directory: zipfile
+    raises NotImplementedError ("zip file version 10.4"), which the probe for keypoint arrays let through as a
+    traceback before any reader saw the file."""
+    from s2h_viewer.io.files import load_hand_file, load_motion_file
+    data = bytearray(path.read_bytes())
+    data[data.index(b"PK\x01\x02") + 6] = 104
+    damaged = tmp_path / "damaged.npz"
+    damaged.write_bytes(bytes(data))
+    for read in (load_hand_file, load_motion_file):
+        with pytest.raises(InputFileError, match=r"damaged\.npz: .*zip file version 10\.4"):
+            read(damaged)
 
 
 def test_failed_write_leaves_the_old_file_intact(tmp_path, rng):

@@ -22,7 +22,7 @@ def is_keypoint_npz(path: Path) -> bool:
     try:
         with zipfile.ZipFile(path) as archive:
             names = {n.removesuffix(".npy") for n in archive.namelist()}
-    except (zipfile.BadZipFile, OSError):
+    except (zipfile.BadZipFile, OSError, NotImplementedError):  # the last: a damaged "version needed" field
         return False
     return "schema" not in names and bool(names & set(ARRAY_KEYS) or len(names - {"fps"}) == 1)
 
@@ -59,7 +59,7 @@ def _load(path: Path) -> tuple[np.ndarray, object]:
         raise
     except ValueError as exc:  # object arrays (pickles) and damaged headers
         raise InputFileError(path, f"is not a plain numeric array file ({exc})") from None
-    except (zipfile.BadZipFile, OSError, EOFError) as exc:
+    except (zipfile.BadZipFile, OSError, EOFError, NotImplementedError) as exc:
         raise InputFileError(path, f"is not a readable .npy/.npz file ({type(exc).__name__}: {exc})") from None
 
 
