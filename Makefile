@@ -40,6 +40,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_retarget.py
 	$(PY) benchmarks/bench_annotate.py
 	$(PY) benchmarks/bench_real_rigs.py
+	$(PY) benchmarks/bench_gltf_json.py
 	$(PY) benchmarks/bench_playback.py
 	$(PY) benchmarks/bench_batch.py
 	$(PY) benchmarks/bench_tracking.py
