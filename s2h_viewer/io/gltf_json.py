@@ -88,13 +88,12 @@ def _list_of(item: Decoder) -> Decoder:
 
 def _object_of(cls) -> Decoder:
     hints = typing.get_type_hints(cls)
-    fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
+    fields = {f.name: _decoder(hints[f.name]) for f in dataclasses.fields(cls) if f.init}
 
     def decode(value, where: str):
         if value is None:  # null where an object belongs: kept, as pygltflib keeps it
             return None
         if not isinstance(value, dict):
             raise ValueError(f"{where}: not a JSON object")
-        kwargs = {name: _decoder(hints[name])(v, f"{where}.{name}") for name, v in value.items() if name in fields}
-        return cls(**kwargs)
+        return cls(**{name: fields[name](v, f"{where}.{name}") for name, v in value.items() if name in fields})
     return decode
