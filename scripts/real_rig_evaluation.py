@@ -19,6 +19,7 @@ from s2h_viewer import samples
 from s2h_viewer.io.files import RigOptions, load_hand_file, load_motion_file
 from s2h_viewer.motions.pose_clip import pose_sequence
 from s2h_viewer.retarget.evaluation import evaluate
+from s2h_viewer.semantics.signature import held_poses
 
 ROOT = Path(__file__).resolve().parents[1]
 #: (file under real-rigs/ or assets/hands/, side or None for a lone hand)
@@ -34,6 +35,8 @@ RIGS = (("real/godot_hand_r.gltf", None), ("real/godot_hand_l.gltf", None), ("re
 #: its poses (its CMC across the palm: 72-76 deg on 33 of 35), so its correlations are made by two or three
 THUMB_EXERCISE = ("Default", "Pinch Tight", "Default", "Pinch Middle", "Default", "Pinch Ring", "Default", "Thumb",
                   "Grip", "Sign 4", "Surfer", "Default", "OK", "Pinky", "Default")
+#: the rest pose's name in each pose file (the left hand's calls it "Default pose")
+REST_NAMES = ("Default", "Default pose")
 
 
 def main() -> None:
@@ -69,7 +72,9 @@ def main() -> None:
           "| thumb follows, poses | thumb follows, thumb exercise | sideways max, gestures | S_finger, gestures |")
     print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     pose_rows = evaluate([poses], hands, labels, methods)
-    exercise = pose_sequence(poses, THUMB_EXERCISE, "thumb exercise", hold=10, blend=15)
+    rest = next(name for name in REST_NAMES if name in {pose for pose, _ in held_poses(poses.labels)})
+    exercise = pose_sequence(poses, [rest if name == "Default" else name for name in THUMB_EXERCISE], "thumb exercise",
+                             hold=10, blend=15)
     exercise_rows = evaluate([exercise], hands, labels, methods)
     gesture_rows = evaluate([gestures], hands, labels, methods)
     for p, e, g in zip(pose_rows, exercise_rows, gesture_rows):
