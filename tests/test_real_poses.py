@@ -21,10 +21,10 @@ from s2h_viewer.retarget.contact_fit import fit_contacts
 from s2h_viewer.retarget.evaluation import evaluate, format_markdown, summarise
 from s2h_viewer.retarget.guard import guarded
 from s2h_viewer.retarget.methods import retarget
-from s2h_viewer.semantics.flexion import thumb_follow
 from s2h_viewer.semantics.metrics import score_retarget
+from s2h_viewer.semantics.flexion import HINGE_JOINTS, flexion_and_sideways, thumb_follow
 from s2h_viewer.semantics.signature import (INVENTED_BIT, SIDEWAYS_LIMIT, TOUCH_BITS, frame_sideways, held_poses,
-                                            loss_masks, pose_differences, signatures)
+                                            loss_masks, pose_differences, sideways_there, signatures)
 
 ROOT = Path(__file__).resolve().parents[1]
 POSES = ROOT / "assets/motions/real/godot_hand_poses_r.gltf"
@@ -33,6 +33,7 @@ HUMAN = ROOT / "assets/hands/real/human-female.glb"
 GODOT_R = ROOT / "assets/hands/real/godot_hand_r.gltf"
 WEBXR_R = ROOT / "assets/hands/webxr/generic-hand-right.glb"
 RPM = ROOT / "assets/hands/real/RPM_Template_Mesh_XR.glb"
+HINGE_NAMES = [name for name, _ in HINGE_JOINTS]
 
 
 @pytest.fixture(scope="module")
@@ -218,6 +219,31 @@ def test_evaluate_reports_sideways_flexion_and_poses_kept(poses, sample_hands):
     assert "Sideways max (deg)" in table and "Poses kept" in table
     assert 0.0 < rows[0].poses_kept <= 1.0
     assert 0.0 <= rows[0].scores.sideways_deg <= 90.0 and "@" in rows[0].scores.sideways_at
+
+
+def test_the_sideways_words_name_the_curves_peak_and_the_sources_bend_there(poses):
+    """TBS Copy of the authored poses onto the VRM robot: the clip's figure, at each joint's tightest curls, is the
+    pinky PIP at 59 deg between two poses, while the sideways curve peaks at 85 in Sign 3 (a fresh-eyes user saw the
+    curve beat the "worst" by 26 deg, and read "(the source: 38)", the source's own worst, as the source's there).
+    The words give both, and the source's bend at the same joint and frame."""
+    motion, rig = poses
+    robot = load_hand_file(ROOT / "assets/hands/real/debug_robot.vrm", RigOptions(side="right"))
+    copied = retarget(motion, rig, robot, "tbs_copy")
+    scores = score_retarget(rig, motion.q_tbs, robot, copied.q_tbs)
+    positions = forward_kinematics(robot, torch.as_tensor(copied.q_tbs, dtype=torch.float64)).positions.numpy()
+    curve = frame_sideways(positions)
+    frame = int(scores.sideways_anywhere_at.partition("@")[2])
+    assert scores.sideways_anywhere_deg == pytest.approx(curve.max()) and curve[frame] == curve.max()
+    assert scores.sideways_anywhere_deg > scores.sideways_deg + 15.0 and motion.labels[frame] == "Sign 3"
+    source = forward_kinematics(rig, torch.as_tensor(motion.q_tbs, dtype=torch.float64)).positions.numpy()
+    there = sideways_there(source, scores.sideways_at)
+    joint, _, at = scores.sideways_at.partition("@")
+    assert there == pytest.approx(flexion_and_sideways(source[int(at):int(at) + 1])[1][0, HINGE_NAMES.index(joint)])
+    words = scores.sideways_words(copied.held_at)
+    assert f"(the source there: {there:.0f}; its own worst: {scores.source_sideways_deg:.0f})" in words
+    assert words.endswith(f"sideways at frame {frame} (Sign 3)") and "at any PIP/DIP flexed 45 deg or more" in words
+    asrn = score_retarget(rig, motion.q_tbs, robot, retarget(motion, rig, robot, "asrn").q_tbs)
+    assert "at any PIP/DIP" not in asrn.sideways_words() or asrn.sideways_anywhere_deg > asrn.sideways_deg + 0.5
 
 
 def test_check_reports_each_animations_sideways_flexion(capsys):

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import dataclasses
 import html
-import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -41,7 +40,7 @@ from s2h_viewer.retarget.compare_state import CompareState, ResultKey
 from s2h_viewer.retarget.comparison import Comparison, MethodResult, corrected_result, with_distinct_names
 from s2h_viewer.retarget.corrections import Corrections
 from s2h_viewer.retarget.methods import METHODS
-from s2h_viewer.semantics.flexion import SidewaysPeak, bend_angles
+from s2h_viewer.semantics.flexion import bend_angles
 from s2h_viewer.semantics.signature import frame_sideways
 from s2h_viewer.widgets.asm_heatmap import AsmHeatmap, spaced
 from s2h_viewer.widgets.compare_view import CompareView
@@ -84,14 +83,11 @@ def default_setup() -> CompareSetup:
                         [samples.load_sample_hand("iris"), samples.load_sample_hand("laurel")], path=path)
 
 
-def sideways_text(name: str, scores) -> str:
-    """"ASRN -> iris: worst sideways flexion: ring DIP bends 40 deg sideways at frame 212 (the source: 11)", in
-    red past the sideways limit. Named: over the curve it read as the curve's, which may show another quantity."""
-    if math.isnan(scores.sideways_deg):
-        return html.escape(f"{name}: no finger curls (no sideways flexion to measure)")
-    joint, _, frame = scores.sideways_at.partition("@")
-    peak = SidewaysPeak(scores.sideways_deg, joint, int(frame)).describe()
-    text = html.escape(f"{name}: worst sideways flexion: {peak} (the source: {scores.source_sideways_deg:.0f})")
+def sideways_text(name: str, scores, motion: Motion) -> str:
+    """"ASRN -> iris: worst sideways flexion: ring DIP bends 40 deg sideways at frame 212 (fist), at its tightest
+    curls (the source there: 11; ...)" (`RetargetScores.sideways_words`, the poses named from ``motion``'s labels),
+    in red past the sideways limit. Named: over the curve it read as the curve's, which may show another quantity."""
+    text = html.escape(f"{name}: worst sideways flexion: {scores.sideways_words(motion.held_at)}")
     return f"<span style='color:{SIDEWAYS_RED}'>{text}</span>" if scores.sideways_broken else text
 
 
@@ -100,7 +96,7 @@ def selected_notes(result: MethodResult, sideways: bool) -> str:
     target's unsure frames if any. The sideways line over the ASM error or a joint's bend read as the curve's (two
     fresh-eyes runs): the scores table's "Sideways" column gives it there."""
     warning = frame_warning(result.target)
-    lines = [sideways_text(label(result), result.scores)] if sideways else []
+    lines = [sideways_text(label(result), result.scores, result.motion)] if sideways else []
     if warning is not None:
         note = f"! {result.target.name}: {warning.banner}: retargets may bend there; check them in Annotate"
         lines.append(f"<span style='color:{BANNER_COLOUR}'>{html.escape(note)}</span>")

@@ -68,6 +68,13 @@ class Motion:
         """Seconds."""
         return self.n_frames / self.fps
 
+    def held_at(self, frame: int) -> str:
+        """" (Sign 3)": the pose or gesture held at ``frame``, " (between poses)" between two, "" in a clip that
+        names none (what a message says after a frame number)."""
+        if self.labels[frame]:
+            return f" ({self.labels[frame]})"
+        return " (between poses)" if (self.labels != "").any() else ""
+
 
 def norm_range(q: np.ndarray) -> tuple[float, float]:
     """Smallest and largest quaternion norm in ``q`` (T, ..., 4), a chunk of frames at a time."""

@@ -15,8 +15,9 @@ from s2h_viewer.semantics.anatomy import violation_rates
 from s2h_viewer.semantics.asm import semantic_matrix
 from s2h_viewer.semantics.contacts import (CONTACT_PAIRS, PAD_PAIRS, PALM_PAIRS, contact_precision_recall,
                                            detect_contacts, touching_and_near)
-from s2h_viewer.semantics.flexion import sideways_peak, thumb_follow
-from s2h_viewer.semantics.signature import SIDEWAYS_LIMIT, pose_loss_masks
+from s2h_viewer.semantics.flexion import SidewaysPeak, sideways_peak, thumb_follow
+from s2h_viewer.semantics.signature import (SIDEWAYS_FLEXION, SIDEWAYS_LIMIT, pose_loss_masks, sideways_anywhere,
+                                            sideways_there)
 from s2h_viewer.semantics.similarity import masked_cosine
 
 #: frames whose ASMs are built at once when a whole clip is scored ((4096, 20, 29, 3) float64: 57 MiB)
@@ -74,6 +75,12 @@ class RetargetScores:
     sideways_deg: float = float("nan")
     sideways_at: str = ""
     source_sideways_deg: float = float("nan")
+    #: the source's sideways bend at that joint and frame (NaN: it flexes too little there to have an axis)
+    source_sideways_there: float = float("nan")
+    #: the worst sideways bend of a PIP/DIP flexed 45 deg or more anywhere (`signature.sideways_anywhere`: the
+    #: viewer's sideways curve's peak, which the tightest curls may leave out) and where it is
+    sideways_anywhere_deg: float = float("nan")
+    sideways_anywhere_at: str = ""
     #: share of frames whose signature (`semantics.signature.loss_masks`: each finger extended, bent or curled,
     #: the thumb's touches, a thumb out to its side where the source's is, no finger bending sideways, no invented
     #: pad contact) is the source's: it drops where
@@ -98,6 +105,24 @@ class RetargetScores:
 
     def as_dict(self) -> dict:
         return asdict(self)
+
+    def sideways_words(self, pose_at=lambda frame: "") -> str:
+        """The worst sideways bend in words, with the source's there and the curve's peak where that is worse:
+        "pinky PIP bends 59 deg sideways at frame 557, at its tightest curls (the source there: 38; its own worst:
+        38); at any PIP/DIP flexed 45 deg or more: pinky PIP bends 85 deg sideways at frame 560 (Sign 3)".
+        ``pose_at(frame)``: the pose held there, as " (Sign 3)", or "" (`Motion.held_at`)."""
+        if np.isnan(self.sideways_deg):
+            return "no finger curls (no sideways flexion to measure)"
+        joint, _, frame = self.sideways_at.partition("@")
+        there = ("the source does not flex it there" if np.isnan(self.source_sideways_there)
+                 else f"the source there: {self.source_sideways_there:.0f}")
+        text = (f"{SidewaysPeak(self.sideways_deg, joint, int(frame)).describe()}{pose_at(int(frame))}, at its "
+                f"tightest curls ({there}; its own worst: {self.source_sideways_deg:.0f})")
+        if self.sideways_anywhere_deg > self.sideways_deg + 0.5:
+            joint, _, frame = self.sideways_anywhere_at.partition("@")
+            text += (f"; at any PIP/DIP flexed {SIDEWAYS_FLEXION:.0f} deg or more: "
+                     f"{SidewaysPeak(self.sideways_anywhere_deg, joint, int(frame)).describe()}{pose_at(int(frame))}")
+        return text
 
     @property
     def sideways_broken(self) -> bool:
@@ -131,6 +156,7 @@ def score_retarget_frames(source_hand: HandModel, source_q: np.ndarray | torch.T
             ref = forward_kinematics(target_hand, torch.as_tensor(np.asarray(reference_q), dtype=torch.float64))
             mse = joint_position_mse(tgt_pose, ref, target_hand.hand_length)
         peak = sideways_peak(tgt_pose.positions.numpy())
+        anywhere = sideways_anywhere(tgt_pose.positions.numpy())
         kept = pose_loss_masks(source_hand, src_pose, target_hand, tgt_pose) == 0
         invented = tgt_contacts & ~src_near  # where the source's pair is apart, not nearly touching
         follow = {name: c for name, c in thumb_follow(src_pose.positions.numpy(), tgt_pose.positions.numpy()).items()
@@ -142,6 +168,8 @@ def score_retarget_frames(source_hand: HandModel, source_q: np.ndarray | torch.T
                                 violation_rate=target_violations, jitter=jitter(tgt_pose, target_hand.hand_length),
                                 mse=mse, sideways_deg=peak.degrees, sideways_at=peak.where,
                                 source_sideways_deg=sideways_peak(src_pose.positions.numpy()).degrees,
+                                source_sideways_there=sideways_there(src_pose.positions.numpy(), peak.where),
+                                sideways_anywhere_deg=anywhere.degrees, sideways_anywhere_at=anywhere.where,
                                 signature_kept=float(kept.mean()), invented_contacts=int(invented.any(-1).sum()),
                                 invented_pairs=invented_by_pair(invented),
                                 thumb_follow=follow.get(worst_thumb, float("nan")), thumb_follow_at=worst_thumb,

@@ -15,7 +15,7 @@ from s2h_viewer.hand import topology as topo
 from s2h_viewer.hand.kinematics import HandPose, forward_kinematics
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.semantics.contacts import CONTACT_PAIRS, contact_gaps, pad_centres
-from s2h_viewer.semantics.flexion import HINGE_JOINTS, flexion_and_sideways, thumb_across, thumb_out
+from s2h_viewer.semantics.flexion import HINGE_JOINTS, SidewaysPeak, flexion_and_sideways, thumb_across, thumb_out
 
 #: a finger's curl (its MCP, PIP and DIP flexion summed, degrees) below which it reads extended, above
 #: which curled; a curl within `CURL_MARGIN` of the source's is kept whatever the words
@@ -215,6 +215,30 @@ def pose_differences(source_hand: HandModel, source_q: np.ndarray, target_hand: 
 #: resting on the curled fingers or not, the thumb across the palm or not
 STATE_BITS, TOUCH_BITS, SIDEWAYS_BIT, INVENTED_BIT, THUMB_OUT_BIT, THUMB_REST_BIT = 0, 4, 8, 9, 10, 11
 THUMB_ACROSS_BIT = 12
+
+
+def sideways_anywhere(positions: np.ndarray) -> SidewaysPeak:
+    """The worst sideways bend of a PIP/DIP flexed past `SIDEWAYS_FLEXION` in any frame of (T, 21, 3) positions: the
+    peak of the viewer's sideways curve (`frame_sideways`), which the clip's figure (`flexion.sideways_peak`, at each
+    joint's tightest curls) may leave out: TBS Copy of the authored poses onto the VRM robot bends the pinky PIP 85
+    deg sideways in Sign 3, where the clip's figure read 59 (a fresh-eyes user found the curve's peak beside it)."""
+    flexion, sideways = flexion_and_sideways(positions)
+    read = np.where(flexion >= SIDEWAYS_FLEXION, np.nan_to_num(sideways, nan=-1.0), -1.0)
+    frame, joint = np.unravel_index(int(np.argmax(read)), read.shape)
+    if read[frame, joint] < 0.0:
+        return SidewaysPeak(float("nan"))
+    return SidewaysPeak(float(read[frame, joint]), HINGE_JOINTS[joint][0], int(frame))
+
+
+def sideways_there(positions: np.ndarray, where: str) -> float:
+    """Degrees joint and frame ``where`` ("pinky_pip@557", a `SidewaysPeak.where`) bend sideways in (T, 21, 3)
+    positions (the source's, say, where a retarget bends the most); NaN where that joint flexes too little to
+    have an axis, or ``where`` is empty."""
+    joint, _, frame = where.partition("@")
+    if not joint:
+        return float("nan")
+    _, sideways = flexion_and_sideways(np.asarray(positions)[int(frame):int(frame) + 1])
+    return float(sideways[0, [name for name, _ in HINGE_JOINTS].index(joint)])
 
 
 def frame_sideways(positions: np.ndarray) -> np.ndarray:

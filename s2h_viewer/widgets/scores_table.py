@@ -17,7 +17,7 @@ from s2h_viewer.annotate.trust import frame_warning
 from s2h_viewer.render.compare_scene import BANNER_BACKGROUND, BANNER_COLOUR
 from s2h_viewer.retarget.comparison import Comparison
 from s2h_viewer.retarget.methods import METHODS
-from s2h_viewer.semantics.flexion import SidewaysPeak
+from s2h_viewer.widgets.text_dialog import TextDialog
 from s2h_viewer.widgets.tooltips import wrapped
 from s2h_viewer.wording import counted
 
@@ -82,10 +82,6 @@ def _cell(key: str, values: dict) -> tuple[str, str | None]:
                                 f"anatomical limits than the source's; outside them at all: "
                                 f"{values['violation_rate']:.3f}, the source itself: "
                                 f"{values['source_violation_rate']:.3f} (a clip authored past them stays past them)")
-    if key == "sideways_deg":
-        joint, _, frame = values["sideways_at"].partition("@")
-        return f"{value:.0f}", SidewaysPeak(value, joint, int(frame)).describe() + f" (the source: " \
-            f"{values['source_sideways_deg']:.0f})"
     if key == "thumb_follow":
         angle = THUMB_ANGLE_NAMES.get(values["thumb_follow_at"], values["thumb_follow_at"])
         return f"{value:.2f}", f"the thumb follows the source's at {value:.2f}, worst in {angle}" + \
@@ -94,12 +90,23 @@ def _cell(key: str, values: dict) -> tuple[str, str | None]:
 
 
 def poses_tip(result) -> str:
-    """The Kept cell's tooltip on a clip of poses: how many the retarget keeps, and what each one lost loses."""
+    """The Kept cell's tooltip on a clip of poses: how many the retarget keeps, and what each one lost loses (the
+    first `POSES_LISTED`: the whole list is a double-click away, `poses_text`)."""
     lost = result.poses_lost
     kept = f"{result.poses_held - len(lost)} of {counted(result.poses_held, 'pose')} kept"
     listed = "".join(f"\n{name}: {', '.join(what)}" for name, what in list(lost.items())[:POSES_LISTED])
-    more = f"\n... and {len(lost) - POSES_LISTED} more" if len(lost) > POSES_LISTED else ""
+    more = (f"\n... and {len(lost) - POSES_LISTED} more: double-click for all"
+            if len(lost) > POSES_LISTED else "")
     return f"{kept}" + (f"; lost:{listed}{more}" if lost else " (every one)")
+
+
+def poses_text(result) -> str:
+    """Every pose ``result`` loses and what it loses, a line each (the Kept cell's double-click): the tooltip's
+    list stopped at 8 of 16 and the rest were only in `s2h evaluate`'s CSV (a fresh-eyes user)."""
+    lost = result.poses_lost
+    head = f"{result.name}: {result.poses_held - len(lost)} of {counted(result.poses_held, 'pose')} kept"
+    return head + ("".join(f"\n\n{name}:\n  " + "\n  ".join(what) for name, what in lost.items()) if lost
+                   else " (every one)")
 
 
 class OwnColours(QStyledItemDelegate):
@@ -135,6 +142,17 @@ class ScoresTable(QTableWidget):
         for role in (QPalette.ColorRole.Highlight, QPalette.ColorRole.HighlightedText):
             palette.setColor(QPalette.ColorGroup.Inactive, role, palette.color(QPalette.ColorGroup.Active, role))
         self.setPalette(palette)
+        self._results: list = []  # the comparison's results, a row each
+        self.cellDoubleClicked.connect(self._show_poses)
+
+    def _show_poses(self, row: int, column: int) -> None:
+        """A double-click on a Kept cell of a clip of poses: every pose that retarget loses, in a dialog of its own
+        (not modal: the clip plays on)."""
+        if column != KEPT_COLUMN or row >= len(self._results) or not self._results[row].poses_held:
+            return
+        result = self._results[row]
+        self.poses_dialog = TextDialog(self, f"Poses lost: {result.name}", poses_text(result))
+        self.poses_dialog.show()
 
     def _height_for(self, rows: int) -> int:
         return self.horizontalHeader().sizeHint().height() + rows * self.verticalHeader().defaultSectionSize() + \
@@ -156,6 +174,7 @@ class ScoresTable(QTableWidget):
 
     def show_comparison(self, comparison: Comparison) -> None:
         self.setRowCount(len(comparison.results))
+        self._results = list(comparison.results)
         for row, result in enumerate(comparison.results):
             values = result.scores.as_dict()
             warning = frame_warning(result.target)
@@ -165,6 +184,9 @@ class ScoresTable(QTableWidget):
             cells = [(f"{method} (fixed)", f"{method}, corrected: {fixes.describe()}") if fixes else (method,) * 2,
                      target]
             cells += [_cell(key, values) for _, key, _ in COLUMNS[2:]]
+            if not math.isnan(result.scores.sideways_deg):
+                cells[SIDEWAYS_COLUMN] = (f"{result.scores.sideways_deg:.0f}",
+                                          result.scores.sideways_words(result.motion.held_at))
             if result.poses_held:  # a clip of poses: which the retarget loses, and how
                 cells[KEPT_COLUMN] = (cells[KEPT_COLUMN][0], poses_tip(result))
             for col, (text, tip) in enumerate(cells):
