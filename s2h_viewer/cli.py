@@ -389,6 +389,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
         raise InputFileError(args.file, "has no animations to check (s2h check reads the animations of a file)")
     rig = None
     worst = float("nan")
+    longest = 0
     for index in range(len(names)):
         chosen = replace(options, animation=index if args.animation is None else args.animation)
         motion, rig = load_motion_file(args.file, rig, chosen)
@@ -397,6 +398,7 @@ def _cmd_check(args: argparse.Namespace) -> int:
         with torch.no_grad():
             positions = forward_kinematics(rig, torch.as_tensor(motion.q_tbs, dtype=torch.float64)).positions.numpy()
         peak = sideways_peak(positions)
+        longest = max(longest, motion.n_frames)
         worst = np.nanmax([worst, peak.degrees]) if not np.isnan(peak.degrees) else worst
         pose = motion.labels[peak.frame] if peak.frame >= 0 else ""
         print(f"{motion.name}: {motion.n_frames} frames; {peak.describe()}" + (f" (pose {pose!r})" if pose else ""))
@@ -409,7 +411,15 @@ def _cmd_check(args: argparse.Namespace) -> int:
     print(f"{args.file}: {side} hand, {what}; worst sideways flexion at the tightest curls: "
           + ("none (no finger curls)" if np.isnan(worst) else f"{worst:.0f} deg") +
           " (0 = a clean curl toward the palm; authored clips of real avatars reach 8-22)")
+    if len(names) > 1 and longest <= POSE_FRAMES:
+        # a still pose is all "tightest curl": a finger bent 12 deg, whose axis is loose, counted as a fist's
+        print(f"{args.file}: each animation holds one pose (a pose library): `--animation all` reads them as one clip, "
+              "each joint at its tightest curls over all of them")
     return 0
+
+
+#: `s2h check`: animations this short each hold one pose (the Godot pose library's hold 2 frames)
+POSE_FRAMES = 5
 
 
 def _cmd_batch(args: argparse.Namespace) -> int:
@@ -477,7 +487,9 @@ SOURCE_HELP = ("hand file (or sample name) of the rig the motion was made for, w
                "(default: the file's own rig, or its sample hand)")
 
 
-def _add_rig_options(parser: argparse.ArgumentParser) -> None:
+def _add_rig_options(parser: argparse.ArgumentParser,
+                     animation_default: str = "the first; `s2h rig FILE` lists them") -> None:
+    """The options that say how to read a hand or motion file; ``animation_default``: what no --animation reads."""
     from s2h_viewer.hand.rig_mapping import SCHEMES, SIDES
     from s2h_viewer.io.units import UNITS
 
@@ -487,7 +499,7 @@ def _add_rig_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--joint-map", help='JSON file {"wrist": "<bone>", "index_mcp": "<bone>", ...} (default: '
                                             "<stem>.<side>.joints.json beside each hand file, if there)")
     parser.add_argument("--animation", help="which animation (glTF) or take (FBX) of a motion file: name or index "
-                                            "(default: the first; `s2h rig FILE` lists them), or `all`: every one in turn, "
+                                            f"(default: {animation_default}), or `all`: every one in turn, "
                                             "one clip labelled by animation (a pose library)")
     parser.add_argument("--fps", type=float, help="frame rate of a tracking recording that does not say it "
                                                   "(keypoint .npy/.npz; default 30), or to override its own")
@@ -662,7 +674,7 @@ def build_parser() -> argparse.ArgumentParser:
                                       "glTF/VRM, FBX, BVH, npz, recordings), each on its own rig")
     ck.add_argument("file", help="an animated avatar or motion file")
     ck.add_argument("--joints", action="store_true", help="also each PIP/DIP joint's worst frame")
-    _add_rig_options(ck)
+    _add_rig_options(ck, animation_default="each animation, a line each")
     ck.set_defaults(func=_cmd_check)
 
     gs = sub.add_parser("gestures", help="list the gesture library with its contact labels")

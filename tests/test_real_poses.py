@@ -251,6 +251,13 @@ def test_check_reports_each_animations_sideways_flexion(capsys):
     out = capsys.readouterr().out
     assert out.startswith("Horns: 2 frames; ") and "deg sideways at frame" in out
     assert "ring_dip" in out and "worst sideways flexion at the tightest curls" in out
+    assert "a pose library" not in out
+    # each animation on its own: a still pose is all tightest curl, so the line says how to read a pose library
+    assert main(["check", str(POSES)]) == 0
+    out = capsys.readouterr().out
+    assert out.count(" frames; ") == 35 and out.rstrip().endswith(
+        "each animation holds one pose (a pose library): `--animation all` reads them as one clip, each joint at its "
+        "tightest curls over all of them")
     assert main(["check", str(HUMAN)]) == 2
     assert "has no animations to check" in capsys.readouterr().err
 
