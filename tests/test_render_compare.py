@@ -36,15 +36,23 @@ def test_render_compare_writes_a_frame_and_a_whole_clip(sample_hands, tmp_path):
     assert not np.array_equal(frames[0], frames[len(frames) // 2])  # the hands move
 
 
-def test_a_target_with_no_skin_says_its_bones_are_drawn(sample_hands):
+def test_a_target_with_no_skin_says_its_bones_are_drawn(sample_hands, tmp_path):
     """The debug robot VRM has no mesh: its cells drew grey bones with no error colour, and nothing said why."""
-    from s2h_viewer.render.compare_scene import result_label
+    from s2h_viewer.render.compare_scene import render_comparison, result_label
     from s2h_viewer.retarget.comparison import build_comparison
     motion = synthesize(["ok"], sample_hands["birch"], seed=1, name="ok")
     bones = dataclasses.replace(sample_hands["laurel"], name="bones", mesh=None)
     comparison = build_comparison(motion, sample_hands["birch"], [sample_hands["laurel"], bones], ["tbs_copy"])
     skinned, bare = comparison.results
     assert result_label(bare).endswith(", no skin: bones") and "no skin" not in result_label(skinned)
+
+    # drawn so a hand reads: its palm see-through in the skin's colour between the knuckles (its metacarpals alone
+    # were lines from one point: a fresh-eyes user could not tell front from back on the VRM robot)
+    picture = render_comparison(build_comparison(motion, sample_hands["birch"], [bones], ["tbs_copy"]),
+                                tmp_path / "bones.png", size=(800, 400))
+    rgb = imageio.imread(picture)[:, 400:720, :3].astype(int)  # the target's cell, short of the colour bar
+    palm = (rgb[..., 0] - rgb[..., 2] > 20) & (rgb[..., 0] > 150)
+    assert palm.sum() > 500, palm.sum()
 
 
 def test_frame_counts_say_one_frame_and_ranges_their_ends():

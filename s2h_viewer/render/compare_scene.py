@@ -27,8 +27,8 @@ from s2h_viewer.hand.kinematics import HandPose
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.hand.skinning import skin_vertices
 from s2h_viewer.render.keypoint_dots import KeypointDots
-from s2h_viewer.render.scene import (BONE_COLOUR, CAMERA_DIRECTIONS, SKIN_COLOUR, display_hand, skeleton, surface,
-                                     to_view)
+from s2h_viewer.render.scene import (BONE_COLOUR, CAMERA_DIRECTIONS, PALM_OPACITY, SKIN_COLOUR, display_hand,
+                                    palm_fan, skeleton, surface, to_view)
 from s2h_viewer.render.text_lock import TEXT_LOCK
 from s2h_viewer.retarget.comparison import Comparison, MethodResult
 from s2h_viewer.retarget.methods import METHODS
@@ -128,9 +128,12 @@ class PosedHand:
             models = [hand] + ([playing_hand] if playing_hand is not None and playing_hand is not hand else [])
             self.levels = [self._add_skin(plotter, model) for model in models]
             self.set_opacity(opacity)
-        else:  # a skeleton-only hand (BVH): bones as tubes
-            self.bones = skeleton(hand, pose, 0)
+        else:  # a skeleton-only hand (BVH, the VRM robot): bones, their joints as dots, the palm see-through
+            self.bones, self.palm = skeleton(hand, pose, 0), palm_fan(hand, pose, 0)
+            plotter.add_mesh(self.palm, color=SKIN_COLOUR, opacity=PALM_OPACITY, reset_camera=False)
             plotter.add_mesh(self.bones, color=BONE_COLOUR, line_width=4, reset_camera=False)
+            plotter.add_mesh(self.bones, style="points", color=BONE_COLOUR, point_size=JOINT_DOT_PX,
+                             render_points_as_spheres=True, reset_camera=False)
         self._show_levels()
 
     def _add_skin(self, plotter: pv.Plotter, hand: HandModel) -> Skin:
@@ -220,7 +223,8 @@ class PosedHand:
         if self.keypoints is not None:
             self.keypoints.show(frame)
         if not self.levels:
-            self.bones.points = to_view(self.hand, self.pose.positions[frame].numpy().astype(np.float64))
+            self.bones.points = self.palm.points = to_view(self.hand,
+                                                           self.pose.positions[frame].numpy().astype(np.float64))
             return
         if posed is None or posed.frame != frame or posed.skin is not self.skin:
             posed = self.posed_skin(frame)
@@ -602,6 +606,8 @@ FIT_ASPECT = 0.65  # width / height of a cell's hand part under which a hand's w
 CAMERA_DISTANCE = 3.0
 #: a skeleton's drawn bones' reach beyond its joints, in lengths of the hand
 BONE_MARGIN = 0.02
+#: a skeleton-only hand's joints, as dots this many pixels across
+JOINT_DOT_PX = 9
 #: room kept around the hands' reach, as a share of it: a hand reaching furthest keeps clear of its cell's frame
 REACH_ROOM = 1.08
 

@@ -63,6 +63,20 @@ def skeleton(hand: HandModel, pose: HandPose, frame: int = 0) -> pv.PolyData:
     return pv.PolyData(points, lines=lines)
 
 
+#: the palm of a hand drawn without a skin: the wrist and the finger knuckles, fanned
+_PALM_FAN = np.array([[3, 0, topo.joint_index(a), topo.joint_index(b)]
+                      for a, b in (("index_mcp", "middle_mcp"), ("middle_mcp", "ring_mcp"), ("ring_mcp", "pinky_mcp"))])
+#: its colour and opacity: the skin's, see-through, so the bones show through it
+PALM_OPACITY = 0.45
+
+
+def palm_fan(hand: HandModel, pose: HandPose, frame: int = 0) -> pv.PolyData:
+    """The palm of a hand drawn as bones (no skin: a VRM robot, a BVH), in view space: triangles from the wrist to
+    the knuckles, so its front, back and fingers' fan read (its metacarpals alone all start at one point)."""
+    points = to_view(hand, pose.positions[frame].detach().cpu().numpy().astype(np.float64))
+    return pv.PolyData(points, faces=_PALM_FAN.ravel())
+
+
 def frame_arrows(hand: HandModel, pose: HandPose, frame: int = 0, scale: float | None = None) -> list[pv.PolyData]:
     """Three glyph sets (twist, bend, splay) of arrows at the 15 articulated joints."""
     scale = scale or 0.11 * hand.hand_length
