@@ -554,7 +554,10 @@ def test_a_clip_of_poses_says_which_poses_a_retarget_loses(window, qtbot):
     listed = table.poses_dialog.text.toPlainText()
     assert listed == poses_text(fixed) and listed.startswith(f"{fixed.name}: {fixed.poses_held - len(fixed.poses_lost)} of 4")
     assert all(f"{name}:\n  {what[0]}" in listed for name, what in fixed.poses_lost.items())
-    table.poses_dialog.close()
+    # it has the keys (Esc closes it) and gives them back to the window (its shortcuts went dead after it closed)
+    qtbot.waitUntil(lambda: QApplication.activeWindow() is table.poses_dialog)
+    QTest.keyClick(QApplication.focusWidget(), Qt.Key.Key_Escape)
+    qtbot.waitUntil(lambda: not table.poses_dialog.isVisible() and QApplication.activeWindow() is win)
 
 
 def test_a_camera_preset_keeps_a_hand_framed_alone_framed(window, qtbot):

@@ -153,6 +153,10 @@ class ScoresTable(QTableWidget):
         result = self._results[row]
         self.poses_dialog = TextDialog(self, f"Poses lost: {result.name}", poses_text(result))
         self.poses_dialog.show()
+        # it takes the keys (Esc closes it) and hands them back when it closes (`app.focus`): shown without, the
+        # window's shortcuts went dead after it closed under an X server with no window manager (a fresh-eyes user)
+        self.poses_dialog.raise_()
+        self.poses_dialog.activateWindow()
 
     def _height_for(self, rows: int) -> int:
         return self.horizontalHeader().sizeHint().height() + rows * self.verticalHeader().defaultSectionSize() + \
