@@ -400,12 +400,14 @@ def _cmd_check(args: argparse.Namespace) -> int:
         peak = sideways_peak(positions)
         longest = max(longest, motion.n_frames)
         worst = np.nanmax([worst, peak.degrees]) if not np.isnan(peak.degrees) else worst
-        pose = motion.labels[peak.frame] if peak.frame >= 0 else ""
-        print(f"{motion.name}: {motion.n_frames} frames; {peak.describe()}" + (f" (pose {pose!r})" if pose else ""))
+        # the pose held at each frame named (" (Sign 3)", " (between poses)"), in a clip of several poses
+        held = motion.held_at if len(set(motion.labels)) > 1 else (lambda frame: "")
+        print(f"{motion.name}: {motion.n_frames} frames; {peak.describe()}"
+              + (held(peak.frame) if peak.frame >= 0 else ""))
         if args.joints:
             for joint, p in finger_peaks(positions).items():
                 print(f"    {joint:10s} " + ("does not curl" if np.isnan(p.degrees) else
-                                             f"{p.degrees:4.0f} deg sideways at frame {p.frame}"))
+                                             f"{p.degrees:4.0f} deg sideways at frame {p.frame}{held(p.frame)}"))
     side = rig.meta.get("side", "right") if rig is not None else "right"
     what = f"{len(names)} animation(s)" if args.animation != "all" else "every animation as one clip"
     print(f"{args.file}: {side} hand, {what}; worst sideways flexion at the tightest curls: "

@@ -240,8 +240,12 @@ def test_the_sideways_words_name_the_curves_peak_and_the_sources_bend_there(pose
     joint, _, at = scores.sideways_at.partition("@")
     assert there == pytest.approx(flexion_and_sideways(source[int(at):int(at) + 1])[1][0, HINGE_NAMES.index(joint)])
     words = scores.sideways_words(copied.held_at)
-    assert f"(the source there: {there:.0f}; its own worst: {scores.source_sideways_deg:.0f})" in words
+    assert f"(the source bends {there:.0f} there; {scores.source_sideways_deg:.0f} at its own tightest curls)" in words
     assert words.endswith(f"sideways at frame {frame} (Sign 3)") and "at any PIP/DIP flexed 45 deg or more" in words
+    # a touch whose pads overlap in the source reads so, not as a gap below 0 ("the source's -0.012 ... apart")
+    lost = pose_differences(rig, motion.q_tbs, robot, copied.q_tbs, motion.labels)["Sign 3"]
+    assert any("the source's pressed 0.0" in what for what in lost), lost
+    assert not any("-0." in what for what in lost), lost
     asrn = score_retarget(rig, motion.q_tbs, robot, retarget(motion, rig, robot, "asrn").q_tbs)
     assert "at any PIP/DIP" not in asrn.sideways_words() or asrn.sideways_anywhere_deg > asrn.sideways_deg + 0.5
 

@@ -139,6 +139,12 @@ def signatures(hand: HandModel, q_tbs: np.ndarray) -> list[PoseSignature]:
                           float(out[t]), rest[t], float(across[t]), gaps[t]) for t in range(len(positions))]
 
 
+def _gap_words(gap: float) -> str:
+    """A fingertip gap in hand lengths, in words: "0.185 hand lengths apart", or "pressed 0.012 into each other"
+    where the pads overlap (a gap below 0: "the source's -0.012 hand lengths apart" read as a typo)."""
+    return f"{gap:.3f} hand lengths apart" if gap >= 0.0 else f"pressed {-gap:.3f} into each other"
+
+
 def differences(source: PoseSignature, target: PoseSignature) -> list[str]:
     """What the target loses of the source's signature, in words (empty: kept)."""
     out = []
@@ -149,7 +155,7 @@ def differences(source: PoseSignature, target: PoseSignature) -> list[str]:
         if a != b:
             # a touch, not a contact: the scores' contacts (and the view's links) are the metric's 1.5%, this 3.5%
             out.append(f"thumb-{topo.FINGERS[f + 1]} touch {'lost' if a else 'invented'} (fingertips "
-                       f"{target.thumb_gaps[f]:.3f} hand lengths apart, the source's {source.thumb_gaps[f]:.3f})")
+                       f"{_gap_words(target.thumb_gaps[f])}, the source's {_gap_words(source.thumb_gaps[f])})")
     if thumb_out_lost(source.thumb_out, target.thumb_out, source.thumb_contacts.any()):
         out.append(f"thumb not out to its side ({target.thumb_out:.0f} deg, the source: {source.thumb_out:.0f})")
     if thumb_rest_lost(source.curl[None], source.thumb_rest[None], target.thumb_rest[None],
