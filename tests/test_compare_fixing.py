@@ -537,14 +537,14 @@ def test_a_clip_of_poses_says_which_poses_a_retarget_loses(window, qtbot):
     result = mode.selected_result()
     assert result.poses_held == 4  # relaxed, fist, ok, v_sign
     kept = result.poses_held - len(result.poses_lost)
-    assert f"({kept}/4 poses)" in win.view.solo_hand().label.text
+    assert f" of frames, {kept}/4 poses" in win.view.solo_hand().label.text
     column = next(c for c, (_, key, _) in enumerate(COLUMNS) if key == "signature_kept")
     assert f"{kept} of 4 poses kept; lost:<br>ok: thumb-index touch lost (fingertips " in mode.scores.item(0, column).toolTip()
     pick_joint(qtbot, win)
     drag(qtbot, win, 40.0)
     fixed = mode.selected_result()
     assert fixed.poses_held == 4 and mode.scores.item(0, column).toolTip() == wrapped(poses_tip(fixed))
-    assert f"({fixed.poses_held - len(fixed.poses_lost)}/4 poses)" in win.view.solo_hand().label.text
+    assert f" of frames, {fixed.poses_held - len(fixed.poses_lost)}/4 poses" in win.view.solo_hand().label.text
     # the whole list, however long, in a dialog of its own: a double-click on the Kept cell
     table = mode.scores
     cell = table.visualItemRect(table.item(0, column)).center()

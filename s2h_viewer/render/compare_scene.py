@@ -479,7 +479,7 @@ def fit_cells(plotter: pv.Plotter, hands: list["PosedHand"], labels: list[CellLa
 
 def result_label(result: MethodResult) -> str:
     """A retarget's cell text: method and target, its S_finger and kept scores (and the poses kept, of a clip of
-    poses); a corrected one's method starred
+    poses: "kept 0.538 of frames, 19/35 poses"); a corrected one's method starred
     (a start of line that survives eliding) and its keys counted; a target with no skin says its bones are drawn
     uncoloured (a fresh-eyes user saw grey sticks and no colour bar, and nothing said why), and a mitten's skin
     that its bones are drawn through it (`apply_options`: another read its see-through skin against the View
@@ -488,7 +488,9 @@ def result_label(result: MethodResult) -> str:
     star, fixed = ("*", f", {counted(keys, 'fix', 'fixes')}") if keys else ("", "")
     bones = (", no skin: bones" if result.target.mesh is None else
              ", mitten: bones" if result.target.meta.get("unparted_fingers") else "")
-    poses = f" ({result.poses_held - len(result.poses_lost)}/{result.poses_held} poses)" if result.poses_held else ""
+    # two measures, each named: "kept 0.538 (19/35 poses)" read as one figure that did not add up (two users)
+    poses = (f" of frames, {result.poses_held - len(result.poses_lost)}/{result.poses_held} poses"
+             if result.poses_held else "")
     return (f"{METHODS[result.method].label}{star} -> {result.target.name}\nS_finger {result.scores.s_finger:.3f}\n"
             f"kept {result.scores.signature_kept:.3f}{poses}{fixed}{bones}")
 
