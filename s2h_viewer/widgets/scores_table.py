@@ -37,14 +37,15 @@ COLUMNS = (("Method", None, "retargeting method"), ("Target", None, "target hand
                                                      "outside the anatomical limits than the source's own (a clip "
                                                      "authored past them stays past them: TBS Copy adds none)"),
            ("Side-\nways", "sideways_deg", "the worst sideways bend of a PIP/DIP at its tightest curls, degrees "
-                                            "(0: a clean curl toward the palm; authored clips reach 8-22)"),
+                                            "(0: a clean curl toward the palm; authored clips reach 8-22); red past "
+                                            "25, or past the source's own figure + 5 where the source bends more"),
            ("Thumb", "thumb_follow", "how closely the thumb follows the source's: the correlation over the clip of "
                                      "each thumb angle (the metacarpal across and out of the palm, the MCP and IP "
                                      "bends) with the source's, the worst of them (1: it does what the source's does)"),
            ("Kept", "signature_kept", KEPT_TIP),
            ("Inv-\nented", "invented_contacts", "frames where the retarget makes a contact the source does not "
-                                               "come near (within 3% of the hand; drawn blue by the contact "
-                                               "overlay)"))
+                                               "come near, fingertip to fingertip or fingertip on the palm (within "
+                                               "3% of the hand; drawn blue by the contact overlay)"))
 TARGET_COLUMN = 1
 KEPT_COLUMN, SIDEWAYS_COLUMN = (next(c for c, (_, key, _) in enumerate(COLUMNS) if key == name)
                                 for name in ("signature_kept", "sideways_deg"))
