@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import csv
 import resource
 import signal
 
@@ -163,6 +164,11 @@ def test_cli_evaluate_writes_a_table(tmp_path, capsys):
     assert len(lines) == 1 + 2 * 3  # header + 1 motion x 2 targets x 3 methods
     families = {line.split(",")[3]: line.split(",")[4] for line in lines[1:]}
     assert families == {"iris": "same", "laurel": "cross"}  # birch is realistic, laurel stylised
+    # beside the clip's sideways figure (at the tightest curls), the sideways curve's peak and where it is
+    rows = list(csv.DictReader(lines))
+    peaks = [(float(r["sideways_anywhere_deg"]), r["sideways_anywhere_at"]) for r in rows if r["sideways_anywhere_deg"]]
+    assert peaks and all(0.0 <= deg <= 90.0 and "_" in at.partition("@")[0] and at.partition("@")[2].isdigit()
+                         for deg, at in peaks), peaks
     assert (tmp_path / "evaluation.md").read_text().startswith("| Method |")
 
 

@@ -129,13 +129,14 @@ def write_results(rows: list[EvaluationRow], summary: dict[str, dict[str, float]
     out_dir = Path(out_dir)
     buffer = io.StringIO()
     writer = csv.writer(buffer)
-    writer.writerow(["method", "motion", "source", "target", "family", *METRICS, "sideways_at", "thumb_follow_at",
-                     "poses_kept", "poses_lost"])
+    writer.writerow(["method", "motion", "source", "target", "family", *METRICS, "sideways_at",
+                     "sideways_anywhere_deg", "sideways_anywhere_at", "thumb_follow_at", "poses_kept", "poses_lost"])
     for r in rows:
         s = r.scores.as_dict()
         writer.writerow([r.method, r.motion, r.source, r.target, r.family,
                          *("" if s[m] is None or np.isnan(s[m]) else s[m] for m in METRICS), s["sideways_at"],
-                         s["thumb_follow_at"], "" if np.isnan(r.poses_kept) else r.poses_kept,
+                         "" if np.isnan(s["sideways_anywhere_deg"]) else s["sideways_anywhere_deg"],
+                         s["sideways_anywhere_at"], s["thumb_follow_at"], "" if np.isnan(r.poses_kept) else r.poses_kept,
                          "; ".join(f"{name}: {', '.join(lost)}" for name, lost in r.poses.items() if lost)])
     written = []
     for name, text in (("evaluation.csv", buffer.getvalue()), ("evaluation.md", format_markdown(summary) + "\n")):
