@@ -191,6 +191,45 @@ def test_contacts_show_in_three_states_and_invented_ones_are_not_drawn_as_kept(w
     assert not overlay.actors[3].visibility and not legend.actor.GetVisibility()
 
 
+def test_a_contact_link_says_which_pads_it_joins_and_which_score_counts_it(window):
+    """A fresh-eyes user saw green "kept" links on TBS Copy beside a Contact R of 0.000 and could not tell which
+    two points a link joined: they were fingertips on the palm, which Palm R counts. Resting the pointer on a link
+    now says its pads, its state and its score, on the retargets and on the source."""
+    from PySide6.QtCore import QEvent, QPoint
+    from PySide6.QtGui import QHelpEvent
+    from PySide6.QtWidgets import QApplication, QToolTip
+    from s2h_viewer.render.compare_scene import PAIR_SITES, contact_words
+    from s2h_viewer.semantics.contacts import CONTACT_PAIRS
+    from s2h_viewer.widgets.tooltips import wrapped
+    window.contact_overlay.trigger()
+    view = window.view
+    hand = next(h for h in view._hands[1:] if h.hand.name == "human-female")
+    overlay = hand.overlay
+    frame = int(np.flatnonzero(overlay.invented.any(1))[0])
+    window.timeline.set_frame(frame)
+    view.interactor.render()
+    pair = int(np.flatnonzero(overlay.invented[frame])[0])
+    ends = []
+    for site in overlay.sites[frame][PAIR_SITES[pair]]:
+        hand.renderer.SetWorldPoint(*site, 1.0)
+        hand.renderer.WorldToDisplay()
+        ends.append(hand.renderer.GetDisplayPoint()[:2])
+    scale, h = view.interactor.devicePixelRatioF(), view.interactor.height()
+    mid = np.mean(ends, axis=0) / scale
+    on_link = QPoint(round(mid[0]), round(h - mid[1]))
+    QApplication.sendEvent(view.interactor, QHelpEvent(QEvent.Type.ToolTip, on_link, view.interactor.mapToGlobal(on_link)))
+    a, b = CONTACT_PAIRS[pair]
+    said = contact_words(pair, 2, on_source=False)
+    assert QToolTip.isVisible() and QToolTip.text() == wrapped(said)
+    assert said.startswith(f"{a} fingertip on the palm: " if b == "palm" else f"{a}-{b} fingertips: ")
+    assert "invented: made here where the source's pair is apart" in said
+    assert said.endswith("(counted in Palm R)" if b == "palm" else "(counted in Contact P/R)")
+    x0, y0, x1, y1 = hand.renderer.GetViewport()  # the cell's top left corner, in its label: no link there
+    assert view.contact_tip(round(x0 * view.interactor.width()) + 3, round((1.0 - y1) * h) + 3) == ""
+    window.contact_overlay.trigger()  # off: no link to name
+    assert view.contact_tip(on_link.x(), on_link.y()) == ""
+
+
 def test_the_table_counts_invented_contacts_and_the_frames_that_keep_the_signature(window):
     table = window.compare.scores
     headers = [table.horizontalHeaderItem(c).text() for c in range(table.columnCount())]

@@ -763,6 +763,41 @@ class Overlays:
                 poly.verts = np.column_stack([np.ones(len(sites), dtype=np.int64), sites]).ravel() if len(sites) \
                     else np.zeros(0, dtype=np.int64)
 
+    def link_at(self, renderer, x: float, y: float, frame: int, reach: float) -> tuple[int, int] | None:
+        """The contact link drawn nearest display pixel (x, y) of ``renderer`` (VTK's: from the bottom left) at
+        ``frame``, within ``reach`` pixels: (its pair, its state) as indices into `CONTACT_PAIRS` and
+        `CONTACT_STATES`; None where the overlay is off or no link is drawn there."""
+        if not self.show_contacts:
+            return None
+        ends = []
+        for site in self.sites[frame]:
+            renderer.SetWorldPoint(*site, 1.0)
+            renderer.WorldToDisplay()
+            ends.append(renderer.GetDisplayPoint()[:2])
+        ends = np.asarray(ends)
+        drawn = [(pair, state) for state, mask in enumerate(self.states) if mask is not None
+                 for pair in np.flatnonzero(mask[frame])]
+        if not drawn:
+            return None
+        pairs = PAIR_SITES[[pair for pair, _ in drawn]]
+        away = distance_to_segments(np.array([x, y], dtype=float), ends[pairs[:, 0]], ends[pairs[:, 1]])
+        nearest = int(np.argmin(away))
+        return (int(drawn[nearest][0]), drawn[nearest][1]) if away[nearest] <= reach else None
+
+
+def contact_words(pair: int, state: int, on_source: bool) -> str:
+    """A contact link in words (its tooltip): which pads it joins and what its colour means, and which score
+    counts it: the fingertip pairs in Contact P/R, the fingertip-on-palm ones in Palm R (a fresh-eyes user read
+    green links beside a Contact R of 0 as a contradiction: they were fingertips on the palm)."""
+    a, b = CONTACT_PAIRS[pair]
+    what = f"{a} fingertip on the palm" if b == "palm" else f"{a}-{b} fingertips"
+    counted_in = "Palm R" if b == "palm" else "Contact P/R"
+    if on_source:
+        return f"{what}: the source's contact (counted in {counted_in})"
+    meaning = ("in contact, as in the source", "lost: the source's contact, not made here",
+               "invented: made here where the source's pair is apart")[state]
+    return f"{what}: {meaning} (counted in {counted_in})"
+
 
 class ContactLegend:
     """What the contact overlay's colours mean, at the bottom left of the current subplot, `LEGEND_PX` in size

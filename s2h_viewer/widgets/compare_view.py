@@ -22,8 +22,8 @@ from PySide6.QtWidgets import QHBoxLayout, QLabel, QToolButton, QToolTip, QVBoxL
 from vtkmodules.vtkRenderingCore import vtkWindowToImageFilter
 
 from s2h_viewer.render.compare_scene import (PLAYING_FACES, CellLabel, Framing, Ghost, PosedHand, PosedSkin,
-                                             ViewOptions, apply_options, fit_cells, grid_layout, populate,
-                                             result_label, show_alone, solo_ghost)
+                                             ViewOptions, apply_options, contact_words, fit_cells, grid_layout,
+                                             populate, result_label, show_alone, solo_ghost)
 from s2h_viewer.retarget.comparison import Comparison, target_ids, target_page
 from s2h_viewer.widgets.rotation_handle import is_click
 from s2h_viewer.widgets.tooltips import wrapped
@@ -35,6 +35,8 @@ MOUSE = (("click a retarget in the grid", "select it (the heatmap, the curve, th
          ("rest the pointer on a cell's orange banner", "its whole warning"))
 #: pixels a target's row needs at least (its label band and a hand that reads): more targets than fit page
 MIN_ROW_PX = 130
+#: the pointer names a contact link (its tooltip) within this many pixels of it
+LINK_REACH_PX = 6
 FRAME_FILL = 0.9  # View > Frame the hand: the share of the cell the hand's box fills
 REFIT_MS = 200  # after a resize, the rows that fit are counted again once it has settled
 
@@ -376,6 +378,19 @@ class CompareView(QWidget):
                 return hand.banner_tip if (v - y0) * h * scale <= hand.banner.drawn_height() else ""
         return ""
 
+    def contact_tip(self, x: int, y: int) -> str:
+        """What the contact link drawn under widget pixel (x, y) joins and means (`contact_words`), "" off any."""
+        w, h = max(1, self.interactor.width()), max(1, self.interactor.height())
+        u, v = x / w, 1.0 - y / h
+        for index, hand in enumerate(self._hands):  # the cell drawn there, in the grid or alone
+            x0, y0, x1, y1 = hand.renderer.GetViewport()
+            if hand.overlay is not None and hand.renderer.GetDraw() and x0 <= u < x1 and y0 <= v < y1:
+                scale = self.interactor.devicePixelRatioF()  # VTK's display pixels, from the bottom
+                found = hand.overlay.link_at(hand.renderer, x * scale, (h - y) * scale, hand.frame,
+                                             LINK_REACH_PX * scale)
+                return "" if found is None else contact_words(*found, on_source=index == 0)
+        return ""
+
     def eventFilter(self, watched: QObject, event: QEvent) -> bool:
         if watched is not self.interactor:
             return False
@@ -394,7 +409,8 @@ class CompareView(QWidget):
                 if hand >= 0:
                     self.hand_clicked.emit(hand)
         if event.type() == QEvent.Type.ToolTip:
-            tip = self.banner_tip(event.pos().x(), event.pos().y())
+            tip = self.banner_tip(event.pos().x(), event.pos().y()) or self.contact_tip(event.pos().x(),
+                                                                                          event.pos().y())
             if tip:
                 QToolTip.showText(event.globalPos(), wrapped(tip), self.interactor)
             else:
