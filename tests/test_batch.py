@@ -117,6 +117,8 @@ def test_a_batch_on_a_local_cluster_equals_the_in_process_retarget_and_a_rerun_s
     assert [r["status"] for r in rows] == ["failed", "failed", "ok", "ok"]  # failures on top
     assert rows[2]["warning"] == ""  # iris's rig is the project's own
     assert list(rows[0]) == list(COLUMNS)
+    # beside the clip's sideways figure (its joints' tightest curls), the sideways curve's peak and where it is
+    assert 0.0 <= rows[-1]["sideways_anywhere_deg"] <= 90.0 and "@" in rows[-1]["sideways_anywhere_at"]
     page = (out / "report.html").read_text()
     assert page.count("<tr") == 5 and "1 failed" not in page and "2 failed" in page
     # a heading sorts its own column: "S_finger" sorted by kept, each score heading one column off (a user saw it)

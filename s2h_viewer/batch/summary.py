@@ -17,11 +17,12 @@ from s2h_viewer.io.atomic import atomic_path
 
 COLUMNS = ("motion", "target", "method", "status", "error", "warning", "frames", "seconds", "kept", "poses_kept",
            "poses_lost", "s_palm", "s_finger", "contact_p", "contact_r", "palm_r", "violations", "violations_added",
-           "sideways_deg", "sideways_at", "worst_frame", "worst_error", "output", "picture", "motion_path",
+           "sideways_deg", "sideways_at", "sideways_anywhere_deg", "sideways_anywhere_at", "worst_frame", "worst_error",
+           "output", "picture", "motion_path",
            "target_path", "animation", "source_path")
 COUNTS = ("frames", "worst_frame")
 SCORES = ("kept", "s_palm", "s_finger", "contact_p", "contact_r", "palm_r", "violations", "violations_added",
-          "sideways_deg", "worst_error")
+          "sideways_deg", "sideways_anywhere_deg", "worst_error")
 
 
 def row_json(row: dict) -> str:

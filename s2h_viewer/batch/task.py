@@ -159,6 +159,7 @@ def _retarget_and_write(task: Task) -> dict:
            "palm_r": scores.palm_contact_recall, "violations": scores.violation_rate,
            "violations_added": scores.added_violation_rate,
            "sideways_deg": scores.sideways_deg, "sideways_at": scores.sideways_at,
+           "sideways_anywhere_deg": scores.sideways_anywhere_deg, "sideways_anywhere_at": scores.sideways_anywhere_at,
            "worst_frame": worst, "worst_error": float(frame_error[worst]) if len(frame_error) else 0.0,
            "output": str(task.output), "warning": warning, "source_path": source_path}
     if task.options.render:
