@@ -66,13 +66,14 @@ UNDEFINED = {"sideways_deg": "n/a: no finger curls", "contact_precision": "n/a: 
              "thumb_follow": "n/a: the source's thumb barely moves, so no motion to follow"}
 
 
-def _cell(key: str, values: dict) -> tuple[str, str | None]:
-    """A score's text and tooltip (None: the column's)."""
-    value = values[key]
+def _cell(key: str, result) -> tuple[str, str | None]:
+    """A score of ``result`` (a `MethodResult`), its text and tooltip (None: the column's)."""
+    scores = result.scores
+    value = getattr(scores, key)
     if isinstance(value, float) and math.isnan(value):
         return "n/a", UNDEFINED.get(key, "n/a")
     if key == "invented_contacts":
-        pairs = values["invented_pairs"]
+        pairs = scores.invented_pairs
         listed = ", ".join(f"{pair} on {counted(frames, 'frame')} (from {first})"
                            for pair, frames, first in pairs[:INVENTED_LISTED])
         more = f", {len(pairs) - INVENTED_LISTED} more" if len(pairs) > INVENTED_LISTED else ""
@@ -81,12 +82,16 @@ def _cell(key: str, values: dict) -> tuple[str, str | None]:
     if key == "added_violation_rate":
         return f"{value:.3f}", (f"{value:.3f} of the (frame, joint) angles more than 5 deg further outside the "
                                 f"anatomical limits than the source's; outside them at all: "
-                                f"{values['violation_rate']:.3f}, the source itself: "
-                                f"{values['source_violation_rate']:.3f} (a clip authored past them stays past them)")
+                                f"{scores.violation_rate:.3f}, the source itself: "
+                                f"{scores.source_violation_rate:.3f} (a clip authored past them stays past them)")
     if key == "thumb_follow":
-        angle = THUMB_ANGLE_NAMES.get(values["thumb_follow_at"], values["thumb_follow_at"])
+        angle = THUMB_ANGLE_NAMES.get(scores.thumb_follow_at, scores.thumb_follow_at)
         return f"{value:.2f}", f"the thumb follows the source's at {value:.2f}, worst in {angle}" + \
             (" (under 0.9: it moves otherwise than the source's)" if value < 0.9 else "")
+    if key == "sideways_deg":
+        return f"{value:.0f}", scores.sideways_words(result.motion.held_at)
+    if key == "signature_kept" and result.poses_held:  # a clip of poses: which the retarget loses, and how
+        return f"{value:.3f}", poses_tip(result)
     return f"{value:.3f}", None
 
 
@@ -181,19 +186,13 @@ class ScoresTable(QTableWidget):
         self.setRowCount(len(comparison.results))
         self._results = list(comparison.results)
         for row, result in enumerate(comparison.results):
-            values = result.scores.as_dict()
             warning = frame_warning(result.target)
             target = (f"! {result.target.name}", warning.describe()) if warning else (result.target.name,) * 2
             method = METHODS[result.method].label
             fixes = result.corrections
             cells = [(f"{method} (fixed)", f"{method}, corrected: {fixes.describe()}") if fixes else (method,) * 2,
                      target]
-            cells += [_cell(key, values) for _, key, _ in COLUMNS[2:]]
-            if not math.isnan(result.scores.sideways_deg):
-                cells[SIDEWAYS_COLUMN] = (f"{result.scores.sideways_deg:.0f}",
-                                          result.scores.sideways_words(result.motion.held_at))
-            if result.poses_held:  # a clip of poses: which the retarget loses, and how
-                cells[KEPT_COLUMN] = (cells[KEPT_COLUMN][0], poses_tip(result))
+            cells += [_cell(key, result) for _, key, _ in COLUMNS[2:]]
             for col, (text, tip) in enumerate(cells):
                 item = QTableWidgetItem(text)
                 if tip is not None:
