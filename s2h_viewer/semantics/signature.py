@@ -228,8 +228,7 @@ def sideways_anywhere(positions: np.ndarray) -> SidewaysPeak:
     peak of the viewer's sideways curve (`frame_sideways`), which the clip's figure (`flexion.sideways_peak`, at each
     joint's tightest curls) may leave out: TBS Copy of the authored poses onto the VRM robot bends the pinky PIP 85
     deg sideways in Sign 3, where the clip's figure read 59 (a fresh-eyes user found the curve's peak beside it)."""
-    flexion, sideways = flexion_and_sideways(positions)
-    read = np.where(flexion >= SIDEWAYS_FLEXION, np.nan_to_num(sideways, nan=-1.0), -1.0)
+    read = _flexed_sideways(positions)
     frame, joint = np.unravel_index(int(np.argmax(read)), read.shape)
     if read[frame, joint] < 0.0:
         return SidewaysPeak(float("nan"))
@@ -247,11 +246,17 @@ def sideways_there(positions: np.ndarray, where: str) -> float:
     return float(sideways[0, [name for name, _ in HINGE_JOINTS].index(joint)])
 
 
+def _flexed_sideways(positions: np.ndarray) -> np.ndarray:
+    """(T, 8) degrees each PIP/DIP (`HINGE_JOINTS`) bends sideways where it flexes past `SIDEWAYS_FLEXION`, -1
+    elsewhere, from (T, 21, 3) positions: the bends the signature reads."""
+    flexion, sideways = flexion_and_sideways(positions)
+    return np.where(flexion >= SIDEWAYS_FLEXION, np.nan_to_num(sideways, nan=-1.0), -1.0)
+
+
 def frame_sideways(positions: np.ndarray) -> np.ndarray:
     """(T,) degrees: each frame's worst sideways bend of the PIP/DIP joints flexed past `SIDEWAYS_FLEXION`, 0 where
     none is (the signature's sideways part, and the viewer's sideways curve), from (T, 21, 3) positions."""
-    flexion, sideways = flexion_and_sideways(positions)
-    return np.where(flexion >= SIDEWAYS_FLEXION, np.nan_to_num(sideways), 0.0).max(axis=1)
+    return _flexed_sideways(positions).max(axis=1).clip(min=0.0)
 
 
 def _frame_features(hand: HandModel, pose: HandPose
