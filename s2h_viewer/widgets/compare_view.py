@@ -366,30 +366,36 @@ class CompareView(QWidget):
         if index < 0:
             self._refit.start()  # the window may have changed size while one hand was shown
 
+    def _drawn_at(self, x: int, y: int) -> tuple[int, PosedHand] | None:
+        """The hand (its index in ``_hands``) whose cell is drawn under widget pixel (x, y), in the grid or alone."""
+        u, v = x / max(1, self.interactor.width()), 1.0 - y / max(1, self.interactor.height())
+        for index, hand in enumerate(self._hands):
+            x0, y0, x1, y1 = hand.renderer.GetViewport()
+            if hand.renderer.GetDraw() and x0 <= u < x1 and y0 <= v < y1:
+                return index, hand
+        return None
+
     def banner_tip(self, x: int, y: int) -> str:
         """The whole warning of the banner drawn under widget pixel (x, y), in the grid or a hand alone ("" off
         any): a small cell draws it in fewer words ("! frames guessed: index")."""
-        w, h = max(1, self.interactor.width()), max(1, self.interactor.height())
-        u, v = x / w, 1.0 - y / h
-        for hand in self._hands:
-            x0, y0, x1, y1 = hand.renderer.GetViewport()
-            if hand.banner is not None and hand.renderer.GetDraw() and x0 <= u < x1 and y0 <= v < y1:
-                scale = self.interactor.devicePixelRatioF()  # the banner is measured in the window's pixels
-                return hand.banner_tip if (v - y0) * h * scale <= hand.banner.drawn_height() else ""
-        return ""
+        drawn = self._drawn_at(x, y)
+        if drawn is None or drawn[1].banner is None:
+            return ""
+        hand, h = drawn[1], self.interactor.height()
+        above = ((1.0 - y / max(1, h)) - hand.renderer.GetViewport()[1]) * h  # the cell's bottom to the pointer
+        scale = self.interactor.devicePixelRatioF()  # the banner is measured in the window's pixels
+        return hand.banner_tip if above * scale <= hand.banner.drawn_height() else ""
 
     def contact_tip(self, x: int, y: int) -> str:
         """What the contact link drawn under widget pixel (x, y) joins and means (`contact_words`), "" off any."""
-        w, h = max(1, self.interactor.width()), max(1, self.interactor.height())
-        u, v = x / w, 1.0 - y / h
-        for index, hand in enumerate(self._hands):  # the cell drawn there, in the grid or alone
-            x0, y0, x1, y1 = hand.renderer.GetViewport()
-            if hand.overlay is not None and hand.renderer.GetDraw() and x0 <= u < x1 and y0 <= v < y1:
-                scale = self.interactor.devicePixelRatioF()  # VTK's display pixels, from the bottom
-                found = hand.overlay.link_at(hand.renderer, x * scale, (h - y) * scale, hand.frame,
-                                             LINK_REACH_PX * scale)
-                return "" if found is None else contact_words(*found, on_source=index == 0)
-        return ""
+        drawn = self._drawn_at(x, y)
+        if drawn is None or drawn[1].overlay is None:
+            return ""
+        index, hand = drawn
+        scale = self.interactor.devicePixelRatioF()  # VTK's display pixels, from the bottom
+        found = hand.overlay.link_at(hand.renderer, x * scale, (self.interactor.height() - y) * scale, hand.frame,
+                                     LINK_REACH_PX * scale)
+        return "" if found is None else contact_words(*found, on_source=index == 0)
 
     def eventFilter(self, watched: QObject, event: QEvent) -> bool:
         if watched is not self.interactor:
