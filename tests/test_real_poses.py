@@ -576,7 +576,7 @@ def test_a_retargets_violations_read_against_the_sources_own(poses, sample_hands
         scores.source_violation_rate > 0.5
     # the cell is what the retarget adds to them (TBS Copy: none), its tooltip the whole figure and the source's
     assert scores.violation_rate > 0.5 and scores.added_violation_rate == 0.0
-    text, tip = _cell("added_violation_rate", scores.as_dict())
+    text, tip = _cell("added_violation_rate", scores)
     assert text == "0.000" and f"outside them at all: {scores.violation_rate:.3f}" in tip
     assert f"the source itself: {scores.source_violation_rate:.3f}" in tip
 

@@ -66,9 +66,9 @@ UNDEFINED = {"sideways_deg": "n/a: no finger curls", "contact_precision": "n/a: 
              "thumb_follow": "n/a: the source's thumb barely moves, so no motion to follow"}
 
 
-def _cell(key: str, result) -> tuple[str, str | None]:
-    """A score of ``result`` (a `MethodResult`), its text and tooltip (None: the column's)."""
-    scores = result.scores
+def _cell(key: str, scores, held_at=lambda frame: "", lost_poses: str | None = None) -> tuple[str, str | None]:
+    """A score's text and tooltip (None: the column's), from `RetargetScores`; ``held_at``: the pose held at a frame
+    (`Motion.held_at`), ``lost_poses``: on a clip of poses, the Kept cell's tooltip (`poses_tip`)."""
     value = getattr(scores, key)
     if isinstance(value, float) and math.isnan(value):
         return "n/a", UNDEFINED.get(key, "n/a")
@@ -89,9 +89,9 @@ def _cell(key: str, result) -> tuple[str, str | None]:
         return f"{value:.2f}", f"the thumb follows the source's at {value:.2f}, worst in {angle}" + \
             (" (under 0.9: it moves otherwise than the source's)" if value < 0.9 else "")
     if key == "sideways_deg":
-        return f"{value:.0f}", scores.sideways_words(result.motion.held_at)
-    if key == "signature_kept" and result.poses_held:  # a clip of poses: which the retarget loses, and how
-        return f"{value:.3f}", poses_tip(result)
+        return f"{value:.0f}", scores.sideways_words(held_at)
+    if key == "signature_kept" and lost_poses is not None:  # a clip of poses: which the retarget loses, and how
+        return f"{value:.3f}", lost_poses
     return f"{value:.3f}", None
 
 
@@ -192,7 +192,8 @@ class ScoresTable(QTableWidget):
             fixes = result.corrections
             cells = [(f"{method} (fixed)", f"{method}, corrected: {fixes.describe()}") if fixes else (method,) * 2,
                      target]
-            cells += [_cell(key, result) for _, key, _ in COLUMNS[2:]]
+            lost_poses = poses_tip(result) if result.poses_held else None
+            cells += [_cell(key, result.scores, result.motion.held_at, lost_poses) for _, key, _ in COLUMNS[2:]]
             for col, (text, tip) in enumerate(cells):
                 item = QTableWidgetItem(text)
                 if tip is not None:
