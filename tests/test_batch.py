@@ -123,7 +123,7 @@ def test_a_batch_on_a_local_cluster_equals_the_in_process_retarget_and_a_rerun_s
     assert page.count("<tr") == 5 and "1 failed" not in page and "2 failed" in page
     # a heading sorts its own column: "S_finger" sorted by kept, each score heading one column off (a user saw it)
     import re
-    columns = {label: int(n) for n, label in re.findall(r'<th data-col="(\d+)">([^<]+)</th>', page)}
+    columns = {label: int(n) for n, label in re.findall(r'<th data-col="(\d+)"[^>]*>([^<]+)</th>', page)}
     last = page.split("<tr")[-1]
     cells = re.findall(r'<td[^>]*data-sort="([^"]*)"|<td[^>]*>', last)
     assert float(cells[columns["S_finger"]]) == pytest.approx(rows[-1]["s_finger"], abs=1e-4)  # the summary's 4
@@ -439,3 +439,35 @@ def test_a_clip_with_no_skin_is_read_onto_the_rig_beside_it(tmp_path):
         options, animation=None))
     row, alone = run_task(npz), run_task(plain)
     assert row["source_path"] == "" and row["warning"] == "" and row["kept"] == alone["kept"]
+
+
+def test_a_finger_bent_sideways_reads_red_on_the_page_in_the_viewers_words_with_the_thumb_beside_it(tmp_path):
+    """TBS Copy of the authored poses onto the VRM robot bends the pinky PIP 59 deg sideways where the source bends
+    38: the viewer's Sideways cell is red and says so, and a batch's page gave the 59 alone, neither red nor beside
+    the source's, and no thumb figure (an issue 26 goal) at all."""
+    from s2h_viewer.batch.report import write_report
+    from s2h_viewer.batch.summary import write_summary
+    from s2h_viewer.batch.task import run_task
+    real = ASSETS_DIR / "motions" / "real"
+    options = TaskOptions(format="npz", render=False, side="right", animation="all",
+                          source=str(real / "godot_hand_r_posed_rig.gltf"))
+    bent, = (run_task(t) for t in plan_batch([str(real / "godot_hand_poses_r.gltf")],
+                                            [str(ASSETS_DIR / "hands" / "real" / "debug_robot.vrm")], ["tbs_copy"],
+                                            tmp_path, options, tuple(METHODS)))
+    clean, = (run_task(t) for t in plan_batch([COUNTING], ["iris"], ["tbs_copy"], tmp_path,
+                                             TaskOptions(format="npz", render=False), tuple(METHODS)))
+    assert bent["sideways_deg"] > bent["source_sideways_deg"] + 5 > 25 and clean["sideways_deg"] < 25
+    assert bent["sideways_words"].startswith("pinky PIP bends") and "(the source bends" in bent["sideways_words"]
+    assert "(Sign 3)" in bent["sideways_words"]  # the curve's peak, named by the pose held there
+    assert 0.0 < bent["thumb_follow"] <= 1.0 and bent["thumb_follow_at"].startswith("thumb_")
+    rows = read_summary(write_summary([bent, clean], tmp_path / "summary.csv"))  # as the viewer reads them back
+    assert rows[0]["sideways_words"] == bent["sideways_words"]
+    assert rows[0]["source_sideways_deg"] == pytest.approx(bent["source_sideways_deg"], abs=1e-5)
+    page = write_report(rows, tmp_path / "report.html").read_text()
+    import html
+    import re
+    red = re.findall(r'<td class="num broken" data-sort="([^"]*)">', page)
+    assert len(red) == 1 and float(red[0]) == pytest.approx(bent["sideways_deg"], abs=1e-5)  # the clean row: not red
+    assert html.escape(bent["sideways_words"]) in page
+    assert "<th data-col" in page and ">thumb follows</th>" in page
+    assert f'>{bent["thumb_follow"]:.2f}</td>' in page

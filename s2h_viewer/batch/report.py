@@ -14,12 +14,23 @@ from s2h_viewer.batch.summary import worst_first
 from s2h_viewer.batch.task import POSES_APART
 from s2h_viewer.io.atomic import atomic_path
 from s2h_viewer.semantics.flexion import SidewaysPeak
+from s2h_viewer.semantics.signature import sideways_broken
 from s2h_viewer.wording import counted
 
 _NAMES = (("motion", "motion"), ("target", "target"), ("method", "method"), ("status", "status"))
 _SCORES = (("kept", "kept"), ("s_finger", "S_finger"), ("s_palm", "S_palm"), ("contact_p", "contact P"),
-           ("contact_r", "contact R"), ("violations_added", "violations added"), ("sideways_deg", "sideways deg"),
-           ("worst_frame", "worst frame"), ("frames", "frames, seconds"))
+           ("contact_r", "contact R"), ("violations_added", "viol. added"), ("sideways_deg", "sideways deg"),
+           ("thumb_follow", "thumb follows"), ("worst_frame", "worst frame"), ("frames", "frames, seconds"))
+#: what a score's heading says under the pointer (its words cost the page width it had to spare)
+_TITLES = {"kept": "share of frames whose signature (each finger extended, bent or curled, the thumb's touches, "
+                   "no finger bent sideways, no invented contact) is the source's",
+           "contact_p": "pad contacts made that the source makes", "contact_r": "pad contacts of the source kept",
+           "violations_added": "share of joint angles over 5 deg further outside the anatomical limits than the "
+                               "source's own",
+           "sideways_deg": "the worst sideways bend of a PIP/DIP at its tightest curls (0: a clean curl); red past 25 "
+                           "and past the source's own + 5",
+           "thumb_follow": "the least correlation of a thumb angle (the metacarpal across and out of the palm, the MCP "
+                           "and IP bends) with the source's (1: it does what the source's does)"}
 
 _STYLE = """
 body { font: 13px system-ui, sans-serif; margin: 1em; color: #222; }
@@ -28,16 +39,18 @@ h1 { font-size: 1.3em; margin: 0 0 .3em; }
 .failed-count { color: #b00020; font-weight: 600; }
 input { font: inherit; padding: .3em .5em; width: 24em; margin: .6em 0; }
 table { border-collapse: collapse; }
-th { position: sticky; top: 0; background: #f0f0f0; cursor: pointer; user-select: none; white-space: nowrap; }
+th { position: sticky; top: 0; background: #f0f0f0; cursor: pointer; user-select: none; white-space: nowrap;
+     font-size: 12px; }
 th, td { border: 1px solid #ccc; padding: .2em .4em; vertical-align: middle; }
 th { white-space: normal; max-width: 6em; }
 th.sorted-asc::after { content: " \\25B2"; } th.sorted-desc::after { content: " \\25BC"; }
 td.num { text-align: right; font-variant-numeric: tabular-nums; }
+td.broken { color: #c62828; background: #ffcdd2; font-weight: 600; }  /* a finger bent sideways: the viewer's red */
 tr.failed td { background: #fde7ea; }
 tr.not-run td { background: #f3f3f3; color: #777; }
-td.error, td.note { min-width: 14em; max-width: 24em; }
-td:nth-child(-n+2) { min-width: 7em; max-width: 11em; overflow-wrap: anywhere; }  /* motion, target: long names wrap */
-td.error { color: #b00020; }
+td.note { min-width: 12em; max-width: 24em; }
+td:nth-child(-n+2) { min-width: 6em; max-width: 11em; overflow-wrap: break-word; }  /* motion, target: wrap at _ */
+.error { color: #b00020; } .note div + div { margin-top: .3em; }
 details ul { margin: .2em 0; padding-left: 1.2em; color: #222; } summary { cursor: pointer; }
 .failures { color: #b00020; margin: .4em 0; } .failures ul { margin: .2em 0; } .failures .tasks { color: #555; }
 img { height: 120px; display: block; }
@@ -83,7 +96,7 @@ def _value(row: dict, key: str) -> tuple[str, str]:
     if isinstance(value, float):
         if math.isnan(value):
             return "n/a", ""
-        text = f"{value:.1f}" if key == "sideways_deg" else f"{value:.3f}"
+        text = f"{value:.1f}" if key == "sideways_deg" else f"{value:.2f}" if key == "thumb_follow" else f"{value:.3f}"
         if key == "kept" and row.get("poses_kept"):
             text += f" ({row['poses_kept']} poses)"
         return text, repr(value)
@@ -122,8 +135,12 @@ def _poses_lost(row: dict) -> str:
             f"<ul>{items}</ul></details>")
 
 
-def _sideways_note(row: dict) -> str:
-    """"ring DIP bends 40 deg sideways at frame 212" from the row's sideways columns ("" if no finger curls)."""
+def sideways_note(row: dict) -> str:
+    """The row's worst sideways bend in the viewer's words, with the source's and the curve's peak
+    (`RetargetScores.sideways_words`); from a summary written before those, "ring DIP bends 40 deg sideways at frame
+    212" from its sideways columns ("" if no finger curls)."""
+    if row.get("sideways_words"):
+        return str(row["sideways_words"])
     joint, _, frame = str(row.get("sideways_at") or "").partition("@")
     degrees = row.get("sideways_deg")
     if not joint or not isinstance(degrees, float) or math.isnan(degrees):
@@ -131,10 +148,20 @@ def _sideways_note(row: dict) -> str:
     return SidewaysPeak(degrees, joint, int(frame)).describe()
 
 
+def _broken(row: dict, key: str) -> bool:
+    """Whether a score cell is drawn red: the sideways bend past the limit and the source's own (`sideways_broken`)."""
+    return (key == "sideways_deg" and isinstance(row.get(key), float)
+            and sideways_broken(row[key], row.get("source_sideways_deg", math.nan)))
+
+
 def _cell(row: dict, key: str, numeric: bool) -> str:
     text, sort = _value(row, key)
-    shown = "<br>".join(html.escape(line) for line in text.split("\n"))
-    return f'<td{" class=num" if numeric else ""} data-sort="{html.escape(sort)}">{shown}</td>'
+    # a long name breaks after its underscores, not anywhere: "debug_robo" over "t" (the page's width is tight)
+    shown = "<br>".join(html.escape(line).replace("_", "_<wbr>" if key in ("motion", "target") else "_")
+                        for line in text.split("\n"))
+    css = " ".join(c for c, wanted in (("num", numeric), ("broken", _broken(row, key))) if wanted)
+    klass = f' class="{css}"' if css else ""
+    return f'<td{klass} data-sort="{html.escape(sort)}">{shown}</td>'
 
 
 def write_report(rows: list[dict], path: str | Path, title: str = "s2h batch") -> Path:
@@ -147,14 +174,17 @@ def write_report(rows: list[dict], path: str | Path, title: str = "s2h batch") -
     warned = sum(r.get("status") == "ok" and bool(r.get("warning")) for r in rows)
     head = "".join(f'<th data-col="{i}">{html.escape(label)}</th>' for i, (_, label) in enumerate(_NAMES))
     head += '<th>error / note</th><th>worst frame: source | retarget; files</th>'  # not sortable: 2 columns
-    head += "".join(f'<th data-col="{len(_NAMES) + 2 + i}">{html.escape(label)}</th>'
-                    for i, (_, label) in enumerate(_SCORES))
+    head += "".join(f'<th data-col="{len(_NAMES) + 2 + i}"'
+                    + (f' title="{html.escape(_TITLES[key])}"' if key in _TITLES else "") + f">{html.escape(label)}</th>"
+                    for i, (key, label) in enumerate(_SCORES))
     lines = []
     for row in rows:
         cells = [_cell(row, key, numeric=False) for key, _ in _NAMES]
-        note = "<br>".join(html.escape(n) for n in (row.get("error"), row.get("warning"), _sideways_note(row)) if n)
-        note += _poses_lost(row)
-        cells.append(f'<td class="{"error" if row.get("error") or row.get("warning") else "note"}">{note}</td>')
+        # an error or a warning in red, the sideways bend in black: it was red too, under a target's warning
+        note = "".join(f'<div{" class=error" if red else ""}>{html.escape(text)}</div>'
+                       for text, red in ((row.get("error"), True), (row.get("warning"), True), (sideways_note(row), False))
+                       if text)
+        cells.append(f'<td class="note">{note}{_poses_lost(row)}</td>')
         picture = row.get("picture") or ""
         links = [f'<a href="{html.escape(_relative(row[k], folder))}">{label}</a>'
                  for k, label in (("output", "output"), ("motion_path", "motion"), ("target_path", "target"))

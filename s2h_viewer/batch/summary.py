@@ -1,7 +1,7 @@
 """``summary.csv``: one row per task, in the plan's order, failures first (then tasks an interrupted batch did
 not run); read back by the viewer. Status: ok, failed, or "not run".
 
-Scores are written with 4 decimals; a score with nothing to measure (no contacts: DESIGN.md section 5) is
+Scores are written with 6 decimals; a score with nothing to measure (no contacts: DESIGN.md section 5) is
 empty, not "nan".
 """
 
@@ -17,12 +17,13 @@ from s2h_viewer.io.atomic import atomic_path
 
 COLUMNS = ("motion", "target", "method", "status", "error", "warning", "frames", "seconds", "kept", "poses_kept",
            "poses_lost", "s_palm", "s_finger", "contact_p", "contact_r", "palm_r", "violations", "violations_added",
-           "sideways_deg", "sideways_at", "sideways_anywhere_deg", "sideways_anywhere_at", "worst_frame", "worst_error",
+           "sideways_deg", "sideways_at", "sideways_anywhere_deg", "sideways_anywhere_at", "source_sideways_deg",
+           "sideways_words", "thumb_follow", "thumb_follow_at", "worst_frame", "worst_error",
            "output", "picture", "motion_path",
            "target_path", "animation", "source_path")
 COUNTS = ("frames", "worst_frame")
 SCORES = ("kept", "s_palm", "s_finger", "contact_p", "contact_r", "palm_r", "violations", "violations_added",
-          "sideways_deg", "sideways_anywhere_deg", "worst_error")
+          "sideways_deg", "sideways_anywhere_deg", "source_sideways_deg", "thumb_follow", "worst_error")
 
 
 def row_json(row: dict) -> str:

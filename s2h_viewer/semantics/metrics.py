@@ -16,7 +16,7 @@ from s2h_viewer.semantics.asm import semantic_matrix
 from s2h_viewer.semantics.contacts import (CONTACT_PAIRS, PAD_PAIRS, PALM_PAIRS, contact_precision_recall,
                                            detect_contacts, touching_and_near)
 from s2h_viewer.semantics.flexion import SidewaysPeak, sideways_peak, thumb_follow
-from s2h_viewer.semantics.signature import (SIDEWAYS_FLEXION, SIDEWAYS_LIMIT, pose_loss_masks, sideways_anywhere,
+from s2h_viewer.semantics.signature import (SIDEWAYS_FLEXION, pose_loss_masks, sideways_anywhere, sideways_broken,
                                             sideways_there)
 from s2h_viewer.semantics.similarity import masked_cosine
 
@@ -127,7 +127,7 @@ class RetargetScores:
     @property
     def sideways_broken(self) -> bool:
         """Its worst sideways bend past the signature's limit and past the source's own + 5 (drawn red)."""
-        return bool(self.sideways_deg > max(SIDEWAYS_LIMIT, np.nan_to_num(self.source_sideways_deg) + 5.0))
+        return sideways_broken(self.sideways_deg, self.source_sideways_deg)
 
 
 def score_retarget(source_hand: HandModel, source_q: np.ndarray | torch.Tensor, target_hand: HandModel,

@@ -77,6 +77,12 @@ class PoseSignature:
 CURL_CHAINS: list[list[int]] = [[0, *range(1 + 4 * f, 5 + 4 * f)] for f in range(1, topo.N_FINGERS)]
 
 
+def sideways_broken(degrees: float, source_degrees: float) -> bool:
+    """A clip's worst sideways bend read as a broken finger: past `SIDEWAYS_LIMIT` and past the source's own (NaN:
+    it curls no finger) + 5; the red of the viewer's Sideways cell and of a batch's row."""
+    return bool(degrees > max(SIDEWAYS_LIMIT, np.nan_to_num(source_degrees) + 5.0))
+
+
 def finger_curls(positions: np.ndarray) -> np.ndarray:
     """(T, 4) curl in degrees of index..pinky: the angles between consecutive bones from the wrist-to-MCP
     line to the tip, summed."""
@@ -170,8 +176,7 @@ def differences(source: PoseSignature, target: PoseSignature) -> list[str]:
                          np.array([source.thumb_across]), np.array([target.thumb_across]))[0]:
         out.append(f"thumb not across the palm ({target.thumb_across:.2f} of its width past the index knuckle; the "
                    f"source's: {source.thumb_across:.2f})")
-    limit = max(SIDEWAYS_LIMIT, (0.0 if np.isnan(source.sideways) else source.sideways) + 5.0)
-    if target.sideways > limit:
+    if sideways_broken(target.sideways, source.sideways):
         joint = target.sideways_joint.replace("_", " ").replace("pip", "PIP").replace("dip", "DIP")
         source_deg = "no joint flexed enough" if np.isnan(source.sideways) else f"{source.sideways:.0f}"
         out.append(f"{joint} bends {target.sideways:.0f} deg sideways (the source: {source_deg})")
