@@ -171,3 +171,30 @@ def test_a_row_of_the_clip_launched_joins_its_grid(qtbot, sample_hands, tmp_path
     assert set(win.compare.state.methods) == {"tbs_copy", "copy"}
     qtbot.waitUntil(lambda: win.compare.selected_result().method == "copy", timeout=30_000)
     assert win.compare.selected_result().target.name == "laurel"
+
+
+def test_a_finger_bent_sideways_is_red_in_the_batch_table_as_in_the_scores_table(qtbot, tmp_path):
+    """TBS Copy of the authored poses onto the VRM robot bends the pinky PIP 59 deg sideways (the source: 38): red,
+    with the scores table's words, in the table of a batch, which showed a bare 59.0; the thumb's figure beside it."""
+    from PySide6.QtGui import QColor
+
+    from s2h_viewer.batch.summary import read_summary
+    from s2h_viewer.widgets.batch_table import COLUMNS, BatchTable
+    from s2h_viewer.widgets.scores_table import SIDEWAYS_RED
+
+    real = ASSETS_DIR / "motions" / "real"
+    tasks = plan_batch([str(real / "godot_hand_poses_r.gltf"), str(ASSETS_DIR / "motions" / "counting.npz")],
+                       [str(ASSETS_DIR / "hands" / "real" / "debug_robot.vrm")], ["tbs_copy"], tmp_path,
+                       TaskOptions(format="npz", render=False, side="right", animation="all",
+                                   source=str(real / "godot_hand_r_posed_rig.gltf")), tuple(METHODS))
+    summary = write_summary([run_task(t) for t in tasks], tmp_path / "summary.csv")
+    table = BatchTable(summary, read_summary(summary))
+    qtbot.addWidget(table)
+    sideways, thumb = (next(c for c, (_, key, _) in enumerate(COLUMNS) if key == name)
+                       for name in ("sideways_deg", "thumb_follow"))
+    cells = {table.table.item(r, 0).text(): table.table.item(r, sideways) for r in range(table.table.rowCount())}
+    bent, counting = cells["godot_hand_poses_r"], cells["counting"]
+    assert float(bent.text()) > 45 and bent.foreground().color() == QColor(SIDEWAYS_RED)
+    assert "the source bends 38 there" in bent.toolTip() and "(Sign 3)" in bent.toolTip()
+    assert counting.foreground().color() != QColor(SIDEWAYS_RED)  # counting's fingers bend no further than its own
+    assert all(0.0 < float(table.table.item(r, thumb).text()) <= 1.0 for r in range(table.table.rowCount()))

@@ -12,13 +12,17 @@ from PySide6.QtWidgets import QHeaderView, QLabel, QTableWidget, QTableWidgetIte
 
 from s2h_viewer.batch.summary import worst_first
 from s2h_viewer.batch.task import POSES_APART
-from s2h_viewer.widgets.scores_table import KEPT_TIP
+from s2h_viewer.batch.report import sideways_note
+from s2h_viewer.semantics.signature import sideways_broken
+from s2h_viewer.widgets.scores_table import KEPT_TIP, SIDEWAYS_BACKGROUND, SIDEWAYS_RED, thumb_words
+from s2h_viewer.widgets.tooltips import wrapped
 
 #: (header, row key, decimals or None for text)
 COLUMNS = (("Motion", "motion", None), ("Target", "target", None), ("Method", "method", None),
            ("Status", "status", None), ("Kept", "kept", 3), ("S_finger", "s_finger", 3), ("S_palm", "s_palm", 3),
            ("Contact P", "contact_p", 3), ("Contact R", "contact_r", 3), ("Violations\nadded", "violations_added", 3),
-           ("Sideways\n(deg)", "sideways_deg", 1), ("Worst\nframe", "worst_frame", None), ("Error or warning", "error", None))
+           ("Sideways\n(deg)", "sideways_deg", 1), ("Thumb", "thumb_follow", 2), ("Worst\nframe", "worst_frame", None),
+           ("Error or warning", "error", None))
 FAILED_COLOUR = QColor("#fde7ea")
 
 
@@ -89,9 +93,13 @@ class BatchTable(QWidget):
                 if key == "violations_added" and number is not None:
                     item.setToolTip(f"joint angles over 5 deg further outside the anatomical limits than the "
                                     f"source's; outside them at all: {row.get('violations', math.nan):.3f}")
-                if key == "sideways_deg" and row.get("sideways_at"):
-                    joint, _, frame = str(row["sideways_at"]).partition("@")
-                    item.setToolTip(f"{joint.replace('_', ' ')} at frame {frame}")
+                if key == "sideways_deg" and number is not None:
+                    item.setToolTip(wrapped(sideways_note(row)))  # the viewer's words, and the page's
+                    if sideways_broken(number, row.get("source_sideways_deg", math.nan)):
+                        item.setForeground(QColor(SIDEWAYS_RED))
+                        item.setBackground(QColor(SIDEWAYS_BACKGROUND))
+                if key == "thumb_follow" and number is not None:
+                    item.setToolTip(thumb_words(number, str(row.get("thumb_follow_at") or "")))
                 item.setData(Qt.ItemDataRole.UserRole, r)
                 if row.get("status") != "ok":
                     item.setBackground(FAILED_COLOUR)

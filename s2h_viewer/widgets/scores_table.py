@@ -85,14 +85,18 @@ def _cell(key: str, scores, held_at=lambda frame: "", lost_poses: str | None = N
                                 f"{scores.violation_rate:.3f}, the source itself: "
                                 f"{scores.source_violation_rate:.3f} (a clip authored past them stays past them)")
     if key == "thumb_follow":
-        angle = THUMB_ANGLE_NAMES.get(scores.thumb_follow_at, scores.thumb_follow_at)
-        return f"{value:.2f}", f"the thumb follows the source's at {value:.2f}, worst in {angle}" + \
-            (" (under 0.9: it moves otherwise than the source's)" if value < 0.9 else "")
+        return f"{value:.2f}", thumb_words(value, scores.thumb_follow_at)
     if key == "sideways_deg":
         return f"{value:.0f}", scores.sideways_words(held_at)
     if key == "signature_kept" and lost_poses is not None:  # a clip of poses: which the retarget loses, and how
         return f"{value:.3f}", lost_poses
     return f"{value:.3f}", None
+
+
+def thumb_words(follow: float, angle: str) -> str:
+    """How closely the thumb follows the source's, and in which angle worst (`RetargetScores.thumb_follow_at`)."""
+    return (f"the thumb follows the source's at {follow:.2f}, worst in {THUMB_ANGLE_NAMES.get(angle, angle)}"
+            + (" (under 0.9: it moves otherwise than the source's)" if follow < 0.9 else ""))
 
 
 def poses_tip(result) -> str:
