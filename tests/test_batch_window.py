@@ -130,7 +130,8 @@ def test_a_row_of_one_animation_of_a_file_shows_that_animation(qtbot, sample_han
     assert offered == [tmp_path / "out" / "two.sign" / "laurel" / "tbs_copy.npz"]
 
 
-def test_letters_typed_in_the_batch_table_find_a_row_and_fire_no_shortcut(qtbot, sample_hands, tmp_path, summary):
+def test_letters_typed_in_the_batch_table_find_a_row_and_fire_no_shortcut(qtbot, sample_hands, tmp_path, summary,
+                                                                         monkeypatch):
     """A fresh-eyes user typed a motion's name in the batch table to find its row: O marked a range out, R turned
     the fixing ring's axis. Letters typed there go to the table's search; Ctrl shortcuts still work."""
     from PySide6.QtTest import QTest
@@ -147,6 +148,19 @@ def test_letters_typed_in_the_batch_table_find_a_row_and_fire_no_shortcut(qtbot,
     assert view.item(view.currentRow(), 1).text() == "broken"
     QTest.keyClick(view, Qt.Key.Key_M, Qt.KeyboardModifier.ControlModifier)  # a Ctrl shortcut: still the window's
     assert win.view.solo >= 0
+    # Return opens the row in the table, and only there: in the frame box it went back to the row's worst frame
+    chosen = []
+    table.row_chosen.connect(chosen.append)
+    spin = win.timeline.spin
+    keyboard_to(qtbot, spin)
+    spin.selectAll()
+    QTest.keyClicks(spin, "5")
+    QTest.keyClick(spin, Qt.Key.Key_Return)
+    assert win.timeline.frame == 5 and chosen == []
+    monkeypatch.setattr(QMessageBox, "critical", lambda *args: None)  # the broken row: "failed in the batch"
+    keyboard_to(qtbot, view)
+    QTest.keyClick(view, Qt.Key.Key_Return)
+    assert [row["target"] for row in chosen] == ["broken"]
 
 
 def test_a_row_of_the_clip_launched_joins_its_grid(qtbot, sample_hands, tmp_path):

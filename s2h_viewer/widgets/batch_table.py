@@ -109,7 +109,11 @@ class BatchTable(QWidget):
         self.table.horizontalHeader().setSortIndicator(-1, Qt.SortOrder.AscendingOrder)  # worst first until a click
         self.table.setSortingEnabled(True)
         self.table.cellDoubleClicked.connect(lambda r, _c: self._choose(r))
-        QShortcut(QKeySequence(Qt.Key.Key_Return), self.table, lambda: self._choose(self.table.currentRow()))
+        for key in (Qt.Key.Key_Return, Qt.Key.Key_Enter):  # in the table only: Return in the frame box went back to
+            # the row's worst frame, the shortcut being the whole window's (a fresh-eyes user); set apart, as PySide6's
+            # constructor drops a context given to it
+            shortcut = QShortcut(QKeySequence(key), self.table, lambda: self._choose(self.table.currentRow()))
+            shortcut.setContext(Qt.ShortcutContext.WidgetWithChildrenShortcut)
         if self.rows:
             self.table.selectRow(0)
         layout = QVBoxLayout(self)
