@@ -212,3 +212,21 @@ def test_a_finger_bent_sideways_is_red_in_the_batch_table_as_in_the_scores_table
     assert "the source bends 38 there" in bent.toolTip() and "(Sign 3)" in bent.toolTip()
     assert counting.foreground().color() != QColor(SIDEWAYS_RED)  # counting's fingers bend no further than its own
     assert all(0.0 < float(table.table.item(r, thumb).text()) <= 1.0 for r in range(table.table.rowCount()))
+
+
+def test_a_row_of_a_shorter_clip_opens_from_a_frame_past_its_end(qtbot, sample_hands, tmp_path, summary):
+    """A fresh-eyes user at frame 480 of the 692 poses, the second of two retargets selected, opened a row of the
+    378-frame gestures clip: the scores table's row moved to the new grid's one retarget and drew it at frame 480
+    (an IndexError in the log) before the timeline took the new clip's length."""
+    win = open_compare_window(qtbot, sample_hands, tmp_path, methods=("tbs_copy",), targets=("iris", "laurel"),
+                              repeats=2)
+    table = win.batch_browser.open(str(summary))  # counting: 237 frames
+    qtbot.waitExposed(table)
+    frames = win.compare.comparison.n_frames
+    assert frames > 237
+    win.compare.select(win.compare.shown_keys()[1])
+    win.timeline.set_frame(frames - 1)
+    chosen = next(r for r in table.rows if r["method"] == "dm" and r["status"] == "ok")
+    with qtbot.waitSignal(win.comparison_ready, timeout=120_000):
+        table.row_chosen.emit(chosen)
+    assert win.compare.comparison.n_frames == 237 and win.timeline.frame == chosen["worst_frame"]

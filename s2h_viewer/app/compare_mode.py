@@ -506,7 +506,9 @@ class CompareMode(QWidget):
         self._shown_index = self.undo_stack.index()
         self._keep_results(set(self.state.wanted()))
         self.view.set_comparison(comparison)
-        self.scores.show_comparison(comparison)
+        self.scores.blockSignals(True)  # its current row moving is no choice: `select` below is (a row of a shorter
+        self.scores.show_comparison(comparison)  # clip drew the new grid at the old clip's frame, past its end)
+        self.scores.blockSignals(False)
         self._fit_table()
         self.heatmap_choice.blockSignals(True)
         self.heatmap_choice.clear()
