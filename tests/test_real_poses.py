@@ -241,7 +241,11 @@ def test_the_sideways_words_name_the_curves_peak_and_the_sources_bend_there(pose
     assert there == pytest.approx(flexion_and_sideways(source[int(at):int(at) + 1])[1][0, HINGE_NAMES.index(joint)])
     words = scores.sideways_words(copied.held_at)
     assert f"(the source bends {there:.0f} there; {scores.source_sideways_deg:.0f} at its own tightest curls)" in words
-    assert words.endswith(f"sideways at frame {frame} (Sign 3)") and "at any PIP/DIP flexed 45 deg or more" in words
+    # the peak with the source's bend there too: the authored Sign 3 bends that pinky 64 itself (a fresh-eyes user)
+    peak_there = sideways_there(source, scores.sideways_anywhere_at)
+    assert scores.source_sideways_anywhere_there == pytest.approx(peak_there) and 45.0 < peak_there < 80.0
+    assert words.endswith(f"sideways at frame {frame} (Sign 3), where the source bends {peak_there:.0f}")
+    assert "at any PIP/DIP flexed 45 deg or more" in words
     # a touch whose pads overlap in the source reads so, not as a gap below 0 ("the source's -0.012 ... apart")
     lost = pose_differences(rig, motion.q_tbs, robot, copied.q_tbs, motion.labels)["Sign 3"]
     assert any("the source's pressed 0.0" in what for what in lost), lost

@@ -81,6 +81,8 @@ class RetargetScores:
     #: viewer's sideways curve's peak, which the tightest curls may leave out) and where it is
     sideways_anywhere_deg: float = float("nan")
     sideways_anywhere_at: str = ""
+    #: the source's sideways bend at that joint and frame (the authored Sign 3 bends the pinky PIP 64 there itself)
+    source_sideways_anywhere_there: float = float("nan")
     #: share of frames whose signature (`semantics.signature.loss_masks`: each finger extended, bent or curled,
     #: the thumb's touches, a thumb out to its side where the source's is, no finger bending sideways, no invented
     #: pad contact) is the source's: it drops where
@@ -109,7 +111,8 @@ class RetargetScores:
     def sideways_words(self, pose_at=lambda frame: "") -> str:
         """The worst sideways bend in words, with the source's there and the curve's peak where that is worse:
         "pinky PIP bends 59 deg sideways at frame 557, at its tightest curls (the source bends 38 there; 38 at its own
-        tightest curls); at any PIP/DIP flexed 45 deg or more: pinky PIP bends 85 deg sideways at frame 560 (Sign 3)".
+        tightest curls); at any PIP/DIP flexed 45 deg or more: pinky PIP bends 85 deg sideways at frame 560 (Sign 3),
+        where the source bends 64".
         ``pose_at(frame)``: the pose held there, as " (Sign 3)", or "" (`Motion.held_at`)."""
         if np.isnan(self.sideways_deg):
             return "no finger curls (no sideways flexion to measure)"
@@ -121,7 +124,9 @@ class RetargetScores:
         if self.sideways_anywhere_deg > self.sideways_deg + 0.5:
             joint, _, frame = self.sideways_anywhere_at.partition("@")
             text += (f"; at any PIP/DIP flexed {SIDEWAYS_FLEXION:.0f} deg or more: "
-                     f"{SidewaysPeak(self.sideways_anywhere_deg, joint, int(frame)).describe()}{pose_at(int(frame))}")
+                     f"{SidewaysPeak(self.sideways_anywhere_deg, joint, int(frame)).describe()}{pose_at(int(frame))}, "
+                     + ("where the source does not flex it" if np.isnan(self.source_sideways_anywhere_there)
+                        else f"where the source bends {self.source_sideways_anywhere_there:.0f}"))
         return text
 
     @property
@@ -170,6 +175,8 @@ def score_retarget_frames(source_hand: HandModel, source_q: np.ndarray | torch.T
                                 source_sideways_deg=sideways_peak(src_pose.positions.numpy()).degrees,
                                 source_sideways_there=sideways_there(src_pose.positions.numpy(), peak.where),
                                 sideways_anywhere_deg=anywhere.degrees, sideways_anywhere_at=anywhere.where,
+                                source_sideways_anywhere_there=sideways_there(src_pose.positions.numpy(),
+                                                                              anywhere.where),
                                 signature_kept=float(kept.mean()), invented_contacts=int(invented.any(-1).sum()),
                                 invented_pairs=invented_by_pair(invented),
                                 thumb_follow=follow.get(worst_thumb, float("nan")), thumb_follow_at=worst_thumb,
