@@ -10,17 +10,26 @@ import pyvista as pv
 
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.io.atomic import atomic_path
-from s2h_viewer.render.scene import (AXIS_COLOURS, BONE_COLOUR, CAMERA_DIRECTIONS, SKIN_COLOUR, frame_arrows,
-                                     pose_frame, posed_mesh, skeleton)
+from s2h_viewer.render.scene import (AXIS_COLOURS, BONE_COLOUR, CAMERA_DIRECTIONS, PALM_OPACITY, SKIN_COLOUR,
+                                     frame_arrows, palm_fan, pose_frame, posed_mesh, skeleton)
+
+#: a caption line's height in a cell, pixels (`add_text` at font size 11): the hand is framed below the caption
+CAPTION_LINE_PX = 22
 
 
-def _set_camera(plotter: pv.Plotter, bounds: tuple, view: str) -> None:
+def _set_camera(plotter: pv.Plotter, bounds: tuple, view: str, caption_share: float = 0.0) -> None:
+    """The camera on ``bounds`` from ``view``'s direction, the hand in the cell's height under the top
+    ``caption_share`` of it (a caption's: a VRM robot's fingers were drawn through its name)."""
     direction, up = CAMERA_DIRECTIONS[view]
     centre = np.array([(bounds[0] + bounds[1]) / 2, (bounds[2] + bounds[3]) / 2, (bounds[4] + bounds[5]) / 2])
     radius = 0.5 * np.linalg.norm([bounds[1] - bounds[0], bounds[3] - bounds[2], bounds[5] - bounds[4]])
     d = np.asarray(direction) / np.linalg.norm(direction)
-    plotter.camera.focal_point = centre
-    plotter.camera.position = centre + d * radius * 3.9
+    distance = 3.9 * radius / (1.0 - caption_share)  # the hand as tall in what is left as in the whole cell before
+    screen_up = np.asarray(up, dtype=np.float64) - d * np.dot(up, d)
+    screen_up /= np.linalg.norm(screen_up)
+    lift = caption_share * distance * math.tan(math.radians(15.0))  # half the view's height times the share
+    plotter.camera.focal_point = centre + screen_up * lift
+    plotter.camera.position = centre + screen_up * lift + d * distance
     plotter.camera.up = up
     plotter.camera.view_angle = 30.0
     plotter.reset_camera_clipping_range()
@@ -41,6 +50,7 @@ def render_hands(hands: list[HandModel], poses: list[np.ndarray], path: str | Pa
     plotter = pv.Plotter(off_screen=True, shape=(rows, columns), border=False,
                          window_size=(cell_size[0] * columns, cell_size[1] * rows))
     fk = [pose_frame(hand, q) for hand, q in zip(hands, poses)]
+    caption_lines = max(str(text).count("\n") + 1 for text in (labels or [hand.name for hand in hands]))
     meshes = [posed_mesh(hand, pose) if hand.mesh is not None else skeleton(hand, pose) for hand, pose in zip(hands, fk)]
     largest = max(meshes, key=lambda m: np.ptp(np.asarray(m.bounds).reshape(3, 2), axis=1).max())
     see_through = show_skeleton or show_frames
@@ -52,13 +62,18 @@ def render_hands(hands: list[HandModel], poses: list[np.ndarray], path: str | Pa
                              opacity=0.35 if see_through else 1.0)
         if show_skeleton or hand.mesh is None:
             plotter.add_mesh(skeleton(hand, pose).tube(radius=0.012 * hand.hand_length), color=BONE_COLOUR)
+        if hand.mesh is None:  # as the viewer draws it: the palm see-through between the knuckles, joints as dots
+            plotter.add_mesh(palm_fan(hand, pose), color=SKIN_COLOUR, opacity=PALM_OPACITY)
+            plotter.add_mesh(pv.PolyData(np.asarray(mesh.points)).glyph(
+                geom=pv.Sphere(radius=0.03 * hand.hand_length), scale=False, orient=False), color=BONE_COLOUR)
         if show_frames:
             for arrows, colour in zip(frame_arrows(hand, pose), AXIS_COLOURS):
                 plotter.add_mesh(arrows, color=colour)
         plotter.add_text(labels[i] if labels else hand.name, font_size=11, color="black", position="upper_edge")
         c = np.asarray(mesh.center)
         half = np.ptp(np.asarray(largest.bounds).reshape(3, 2), axis=1) / 2
-        _set_camera(plotter, tuple(np.ravel(np.column_stack([c - half, c + half]))), view)
+        _set_camera(plotter, tuple(np.ravel(np.column_stack([c - half, c + half]))), view,
+                    min(0.4, CAPTION_LINE_PX * caption_lines / cell_size[1]))
     path = Path(path)
     with atomic_path(path) as tmp:
         plotter.screenshot(str(tmp))
