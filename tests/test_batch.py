@@ -456,18 +456,22 @@ def test_a_finger_bent_sideways_reads_red_on_the_page_in_the_viewers_words_with_
                                             tmp_path, options, tuple(METHODS)))
     clean, = (run_task(t) for t in plan_batch([COUNTING], ["iris"], ["tbs_copy"], tmp_path,
                                              TaskOptions(format="npz", render=False), tuple(METHODS)))
+    astray, = (run_task(t) for t in plan_batch([GESTURES], [str(ASSETS_DIR / "hands" / "real" / "debug_robot.vrm")],
+                                              ["asrn"], tmp_path, TaskOptions(format="npz", render=False, side="right"),
+                                              tuple(METHODS)))  # its claw's thumb brought across the palm
     assert bent["sideways_deg"] > bent["source_sideways_deg"] + 5 > 25 and clean["sideways_deg"] < 25
     assert bent["sideways_words"].startswith("pinky PIP bends") and "(the source bends" in bent["sideways_words"]
     assert "(Sign 3)" in bent["sideways_words"]  # the curve's peak, named by the pose held there
     assert 0.0 < bent["thumb_follow"] <= 1.0 and bent["thumb_follow_at"].startswith("thumb_")
-    rows = read_summary(write_summary([bent, clean], tmp_path / "summary.csv"))  # as the viewer reads them back
+    rows = read_summary(write_summary([bent, clean, astray], tmp_path / "summary.csv"))  # as the viewer reads them
     assert rows[0]["sideways_words"] == bent["sideways_words"]
     assert rows[0]["source_sideways_deg"] == pytest.approx(bent["source_sideways_deg"], abs=1e-5)
     page = write_report(rows, tmp_path / "report.html").read_text()
     import html
     import re
-    red = re.findall(r'<td class="num broken" data-sort="([^"]*)">', page)
-    assert len(red) == 1 and float(red[0]) == pytest.approx(bent["sideways_deg"], abs=1e-5)  # the clean row: not red
+    red = sorted(float(v) for v in re.findall(r'<td class="num broken" data-sort="([^"]*)">', page))
+    assert astray["thumb_follow"] < 0.9 < min(bent["thumb_follow"], clean["thumb_follow"])  # red: the thumb astray
+    assert red == pytest.approx(sorted([astray["thumb_follow"], bent["sideways_deg"]]), abs=1e-5)  # and the bend
     assert html.escape(bent["sideways_words"]) in page
     assert "<th data-col" in page and ">thumb follows</th>" in page
     assert f'>{bent["thumb_follow"]:.2f}</td>' in page

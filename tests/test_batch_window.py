@@ -201,6 +201,9 @@ def test_a_finger_bent_sideways_is_red_in_the_batch_table_as_in_the_scores_table
                        [str(ASSETS_DIR / "hands" / "real" / "debug_robot.vrm")], ["tbs_copy"], tmp_path,
                        TaskOptions(format="npz", render=False, side="right", animation="all",
                                    source=str(real / "godot_hand_r_posed_rig.gltf")), tuple(METHODS))
+    tasks += plan_batch([str(ASSETS_DIR / "motions" / "gestures.npz")],  # its claw's thumb brought across the palm
+                        [str(ASSETS_DIR / "hands" / "real" / "debug_robot.vrm")], ["asrn"], tmp_path,
+                        TaskOptions(format="npz", render=False, side="right"), tuple(METHODS))
     summary = write_summary([run_task(t) for t in tasks], tmp_path / "summary.csv")
     table = BatchTable(summary, read_summary(summary))
     qtbot.addWidget(table)
@@ -211,7 +214,11 @@ def test_a_finger_bent_sideways_is_red_in_the_batch_table_as_in_the_scores_table
     assert float(bent.text()) > 45 and bent.foreground().color() == QColor(SIDEWAYS_RED)
     assert "the source bends 38 there" in bent.toolTip() and "(Sign 3)" in bent.toolTip()
     assert counting.foreground().color() != QColor(SIDEWAYS_RED)  # counting's fingers bend no further than its own
-    assert all(0.0 < float(table.table.item(r, thumb).text()) <= 1.0 for r in range(table.table.rowCount()))
+    thumbs = {table.table.item(r, 0).text(): table.table.item(r, thumb) for r in range(table.table.rowCount())}
+    assert all(0.0 < float(item.text()) <= 1.0 for item in thumbs.values())
+    red = {name for name, item in thumbs.items() if item.foreground().color() == QColor(SIDEWAYS_RED)}
+    assert red == {name for name, item in thumbs.items() if float(item.text()) < 0.9} == {"gestures"}
+    assert "under 0.9" in thumbs["gestures"].toolTip()
 
 
 def test_a_row_of_a_shorter_clip_opens_from_a_frame_past_its_end(qtbot, sample_hands, tmp_path, summary):

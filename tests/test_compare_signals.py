@@ -253,6 +253,18 @@ def test_the_table_says_how_closely_each_thumb_follows_the_sources(window):
     for row, result in enumerate(window.comparison.results):
         assert table.item(row, thumb).text() == f"{result.scores.thumb_follow:.2f}"
         assert f"at {result.scores.thumb_follow:.2f}, worst in its " in table.item(row, thumb).toolTip()
+    # under 0.9, red as a finger bent sideways is (a fresh-eyes user read the robot's 0.55 in black)
+    from PySide6.QtGui import QColor
+
+    from s2h_viewer.widgets.scores_table import SIDEWAYS_RED
+    comparison = window.comparison
+    astray = dataclasses.replace(comparison.results[0], scores=dataclasses.replace(
+        comparison.results[0].scores, thumb_follow=0.55, thumb_follow_at="thumb_cmc_lift"))
+    table.show_comparison(dataclasses.replace(comparison, results=[astray, comparison.results[1]]))
+    assert table.item(0, thumb).foreground().color() == QColor(SIDEWAYS_RED)
+    assert "under 0.9" in table.item(0, thumb).toolTip()
+    assert comparison.results[1].scores.thumb_follow >= 0.9
+    assert table.item(1, thumb).foreground().color() != QColor(SIDEWAYS_RED)
 
 
 def test_a_sideways_bend_past_the_limit_is_red_in_the_table(window):

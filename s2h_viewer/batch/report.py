@@ -13,7 +13,7 @@ from pathlib import Path
 from s2h_viewer.batch.summary import worst_first
 from s2h_viewer.batch.task import POSES_APART
 from s2h_viewer.io.atomic import atomic_path
-from s2h_viewer.semantics.flexion import SidewaysPeak
+from s2h_viewer.semantics.flexion import THUMB_FOLLOWS_FROM, SidewaysPeak
 from s2h_viewer.semantics.signature import sideways_broken
 from s2h_viewer.wording import counted
 
@@ -30,7 +30,7 @@ _TITLES = {"kept": "share of frames whose signature (each finger extended, bent 
            "sideways_deg": "the worst sideways bend of a PIP/DIP at its tightest curls (0: a clean curl); red past 25 "
                            "and past the source's own + 5",
            "thumb_follow": "the least correlation of a thumb angle (the metacarpal across and out of the palm, the MCP "
-                           "and IP bends) with the source's (1: it does what the source's does)"}
+                           "and IP bends) with the source's (1: it does what the source's does); red under 0.9"}
 
 _STYLE = """
 body { font: 13px system-ui, sans-serif; margin: 1em; color: #222; }
@@ -149,9 +149,13 @@ def sideways_note(row: dict) -> str:
 
 
 def _broken(row: dict, key: str) -> bool:
-    """Whether a score cell is drawn red: the sideways bend past the limit and the source's own (`sideways_broken`)."""
-    return (key == "sideways_deg" and isinstance(row.get(key), float)
-            and sideways_broken(row[key], row.get("source_sideways_deg", math.nan)))
+    """Whether a score cell is drawn red, as in the viewer: the sideways bend past the limit and the source's own
+    (`sideways_broken`), a thumb following the source's under `THUMB_FOLLOWS_FROM`."""
+    value = row.get(key)
+    if not isinstance(value, float):
+        return False
+    return (key == "sideways_deg" and sideways_broken(value, row.get("source_sideways_deg", math.nan))
+            or key == "thumb_follow" and value < THUMB_FOLLOWS_FROM)
 
 
 def _cell(row: dict, key: str, numeric: bool) -> str:

@@ -155,6 +155,9 @@ THUMB_HINGES: tuple[tuple[str, int], ...] = tuple((name, topo.JOINT_NAMES.index(
 THUMB_ANGLES: tuple[str, ...] = ("thumb_cmc_across", "thumb_cmc_lift") + tuple(name for name, _ in THUMB_HINGES)
 #: a thumb joint moving less than this (standard deviation of its angle, degrees) in the source has no motion to follow
 MIN_THUMB_MOTION_DEG = 2.0
+#: a thumb following the source's less than this (`thumb_follow`'s worst angle) moves otherwise than the source's:
+#: drawn red, as a finger bent sideways is (issue 26's goal; the gestures' claw onto the VRM robot reads 0.55)
+THUMB_FOLLOWS_FROM = 0.9
 
 
 def thumb_metacarpal_angles(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

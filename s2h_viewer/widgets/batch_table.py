@@ -13,8 +13,9 @@ from PySide6.QtWidgets import QHeaderView, QLabel, QTableWidget, QTableWidgetIte
 from s2h_viewer.batch.summary import worst_first
 from s2h_viewer.batch.task import POSES_APART
 from s2h_viewer.batch.report import sideways_note
+from s2h_viewer.semantics.flexion import THUMB_FOLLOWS_FROM
 from s2h_viewer.semantics.signature import sideways_broken
-from s2h_viewer.widgets.scores_table import KEPT_TIP, SIDEWAYS_BACKGROUND, SIDEWAYS_RED, thumb_words
+from s2h_viewer.widgets.scores_table import KEPT_TIP, SIDEWAYS_BACKGROUND, SIDEWAYS_RED, OwnColours, thumb_words
 from s2h_viewer.widgets.tooltips import wrapped
 
 #: (header, row key, decimals or None for text)
@@ -69,6 +70,7 @@ class BatchTable(QWidget):
         self.table.setEditTriggers(QTableWidget.EditTrigger.NoEditTriggers)
         self.table.setSelectionBehavior(QTableWidget.SelectionBehavior.SelectRows)
         self.table.setSelectionMode(QTableWidget.SelectionMode.SingleSelection)
+        self.table.setItemDelegate(OwnColours(self.table))  # a red cell stays red in the selected row
         for r, row in enumerate(self.rows):
             for c, (_, key, decimals) in enumerate(COLUMNS):
                 value = row.get(key, "")
@@ -100,6 +102,9 @@ class BatchTable(QWidget):
                         item.setBackground(QColor(SIDEWAYS_BACKGROUND))
                 if key == "thumb_follow" and number is not None:
                     item.setToolTip(thumb_words(number, str(row.get("thumb_follow_at") or "")))
+                    if number < THUMB_FOLLOWS_FROM:
+                        item.setForeground(QColor(SIDEWAYS_RED))
+                        item.setBackground(QColor(SIDEWAYS_BACKGROUND))
                 item.setData(Qt.ItemDataRole.UserRole, r)
                 if row.get("status") != "ok":
                     item.setBackground(FAILED_COLOUR)

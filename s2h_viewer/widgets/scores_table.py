@@ -17,6 +17,7 @@ from s2h_viewer.annotate.trust import frame_warning
 from s2h_viewer.render.compare_scene import BANNER_BACKGROUND, BANNER_COLOUR
 from s2h_viewer.retarget.comparison import Comparison
 from s2h_viewer.retarget.methods import METHODS
+from s2h_viewer.semantics.flexion import THUMB_FOLLOWS_FROM
 from s2h_viewer.widgets.text_dialog import TextDialog
 from s2h_viewer.widgets.tooltips import wrapped
 from s2h_viewer.wording import counted
@@ -41,14 +42,15 @@ COLUMNS = (("Method", None, "retargeting method"), ("Target", None, "target hand
                                             "25, or past the source's own figure + 5 where the source bends more"),
            ("Thumb", "thumb_follow", "how closely the thumb follows the source's: the correlation over the clip of "
                                      "each thumb angle (the metacarpal across and out of the palm, the MCP and IP "
-                                     "bends) with the source's, the worst of them (1: it does what the source's does)"),
+                                     "bends) with the source's, the worst of them (1: it does what the source's does); "
+                                     "red under 0.9"),
            ("Kept", "signature_kept", KEPT_TIP),
            ("Inv-\nented", "invented_contacts", "frames where the retarget makes a contact the source does not "
                                                "come near, fingertip to fingertip or fingertip on the palm (within "
                                                "3% of the hand; drawn blue by the contact overlay)"))
 TARGET_COLUMN = 1
-KEPT_COLUMN, SIDEWAYS_COLUMN = (next(c for c, (_, key, _) in enumerate(COLUMNS) if key == name)
-                                for name in ("signature_kept", "sideways_deg"))
+KEPT_COLUMN, SIDEWAYS_COLUMN, THUMB_COLUMN = (next(c for c, (_, key, _) in enumerate(COLUMNS) if key == name)
+                                              for name in ("signature_kept", "sideways_deg", "thumb_follow"))
 SHOWN_ROWS, MIN_ROWS = 6, 2  # rows the table asks room for, and keeps in view at least
 NAME_WIDTH = 140  # pixels: widest a name column starts (drag the header edge for more)
 #: a sideways bend past the limit, in the table and over the error curve (in the table on this background)
@@ -96,7 +98,7 @@ def _cell(key: str, scores, held_at=lambda frame: "", lost_poses: str | None = N
 def thumb_words(follow: float, angle: str) -> str:
     """How closely the thumb follows the source's, and in which angle worst (`RetargetScores.thumb_follow_at`)."""
     return (f"the thumb follows the source's at {follow:.2f}, worst in {THUMB_ANGLE_NAMES.get(angle, angle)}"
-            + (" (under 0.9: it moves otherwise than the source's)" if follow < 0.9 else ""))
+            + (" (under 0.9: it moves otherwise than the source's)" if follow < THUMB_FOLLOWS_FROM else ""))
 
 
 def poses_tip(result) -> str:
@@ -202,7 +204,8 @@ class ScoresTable(QTableWidget):
                 item = QTableWidgetItem(text)
                 if tip is not None:
                     item.setToolTip(wrapped(tip))  # a list of invented pairs, a warning: long
-                if col == SIDEWAYS_COLUMN and result.scores.sideways_broken:  # a finger bent sideways
+                if (col == SIDEWAYS_COLUMN and result.scores.sideways_broken  # a finger bent sideways, a thumb
+                        or col == THUMB_COLUMN and result.scores.thumb_follow < THUMB_FOLLOWS_FROM):  # astray
                     item.setForeground(QColor(SIDEWAYS_RED))
                     item.setBackground(QColor(SIDEWAYS_BACKGROUND))
                 if warning is not None and col == TARGET_COLUMN:  # frames unsure: the target's cell says so
