@@ -219,6 +219,10 @@ def test_a_finger_bent_sideways_is_red_in_the_batch_table_as_in_the_scores_table
     red = {name for name, item in thumbs.items() if item.foreground().color() == QColor(SIDEWAYS_RED)}
     assert red == {name for name, item in thumbs.items() if float(item.text()) < 0.9} == {"gestures"}
     assert "under 0.9" in thumbs["gestures"].toolTip()
+    invented = next(c for c, (_, key, _) in enumerate(COLUMNS) if key == "invented")
+    poses = next(r for r in range(table.table.rowCount()) if table.table.item(r, 0).text() == "godot_hand_poses_r")
+    assert int(table.table.item(poses, invented).text()) > 0  # fingertips on the palm the source's are not
+    assert "with a contact the source does not make: " in table.table.item(poses, invented).toolTip()
 
 
 def test_a_row_of_a_shorter_clip_opens_from_a_frame_past_its_end(qtbot, sample_hands, tmp_path, summary):

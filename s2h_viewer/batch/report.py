@@ -37,7 +37,7 @@ body { font: 13px system-ui, sans-serif; margin: 1em; color: #222; }
 h1 { font-size: 1.3em; margin: 0 0 .3em; }
 .counts span { margin-right: 1.2em; }
 .failed-count { color: #b00020; font-weight: 600; }
-input { font: inherit; padding: .3em .5em; width: 24em; margin: .6em 0; }
+input { font: inherit; padding: .3em .5em; width: 38em; max-width: 95%; margin: .6em 0; }  /* its placeholder whole */
 table { border-collapse: collapse; }
 th { position: sticky; top: 0; background: #f0f0f0; cursor: pointer; user-select: none; white-space: nowrap;
      font-size: 12px; }
@@ -185,8 +185,10 @@ def write_report(rows: list[dict], path: str | Path, title: str = "s2h batch") -
     for row in rows:
         cells = [_cell(row, key, numeric=False) for key, _ in _NAMES]
         # an error or a warning in red, the sideways bend in black: it was red too, under a target's warning
+        invented = row.get("invented_words") if row.get("invented") else ""  # palm contacts too: no column has them
         note = "".join(f'<div{" class=error" if red else ""}>{html.escape(text)}</div>'
-                       for text, red in ((row.get("error"), True), (row.get("warning"), True), (sideways_note(row), False))
+                       for text, red in ((row.get("error"), True), (row.get("warning"), True), (sideways_note(row), False),
+                                         (invented, False))
                        if text)
         cells.append(f'<td class="note">{note}{_poses_lost(row)}</td>')
         picture = row.get("picture") or ""

@@ -18,10 +18,10 @@ from s2h_viewer.io.atomic import atomic_path
 COLUMNS = ("motion", "target", "method", "status", "error", "warning", "frames", "seconds", "kept", "poses_kept",
            "poses_lost", "s_palm", "s_finger", "contact_p", "contact_r", "palm_r", "violations", "violations_added",
            "sideways_deg", "sideways_at", "sideways_anywhere_deg", "sideways_anywhere_at", "source_sideways_deg",
-           "sideways_words", "thumb_follow", "thumb_follow_at", "worst_frame", "worst_error",
+           "sideways_words", "thumb_follow", "thumb_follow_at", "invented", "invented_words", "worst_frame", "worst_error",
            "output", "picture", "motion_path",
            "target_path", "animation", "source_path")
-COUNTS = ("frames", "worst_frame")
+COUNTS = ("frames", "worst_frame", "invented")
 SCORES = ("kept", "s_palm", "s_finger", "contact_p", "contact_r", "palm_r", "violations", "violations_added",
           "sideways_deg", "sideways_anywhere_deg", "source_sideways_deg", "thumb_follow", "worst_error")
 

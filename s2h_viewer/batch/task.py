@@ -162,6 +162,7 @@ def _retarget_and_write(task: Task) -> dict:
            "sideways_anywhere_deg": scores.sideways_anywhere_deg, "sideways_anywhere_at": scores.sideways_anywhere_at,
            "source_sideways_deg": scores.source_sideways_deg, "sideways_words": scores.sideways_words(motion.held_at),
            "thumb_follow": scores.thumb_follow, "thumb_follow_at": scores.thumb_follow_at,
+           "invented": scores.invented_contacts, "invented_words": scores.invented_words(),
            "worst_frame": worst, "worst_error": float(frame_error[worst]) if len(frame_error) else 0.0,
            "output": str(task.output), "warning": warning, "source_path": source_path}
     if task.options.render:

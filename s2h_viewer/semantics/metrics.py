@@ -19,6 +19,7 @@ from s2h_viewer.semantics.flexion import SidewaysPeak, sideways_peak, thumb_foll
 from s2h_viewer.semantics.signature import (SIDEWAYS_FLEXION, pose_loss_masks, sideways_anywhere, sideways_broken,
                                             sideways_there)
 from s2h_viewer.semantics.similarity import masked_cosine
+from s2h_viewer.wording import counted
 
 #: frames whose ASMs are built at once when a whole clip is scored ((4096, 20, 29, 3) float64: 57 MiB)
 ASM_CHUNK_FRAMES = 4096
@@ -128,6 +129,16 @@ class RetargetScores:
                      + ("where the source does not flex it" if np.isnan(self.source_sideways_anywhere_there)
                         else f"where the source bends {self.source_sideways_anywhere_there:.0f}"))
         return text
+
+    def invented_words(self, listed: int = 5) -> str:
+        """The frames with a contact the source does not make, and per pair (the first ``listed``) on how many frames
+        from which: "22 frames with a contact the source does not make: index-palm on 22 frames (from 120)"."""
+        pairs = self.invented_pairs
+        if not self.invented_contacts:
+            return "no contact the source does not make"
+        named = ", ".join(f"{pair} on {counted(frames, 'frame')} (from {first})" for pair, frames, first in pairs[:listed])
+        more = f", {len(pairs) - listed} more" if len(pairs) > listed else ""
+        return f"{counted(self.invented_contacts, 'frame')} with a contact the source does not make: {named}{more}"
 
     @property
     def sideways_broken(self) -> bool:

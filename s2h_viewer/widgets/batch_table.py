@@ -10,7 +10,7 @@ from PySide6.QtCore import QEvent, Qt, Signal
 from PySide6.QtGui import QColor, QKeyEvent, QKeySequence, QShortcut
 from PySide6.QtWidgets import QHeaderView, QLabel, QTableWidget, QTableWidgetItem, QVBoxLayout, QWidget
 
-from s2h_viewer.batch.summary import worst_first
+from s2h_viewer.batch.summary import COUNTS, worst_first
 from s2h_viewer.batch.task import POSES_APART
 from s2h_viewer.batch.report import sideways_note
 from s2h_viewer.semantics.flexion import THUMB_FOLLOWS_FROM
@@ -22,7 +22,8 @@ from s2h_viewer.widgets.tooltips import wrapped
 COLUMNS = (("Motion", "motion", None), ("Target", "target", None), ("Method", "method", None),
            ("Status", "status", None), ("Kept", "kept", 3), ("S_finger", "s_finger", 3), ("S_palm", "s_palm", 3),
            ("Contact P", "contact_p", 3), ("Contact R", "contact_r", 3), ("Violations\nadded", "violations_added", 3),
-           ("Sideways\n(deg)", "sideways_deg", 1), ("Thumb", "thumb_follow", 2), ("Worst\nframe", "worst_frame", None),
+           ("Sideways\n(deg)", "sideways_deg", 1), ("Thumb", "thumb_follow", 2), ("Inv-\nented", "invented", None),
+           ("Worst\nframe", "worst_frame", None),
            ("Error or warning", "error", None))
 FAILED_COLOUR = QColor("#fde7ea")
 
@@ -89,7 +90,9 @@ class BatchTable(QWidget):
                     item.setTextAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
                 else:
                     text = str(value)
-                    item = _Item(text, float(text) if key == "worst_frame" and text.isdigit() else None)
+                    item = _Item(text, float(text) if key in COUNTS and text.isdigit() else None)
+                    if key == "invented" and row.get("invented_words"):
+                        item.setToolTip(wrapped(str(row["invented_words"])))
                 if key == "error" and value:
                     item.setToolTip(str(value))
                 if key == "violations_added" and number is not None:

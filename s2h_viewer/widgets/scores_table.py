@@ -75,12 +75,7 @@ def _cell(key: str, scores, held_at=lambda frame: "", lost_poses: str | None = N
     if isinstance(value, float) and math.isnan(value):
         return "n/a", UNDEFINED.get(key, "n/a")
     if key == "invented_contacts":
-        pairs = scores.invented_pairs
-        listed = ", ".join(f"{pair} on {counted(frames, 'frame')} (from {first})"
-                           for pair, frames, first in pairs[:INVENTED_LISTED])
-        more = f", {len(pairs) - INVENTED_LISTED} more" if len(pairs) > INVENTED_LISTED else ""
-        return f"{value}", (f"{counted(value, 'frame')} with a contact the source does not make: {listed}{more}"
-                            if value else "no contact the source does not make")
+        return f"{value}", scores.invented_words(INVENTED_LISTED)
     if key == "added_violation_rate":
         return f"{value:.3f}", (f"{value:.3f} of the (frame, joint) angles more than 5 deg further outside the "
                                 f"anatomical limits than the source's; outside them at all: "
