@@ -223,6 +223,12 @@ def test_a_finger_bent_sideways_is_red_in_the_batch_table_as_in_the_scores_table
     poses = next(r for r in range(table.table.rowCount()) if table.table.item(r, 0).text() == "godot_hand_poses_r")
     assert int(table.table.item(poses, invented).text()) > 0  # fingertips on the palm the source's are not
     assert "with a contact the source does not make: " in table.table.item(poses, invented).toolTip()
+    # a heading of one line keeps its text whole beside the sort arrow a click draws ("Sideways" read "ideway")
+    header = table.table.horizontalHeader()
+    for column, (heading, _, _) in enumerate(COLUMNS[:-1]):
+        table.table.sortItems(column)
+        if "\n" not in heading:
+            assert table.table.columnWidth(column) >= header.sectionSizeHint(column), heading
 
 
 def test_a_row_of_a_shorter_clip_opens_from_a_frame_past_its_end(qtbot, sample_hands, tmp_path, summary):

@@ -26,6 +26,8 @@ COLUMNS = (("Motion", "motion", None), ("Target", "target", None), ("Method", "m
            ("Worst\nframe", "worst_frame", None),
            ("Error or warning", "error", None))
 FAILED_COLOUR = QColor("#fde7ea")
+#: pixels a heading needs beside its text for the sort arrow a click draws there
+SORT_ARROW_PX = 20
 
 
 class _Item(QTableWidgetItem):
@@ -91,6 +93,8 @@ class BatchTable(QWidget):
                 else:
                     text = str(value)
                     item = _Item(text, float(text) if key in COUNTS and text.isdigit() else None)
+                    if key in COUNTS:
+                        item.setTextAlignment(Qt.AlignmentFlag.AlignRight | Qt.AlignmentFlag.AlignVCenter)
                     if key == "invented" and row.get("invented_words"):
                         item.setToolTip(wrapped(str(row["invented_words"])))
                 if key == "error" and value:
@@ -113,6 +117,8 @@ class BatchTable(QWidget):
                     item.setBackground(FAILED_COLOUR)
                 self.table.setItem(r, c, item)
         self.table.resizeColumnsToContents()
+        for column in range(len(COLUMNS) - 1):  # room for the sort arrow beside a heading: it clipped "Sideways"
+            self.table.setColumnWidth(column, self.table.columnWidth(column) + SORT_ARROW_PX)
         self.table.horizontalHeader().setSectionResizeMode(len(COLUMNS) - 1, QHeaderView.ResizeMode.Stretch)
         self.table.horizontalHeader().setSortIndicator(-1, Qt.SortOrder.AscendingOrder)  # worst first until a click
         self.table.setSortingEnabled(True)
