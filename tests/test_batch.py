@@ -449,8 +449,7 @@ def test_a_finger_bent_sideways_reads_red_on_the_page_in_the_viewers_words_with_
     from s2h_viewer.batch.summary import write_summary
     from s2h_viewer.batch.task import run_task
     real = ASSETS_DIR / "motions" / "real"
-    options = TaskOptions(format="npz", render=False, side="right", animation="all",
-                          source=str(real / "godot_hand_r_posed_rig.gltf"))
+    options = TaskOptions(format="npz", side="right", animation="all", source=str(real / "godot_hand_r_posed_rig.gltf"))
     bent, = (run_task(t) for t in plan_batch([str(real / "godot_hand_poses_r.gltf")],
                                             [str(ASSETS_DIR / "hands" / "real" / "debug_robot.vrm")], ["tbs_copy"],
                                             tmp_path, options, tuple(METHODS)))
@@ -476,5 +475,9 @@ def test_a_finger_bent_sideways_reads_red_on_the_page_in_the_viewers_words_with_
     # the fingertips it puts on the palm where the source's are not: no column of the page counts them, its note does
     assert rows[0]["invented"] == bent["invented"] > 0 and "-palm on " in bent["invented_words"]
     assert html.escape(bent["invented_words"]) in page
+    # a picture of the frame the red figure is at, under the worst frame's (that showed a fist: the note a pinky)
+    frame = int(bent["sideways_at"].partition("@")[2])
+    assert frame != bent["worst_frame"] and Path(bent["sideways_picture"]).stat().st_size > 1000
+    assert f"the sideways bend, frame {frame}:" in page and 'src="godot_hand_poses_r/debug_robot/tbs_copy.sideways.png"' in page
     assert "<th data-col" in page and ">thumb follows</th>" in page
     assert f'>{bent["thumb_follow"]:.2f}</td>' in page

@@ -85,6 +85,11 @@ class Task:
         return self.folder / f"{self.method}.worst.png"
 
     @property
+    def sideways_picture(self) -> Path:
+        """The frame a finger bends sideways the most at, where that is past the limit (`sideways_broken`)."""
+        return self.folder / f"{self.method}.sideways.png"
+
+    @property
     def row_file(self) -> Path:
         return self.folder / f"{self.method}.row.json"
 

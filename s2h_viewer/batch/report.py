@@ -54,7 +54,7 @@ td:nth-child(-n+2) { min-width: 6em; max-width: 11em; overflow-wrap: break-word;
 details ul { margin: .2em 0; padding-left: 1.2em; color: #222; } summary { cursor: pointer; }
 .failures { color: #b00020; margin: .4em 0; } .failures ul { margin: .2em 0; } .failures .tasks { color: #555; }
 img { height: 120px; display: block; }
-.files { font-size: .9em; } .files a { margin-right: .6em; }
+.files { font-size: .9em; } .files a { margin-right: .6em; } .also { font-size: .9em; color: #555; }
 """
 
 _SCRIPT = """
@@ -121,6 +121,14 @@ def _failure_groups(rows: list[dict]) -> str:
     items = "".join(f"<li>{html.escape(error)} <span class=tasks>({counted(count, 'task')})</span></li>"
                     for error, count in sorted(groups.items(), key=lambda g: -g[1]))
     return f'<div class="failures"><b>Failures</b><ul>{items}</ul></div>'
+
+
+def _image(picture: str, folder: Path, alt: str) -> str:
+    """A picture of the row's, linked to itself ("" if none)."""
+    if not picture:
+        return ""
+    src = html.escape(_relative(picture, folder))
+    return f'<a href="{src}"><img loading="lazy" alt="{html.escape(alt)}" src="{src}"></a>'
 
 
 def _poses_lost(row: dict) -> str:
@@ -195,9 +203,12 @@ def write_report(rows: list[dict], path: str | Path, title: str = "s2h batch") -
         links = [f'<a href="{html.escape(_relative(row[k], folder))}">{label}</a>'
                  for k, label in (("output", "output"), ("motion_path", "motion"), ("target_path", "target"))
                  if row.get(k) and (k == "output" or Path(row[k]).is_file())]
-        image = (f'<a href="{html.escape(_relative(picture, folder))}"><img loading="lazy" alt="frame '
-                 f'{row.get("worst_frame", "")}" src="{html.escape(_relative(picture, folder))}"></a>' if picture else "")
-        cells.append(f'<td>{image}<div class="files">{" ".join(links)}</div></td>')  # the files under the picture
+        image = _image(picture, folder, f'frame {row.get("worst_frame", "")}')
+        if row.get("sideways_picture"):  # where the note's finger bends sideways: the worst frame's showed a fist
+            frame = str(row.get("sideways_at") or "").partition("@")[2]
+            image += (f'<div class="also">the sideways bend, frame {html.escape(frame)}:</div>'
+                      + _image(row["sideways_picture"], folder, f"frame {frame}"))
+        cells.append(f'<td>{image}<div class="files">{" ".join(links)}</div></td>')  # the files under the pictures
         measured = row.get("status") == "ok"  # a task that failed or did not run measured nothing: no "n/a"
         cells += [_cell(row, key, numeric=True) if measured or key == "frames" else '<td class=num data-sort=""></td>'
                   for key, _ in _SCORES]

@@ -151,6 +151,6 @@ def earlier_rows(out: Path, planned: set[Path]) -> list[dict]:
 def _remove_partial_files(task: Task) -> None:
     """The temporary files a write killed by Ctrl+C left behind (their process is gone by now)."""
     sidecars = [sidecar_path(task.output, side) for side in SIDES]
-    for path in (task.output, task.picture, task.row_file, *sidecars):
+    for path in (task.output, task.picture, task.sideways_picture, task.row_file, *sidecars):
         if path.parent.exists():
             remove_stale_temps(path)

@@ -19,7 +19,7 @@ COLUMNS = ("motion", "target", "method", "status", "error", "warning", "frames",
            "poses_lost", "s_palm", "s_finger", "contact_p", "contact_r", "palm_r", "violations", "violations_added",
            "sideways_deg", "sideways_at", "sideways_anywhere_deg", "sideways_anywhere_at", "source_sideways_deg",
            "sideways_words", "thumb_follow", "thumb_follow_at", "invented", "invented_words", "worst_frame", "worst_error",
-           "output", "picture", "motion_path",
+           "output", "picture", "sideways_picture", "motion_path",
            "target_path", "animation", "source_path")
 COUNTS = ("frames", "worst_frame", "invented")
 SCORES = ("kept", "s_palm", "s_finger", "contact_p", "contact_r", "palm_r", "violations", "violations_added",

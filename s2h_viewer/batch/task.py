@@ -166,8 +166,12 @@ def _retarget_and_write(task: Task) -> dict:
            "worst_frame": worst, "worst_error": float(frame_error[worst]) if len(frame_error) else 0.0,
            "output": str(task.output), "warning": warning, "source_path": source_path}
     if task.options.render:
-        _render_worst(task, source, motion, target, moved, worst)
+        _render_frame(task, source, motion, target, moved, worst, task.picture)
         row["picture"] = str(task.picture)
+        bent = int(scores.sideways_at.partition("@")[2] or worst)
+        if scores.sideways_broken and bent != worst:  # the worst frame's picture showed a fist, the note a pinky
+            _render_frame(task, source, motion, target, moved, bent, task.sideways_picture)
+            row["sideways_picture"] = str(task.sideways_picture)
     return row
 
 
@@ -203,13 +207,13 @@ def frames_warning(target) -> str:
 PICTURE_NAME = 22
 
 
-def _render_worst(task: Task, source, motion, target, moved, frame: int) -> None:
-    """The worst frame, source beside retarget, off screen."""
+def _render_frame(task: Task, source, motion, target, moved, frame: int, path: Path) -> None:
+    """One frame, source beside retarget, off screen, to ``path``."""
     from s2h_viewer.render.offscreen import render_hands
     from s2h_viewer.retarget.methods import METHODS
 
     bones = ["\n(no skin: its bones)" if hand.mesh is None else "" for hand in (source, target)]
     name = task.target.name if len(task.target.name) <= PICTURE_NAME else task.target.name[:PICTURE_NAME - 3] + "..."
-    render_hands([source, target], [motion.q_tbs[frame], moved.q_tbs[frame]], task.picture,
+    render_hands([source, target], [motion.q_tbs[frame], moved.q_tbs[frame]], path,
                  labels=[f"source, frame {frame}{bones[0]}", f"{METHODS[task.method].label} ->\n{name}{bones[1]}"],
                  columns=2, view="palm", cell_size=(300, 320))
