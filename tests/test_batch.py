@@ -472,6 +472,8 @@ def test_a_finger_bent_sideways_reads_red_on_the_page_in_the_viewers_words_with_
     assert astray["thumb_follow"] < 0.9 < min(bent["thumb_follow"], clean["thumb_follow"])  # red: the thumb astray
     assert red == pytest.approx(sorted([astray["thumb_follow"], bent["sideways_deg"]]), abs=1e-5)  # and the bend
     assert html.escape(bent["sideways_words"]) in page
+    assert f'<div class=warning>{html.escape(bent["warning"])}</div>' in page  # the robot's guessed frames: orange,
+    assert f'<div>{html.escape(bent["sideways_words"])}</div>' in page  # as the viewer's banner; the words black
     # the fingertips it puts on the palm where the source's are not: no column of the page counts them, its note does
     assert rows[0]["invented"] == bent["invented"] > 0 and "-palm on " in bent["invented_words"]
     assert html.escape(bent["invented_words"]) in page

@@ -13,6 +13,7 @@ from pathlib import Path
 from s2h_viewer.batch.summary import worst_first
 from s2h_viewer.batch.task import POSES_APART
 from s2h_viewer.io.atomic import atomic_path
+from s2h_viewer.render.compare_scene import BANNER_COLOUR
 from s2h_viewer.semantics.flexion import THUMB_FOLLOWS_FROM, SidewaysPeak
 from s2h_viewer.semantics.signature import sideways_broken
 from s2h_viewer.wording import counted
@@ -31,6 +32,9 @@ _TITLES = {"kept": "share of frames whose signature (each finger extended, bent 
                            "and past the source's own + 5",
            "thumb_follow": "the least correlation of a thumb angle (the metacarpal across and out of the palm, the MCP "
                            "and IP bends) with the source's (1: it does what the source's does); red under 0.9"}
+
+#: a warning's colours: the viewer's banner's (orange; an error is red)
+_WARNING_CSS = f".warning {{ color: {BANNER_COLOUR}; }}"
 
 _STYLE = """
 body { font: 13px system-ui, sans-serif; margin: 1em; color: #222; }
@@ -194,10 +198,9 @@ def write_report(rows: list[dict], path: str | Path, title: str = "s2h batch") -
         cells = [_cell(row, key, numeric=False) for key, _ in _NAMES]
         # an error or a warning in red, the sideways bend in black: it was red too, under a target's warning
         invented = row.get("invented_words") if row.get("invented") else ""  # palm contacts too: no column has them
-        note = "".join(f'<div{" class=error" if red else ""}>{html.escape(text)}</div>'
-                       for text, red in ((row.get("error"), True), (row.get("warning"), True), (sideways_note(row), False),
-                                         (invented, False))
-                       if text)
+        note = "".join(f'<div{f" class={kind}" if kind else ""}>{html.escape(text)}</div>'
+                       for text, kind in ((row.get("error"), "error"), (row.get("warning"), "warning"),
+                                          (sideways_note(row), ""), (invented, "")) if text)
         cells.append(f'<td class="note">{note}{_poses_lost(row)}</td>')
         picture = row.get("picture") or ""
         links = [f'<a href="{html.escape(_relative(row[k], folder))}">{label}</a>'
@@ -217,7 +220,7 @@ def write_report(rows: list[dict], path: str | Path, title: str = "s2h batch") -
         css = {"failed": ' class="failed"', "not run": ' class="not-run"'}.get(row.get("status"), "")
         lines.append(f'<tr{css} data-text="{html.escape(text)}">{"".join(cells)}</tr>')
     page = f"""<!doctype html>
-<html lang="en"><head><meta charset="utf-8"><title>{html.escape(title)}</title><style>{_STYLE}</style></head>
+<html lang="en"><head><meta charset="utf-8"><title>{html.escape(title)}</title><style>{_STYLE}{_WARNING_CSS}</style></head>
 <body>
 <h1>{html.escape(title)}</h1>
 <div class="counts"><span>{len(rows)} tasks</span><span>{ok} ok{f" ({warned} with a warning)" if warned else ""}</span>
