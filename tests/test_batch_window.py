@@ -247,3 +247,31 @@ def test_a_row_of_a_shorter_clip_opens_from_a_frame_past_its_end(qtbot, sample_h
     with qtbot.waitSignal(win.comparison_ready, timeout=120_000):
         table.row_chosen.emit(chosen)
     assert win.compare.comparison.n_frames == 237 and win.timeline.frame == chosen["worst_frame"]
+
+
+def test_the_batch_table_follows_its_summary_as_a_batch_writes_it_again(qtbot, sample_hands, tmp_path, summary):
+    """A fresh-eyes user ran the batch again with one more method while the viewer showed it: the table still said
+    20 tasks until they opened it once more. It reads the summary again when it is written, keeping the row
+    selected and leaving the keyboard where it was."""
+    import shutil
+
+    from s2h_viewer.batch.summary import read_summary
+
+    copy = Path(shutil.copy(summary, tmp_path / "summary.csv"))
+    win = open_compare_window(qtbot, sample_hands, tmp_path)
+    table = win.batch_browser.open(str(copy))
+    qtbot.waitExposed(table)
+    rows = read_summary(copy)
+    ok = next(r for r in range(table.table.rowCount()) if table.table.item(r, 3).text() == "ok")
+    table.table.selectRow(ok)
+    selected = table.current_row()
+    keyboard_to(qtbot, win.timeline.spin)
+    more = plan_batch([str(ASSETS_DIR / "motions" / "counting.npz")], ["laurel"], ["copy"], tmp_path,
+                      TaskOptions(format="npz", render=False), tuple(METHODS))
+    write_summary(rows + [run_task(t) for t in more], copy)  # as a batch writes it: a new file renamed over it
+    qtbot.waitUntil(lambda: win.batch_browser.table.table.rowCount() == len(rows) + 1, timeout=10_000)
+    again = win.batch_browser.table
+    assert "copy" in [r["method"] for r in again.rows] and f"({len(rows) + 1} tasks" in win.batch_browser.dock.windowTitle()
+    assert again.current_row() == selected and win.timeline.spin.hasFocus()
+    write_summary(rows, copy)  # and again: the watch holds after a file renamed over the one it watched
+    qtbot.waitUntil(lambda: win.batch_browser.table.table.rowCount() == len(rows), timeout=10_000)

@@ -2,19 +2,24 @@
 out to float it, close it with its button), and a row double-clicked there
 shown in Compare: a row of another clip as a comparison of its own (that clip, its target and its method alone), a
 row of the clip shown added to the grid (its target, its method ticked), then that retarget selected at its worst
-frame once the grid shows it."""
+frame once the grid shows it. The table follows its summary: a batch run again (or more of it) while the
+viewer is open is listed as it is written."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from PySide6.QtCore import QObject, Qt
+from PySide6.QtCore import QFileSystemWatcher, QObject, Qt, QTimer
 from PySide6.QtWidgets import QDockWidget
 
 from s2h_viewer.app.opened_clips import OpenedClips
 from s2h_viewer.errors import S2HError
 from s2h_viewer.hand.model import HandModel
 from s2h_viewer.widgets.batch_table import BatchTable
+
+
+#: milliseconds after a summary changes on disk that the table reads it again (a batch writes it once per run)
+RELOAD_AFTER_MS = 500
 
 
 class BatchBrowser(QObject):
@@ -32,6 +37,10 @@ class BatchBrowser(QObject):
         self._pending: tuple[HandModel, str, int] | None = None  # (target, method, frame) to select when shown
         self._rows: dict[tuple[int, int, str], dict] = {}  # (id of clip, id of target, method) -> its row shown
         window.comparison_ready.connect(self._select_pending)
+        self._watcher = QFileSystemWatcher(self)  # the summary shown, read again when a batch writes it
+        self._watcher.fileChanged.connect(lambda path: self._reload.start())
+        self._reload = QTimer(self, singleShot=True, interval=RELOAD_AFTER_MS)
+        self._reload.timeout.connect(self._read_again)
 
     def open(self, path: str) -> BatchTable | None:
         from s2h_viewer.batch.summary import read_summary
@@ -40,16 +49,39 @@ class BatchBrowser(QObject):
         except S2HError as exc:
             self.window.error(str(exc))
             return None
-        if self.table is not None:
-            self.table.deleteLater()
-        self.table = BatchTable(path, rows)
-        self.table.row_chosen.connect(self.show_row)
-        self.dock.setWidget(self.table)
-        self.dock.setWindowTitle(self.table.windowTitle())
+        self._show(path, rows)
         self.dock.show()
         self.dock.raise_()
         self.table.table.setFocus()
         return self.table
+
+    def _show(self, path: str, rows: list[dict]) -> None:
+        """``rows`` of the summary ``path`` as the table, the row selected before still selected."""
+        chosen = self.table.current_row() if self.table is not None else None
+        if self.table is not None:
+            self.table.deleteLater()
+        self.table = BatchTable(path, rows)
+        self.table.row_chosen.connect(self.show_row)
+        if chosen is not None:
+            self.table.select(chosen)
+        self.dock.setWidget(self.table)
+        self.dock.setWindowTitle(self.table.windowTitle())
+        if self._watcher.files():
+            self._watcher.removePaths(self._watcher.files())
+        self._watcher.addPath(path)
+
+    def _read_again(self) -> None:
+        """The summary shown was written again (a batch run again into its folder): its rows, without taking the
+        focus; one being written (or gone) keeps the table as it is until it is whole."""
+        from s2h_viewer.batch.summary import read_summary
+        path = str(self.table.summary) if self.table is not None else ""
+        if not path or not Path(path).is_file():
+            return
+        try:
+            rows = read_summary(path)
+        except S2HError:
+            return
+        self._show(path, rows)
 
     def show_row(self, row: dict) -> None:
         """Show one summary row's retarget in Compare (a failed row: its error, in a dialog)."""

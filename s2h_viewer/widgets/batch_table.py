@@ -63,6 +63,7 @@ class BatchTable(QWidget):
 
     def __init__(self, summary: str | Path, rows: list[dict], parent: QWidget | None = None):
         super().__init__(parent)
+        self.summary = Path(summary)
         self.rows = worst_first(rows)
         failed = sum(r.get("status") == "failed" for r in self.rows)
         self.setWindowTitle(f"Batch: {Path(summary).parent.name}/{Path(summary).name} ({len(self.rows)} tasks, "
@@ -135,6 +136,22 @@ class BatchTable(QWidget):
         layout.addWidget(QLabel("Worst first (failures, then the least kept); click a heading to sort, "
                                 "double-click a row (or Enter) to show it in Compare at its worst frame."))
         layout.addWidget(self.table)
+
+    def current_row(self) -> tuple[str, str, str] | None:
+        """(motion, target, method) of the row selected, None if none."""
+        item = self.table.item(self.table.currentRow(), 0) if self.table.currentRow() >= 0 else None
+        if item is None:
+            return None
+        row = self.rows[item.data(Qt.ItemDataRole.UserRole)]
+        return row["motion"], row["target"], row["method"]
+
+    def select(self, task: tuple[str, str, str]) -> None:
+        """Select the row of ``task`` (motion, target, method), if listed."""
+        for table_row in range(self.table.rowCount()):
+            row = self.rows[self.table.item(table_row, 0).data(Qt.ItemDataRole.UserRole)]
+            if (row["motion"], row["target"], row["method"]) == task:
+                self.table.selectRow(table_row)
+                return
 
     def _choose(self, table_row: int) -> None:
         item = self.table.item(table_row, 0)
