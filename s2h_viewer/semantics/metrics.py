@@ -111,17 +111,17 @@ class RetargetScores:
 
     def sideways_words(self, pose_at=lambda frame: "") -> str:
         """The worst sideways bend in words, with the source's there and the curve's peak where that is worse:
-        "pinky PIP bends 59 deg sideways at frame 557, at its tightest curls (the source bends 38 there; 38 at its own
-        tightest curls); at any PIP/DIP flexed 45 deg or more: pinky PIP bends 85 deg sideways at frame 560 (Sign 3),
-        where the source bends 64".
+        "pinky PIP bends 59 deg sideways at frame 557, at that joint's tightest curls (the source bends 38 there; 38 at
+        its own tightest curls); at any PIP/DIP flexed 45 deg or more: pinky PIP bends 85 deg sideways at frame 560
+        (Sign 3), where the source bends 64".
         ``pose_at(frame)``: the pose held there, as " (Sign 3)", or "" (`Motion.held_at`)."""
         if np.isnan(self.sideways_deg):
             return "no finger curls (no sideways flexion to measure)"
         joint, _, frame = self.sideways_at.partition("@")
         there = ("the source does not flex it there" if np.isnan(self.source_sideways_there)
                  else f"the source bends {self.source_sideways_there:.0f} there")
-        text = (f"{SidewaysPeak(self.sideways_deg, joint, int(frame)).describe()}{pose_at(int(frame))}, at its "
-                f"tightest curls ({there}; {self.source_sideways_deg:.0f} at its own tightest curls)")
+        text = (f"{SidewaysPeak(self.sideways_deg, joint, int(frame)).describe()}{pose_at(int(frame))}, at that "
+                f"joint's tightest curls ({there}; {self.source_sideways_deg:.0f} at its own tightest curls)")
         if self.sideways_anywhere_deg > self.sideways_deg + 0.5:
             joint, _, frame = self.sideways_anywhere_at.partition("@")
             text += (f"; at any PIP/DIP flexed {SIDEWAYS_FLEXION:.0f} deg or more: "

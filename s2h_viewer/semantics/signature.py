@@ -174,13 +174,22 @@ def differences(source: PoseSignature, target: PoseSignature) -> list[str]:
                    f"source's: {source.thumb_rest[fingers].min():.2f})")
     if thumb_across_lost(source.curl[None], source.thumb_rest[None], source.thumb_contacts[None],
                          np.array([source.thumb_across]), np.array([target.thumb_across]))[0]:
-        out.append(f"thumb not across the palm ({target.thumb_across:.2f} of its width past the index knuckle; the "
-                   f"source's: {source.thumb_across:.2f})")
+        out.append(f"thumb not across the palm (its tip {_across_words(target.thumb_across)}; the source's "
+                   f"{_across_words(source.thumb_across)})")
     if sideways_broken(target.sideways, source.sideways):
         joint = target.sideways_joint.replace("_", " ").replace("pip", "PIP").replace("dip", "DIP")
         source_deg = "no joint flexed enough" if np.isnan(source.sideways) else f"{source.sideways:.0f}"
         out.append(f"{joint} bends {target.sideways:.0f} deg sideways (the source: {source_deg})")
     return out
+
+
+def _across_words(across: float) -> str:
+    """Where a thumb tip lies along the palm's width (`flexion.thumb_across`): "0.46 of the palm's width across it,
+    past the index knuckle", "0.29 of the palm's width outside the index knuckle" (a fresh-eyes user read "-0.29 of
+    its width past the index knuckle" as nonsense)."""
+    if across >= 0.0:
+        return f"{across:.2f} of the palm's width across it, past the index knuckle"
+    return f"{-across:.2f} of the palm's width outside the index knuckle"
 
 
 def thumb_across_lost(source_curl: np.ndarray, source_rest: np.ndarray, source_touches: np.ndarray,
