@@ -91,6 +91,10 @@ def test_a_double_clicked_row_is_shown_in_compare_at_its_worst_frame(qtbot, samp
     with qtbot.waitSignal(win.comparison_ready, timeout=120_000):
         double_click(ok)  # the same clip: its retarget joins the grid
     assert win.compare.state.methods == ["tbs_copy", "dm"] and len(win.compare.state.targets) == 1
+    qtbot.waitUntil(lambda: win.compare.selected_result().method == "tbs_copy", timeout=30_000)
+    win.batch_browser.table.table.selectRow(0)  # a row looked at, not opened
+    win.open_batch(str(summary))  # opened again: the row of the retarget shown is the one selected, not the first
+    assert win.batch_browser.table.current_row() == ("counting", "laurel", "tbs_copy")
     assert Path(str(win.settings.value("files/motion_dir"))) == Path(wanted["motion_path"]).resolve().parent
     # the rows' methods are not the user's choice: the next session starts with the methods the user chose
     assert win.settings.value("compare/methods") == remembered and remembered != ["tbs_copy", "dm"]

@@ -50,6 +50,11 @@ class BatchBrowser(QObject):
             self.window.error(str(exc))
             return None
         self._show(path, rows)
+        compare = self.window.compare
+        result = compare.selected_result() if compare.comparison is not None else None
+        shown = self.row_of(compare.state.motion, result) if result is not None else None
+        if shown is not None:  # the retarget the grid shows, opened from this batch: its row, not the first
+            self.table.select((shown["motion"], shown["target"], shown["method"]))
         self.dock.show()
         self.dock.raise_()
         self.table.table.setFocus()
