@@ -244,12 +244,12 @@ def test_s2h_retarget_applies_a_sidecar_and_records_it_beside_its_output(tmp_pat
 def test_every_message_names_a_joint_one_way():
     """'thumb IP', 'index PIP': the fixing's bar and undo texts, the viewer's and the batch report's sideways line
     (which said 'thumb ip' where the others said 'thumb IP')."""
-    from s2h_viewer.batch.report import _sideways_note
+    from s2h_viewer.batch.report import sideways_note
     from s2h_viewer.semantics.flexion import SidewaysPeak
     assert [topo.joint_label(n) for n in ("thumb_ip", "index_pip", "pinky_mcp", "wrist")] == [
         "thumb IP", "index PIP", "pinky MCP", "wrist"]
     assert SidewaysPeak(40.0, "thumb_ip", 3).describe() == "thumb IP bends 40 deg sideways at frame 3"
-    assert _sideways_note({"sideways_at": "thumb_ip@3", "sideways_deg": 40.0}) == SidewaysPeak(
+    assert sideways_note({"sideways_at": "thumb_ip@3", "sideways_deg": 40.0}) == SidewaysPeak(
         40.0, "thumb_ip", 3).describe()
     fixes = Corrections().with_turn(topo.ARTICULATED_NAMES.index("thumb_ip"), 5, turn_about("bend", 10.0), 0, 9)
     assert fixes.describe() == "thumb IP: key at frame 5 (blended over 0-9)"
