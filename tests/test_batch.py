@@ -448,6 +448,7 @@ def test_a_finger_bent_sideways_reads_red_on_the_page_in_the_viewers_words_with_
     from s2h_viewer.batch.report import write_report
     from s2h_viewer.batch.summary import write_summary
     from s2h_viewer.batch.task import run_task
+    from s2h_viewer.semantics.flexion import thumb_words
     real = ASSETS_DIR / "motions" / "real"
     options = TaskOptions(format="npz", side="right", animation="all", source=str(real / "godot_hand_r_posed_rig.gltf"))
     bent, = (run_task(t) for t in plan_batch([str(real / "godot_hand_poses_r.gltf")],
@@ -474,6 +475,9 @@ def test_a_finger_bent_sideways_reads_red_on_the_page_in_the_viewers_words_with_
     assert html.escape(bent["sideways_words"]) in page
     assert f'<div class=warning>{html.escape(bent["warning"])}</div>' in page  # the robot's guessed frames: orange,
     assert f'<div>{html.escape(bent["sideways_words"])}</div>' in page  # as the viewer's banner; the words black
+    # a red thumb says why in the note, as the viewer's tooltip does: which angle (the page had the figure alone)
+    assert html.escape(thumb_words(astray["thumb_follow"], astray["thumb_follow_at"])) in page
+    assert "under 0.9" not in page.split(html.escape(bent["sideways_words"]))[1].split("<tr")[0]  # bent's: 0.95
     # the fingertips it puts on the palm where the source's are not: no column of the page counts them, its note does
     assert rows[0]["invented"] == bent["invented"] > 0 and "-palm on " in bent["invented_words"]
     assert html.escape(bent["invented_words"]) in page

@@ -14,7 +14,7 @@ from s2h_viewer.batch.summary import worst_first
 from s2h_viewer.batch.task import POSES_APART
 from s2h_viewer.io.atomic import atomic_path
 from s2h_viewer.render.compare_scene import BANNER_COLOUR
-from s2h_viewer.semantics.flexion import THUMB_FOLLOWS_FROM, SidewaysPeak
+from s2h_viewer.semantics.flexion import THUMB_FOLLOWS_FROM, SidewaysPeak, thumb_words
 from s2h_viewer.semantics.signature import sideways_broken
 from s2h_viewer.wording import counted
 
@@ -24,7 +24,7 @@ _SCORES = (("kept", "kept"), ("s_finger", "S_finger"), ("s_palm", "S_palm"), ("c
            ("thumb_follow", "thumb follows"), ("worst_frame", "worst frame"), ("frames", "frames, seconds"))
 #: what a score's heading says under the pointer (its words cost the page width it had to spare)
 _TITLES = {"kept": "share of frames whose signature (each finger extended, bent or curled, the thumb's touches, "
-                   "no finger bent sideways, no invented contact) is the source's",
+                   "no finger bent sideways, no invented fingertip-to-fingertip contact) is the source's",
            "contact_p": "pad contacts made that the source makes", "contact_r": "pad contacts of the source kept",
            "violations_added": "share of joint angles over 5 deg further outside the anatomical limits than the "
                                "source's own",
@@ -198,9 +198,11 @@ def write_report(rows: list[dict], path: str | Path, title: str = "s2h batch") -
         cells = [_cell(row, key, numeric=False) for key, _ in _NAMES]
         # an error or a warning in red, the sideways bend in black: it was red too, under a target's warning
         invented = row.get("invented_words") if row.get("invented") else ""  # palm contacts too: no column has them
+        thumb = (thumb_words(row["thumb_follow"], str(row.get("thumb_follow_at") or ""))
+                 if _broken(row, "thumb_follow") else "")  # a red figure says why, as the sideways one does
         note = "".join(f'<div{f" class={kind}" if kind else ""}>{html.escape(text)}</div>'
                        for text, kind in ((row.get("error"), "error"), (row.get("warning"), "warning"),
-                                          (sideways_note(row), ""), (invented, "")) if text)
+                                          (sideways_note(row), ""), (thumb, ""), (invented, "")) if text)
         cells.append(f'<td class="note">{note}{_poses_lost(row)}</td>')
         picture = row.get("picture") or ""
         links = [f'<a href="{html.escape(_relative(row[k], folder))}">{label}</a>'

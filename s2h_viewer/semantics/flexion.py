@@ -158,6 +158,10 @@ MIN_THUMB_MOTION_DEG = 2.0
 #: a thumb following the source's less than this (`thumb_follow`'s worst angle) moves otherwise than the source's:
 #: drawn red, as a finger bent sideways is (issue 26's goal; the gestures' claw onto the VRM robot reads 0.55)
 THUMB_FOLLOWS_FROM = 0.9
+#: the thumb angles `thumb_follow` reads, as words name them
+THUMB_ANGLE_NAMES = {"thumb_cmc_across": "its metacarpal's swing across the palm",
+                     "thumb_cmc_lift": "its metacarpal's lift out of the palm", "thumb_mcp": "its MCP's bend",
+                     "thumb_ip": "its IP's bend"}
 
 
 def thumb_metacarpal_angles(positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -207,6 +211,13 @@ def thumb_angles(positions: np.ndarray) -> dict[str, np.ndarray]:
     across, lift = thumb_metacarpal_angles(positions)
     return {"thumb_cmc_across": across, "thumb_cmc_lift": lift,
             **{name: signed_hinge_bends(positions, j) for name, j in THUMB_HINGES}}
+
+
+def thumb_words(follow: float, angle: str) -> str:
+    """How closely the thumb follows the source's, and in which angle worst (`RetargetScores.thumb_follow_at`): the
+    scores table's and a batch's words."""
+    return (f"the thumb follows the source's at {follow:.2f}, worst in {THUMB_ANGLE_NAMES.get(angle, angle)}"
+            + (" (under 0.9: it moves otherwise than the source's)" if follow < THUMB_FOLLOWS_FROM else ""))
 
 
 def thumb_follow(source_positions: np.ndarray, target_positions: np.ndarray) -> dict[str, float]:

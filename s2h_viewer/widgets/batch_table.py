@@ -13,9 +13,9 @@ from PySide6.QtWidgets import QHeaderView, QLabel, QTableWidget, QTableWidgetIte
 from s2h_viewer.batch.summary import COUNTS, worst_first
 from s2h_viewer.batch.task import POSES_APART
 from s2h_viewer.batch.report import sideways_note
-from s2h_viewer.semantics.flexion import THUMB_FOLLOWS_FROM
+from s2h_viewer.semantics.flexion import THUMB_FOLLOWS_FROM, thumb_words
 from s2h_viewer.semantics.signature import sideways_broken
-from s2h_viewer.widgets.scores_table import KEPT_TIP, SIDEWAYS_BACKGROUND, SIDEWAYS_RED, OwnColours, thumb_words
+from s2h_viewer.widgets.scores_table import KEPT_TIP, SIDEWAYS_BACKGROUND, SIDEWAYS_RED, OwnColours
 from s2h_viewer.widgets.tooltips import wrapped
 
 #: (header, row key, decimals or None for text)

@@ -17,7 +17,7 @@ from s2h_viewer.annotate.trust import frame_warning
 from s2h_viewer.render.compare_scene import BANNER_BACKGROUND, BANNER_COLOUR
 from s2h_viewer.retarget.comparison import Comparison
 from s2h_viewer.retarget.methods import METHODS
-from s2h_viewer.semantics.flexion import THUMB_FOLLOWS_FROM
+from s2h_viewer.semantics.flexion import THUMB_FOLLOWS_FROM, thumb_words
 from s2h_viewer.widgets.text_dialog import TextDialog
 from s2h_viewer.widgets.tooltips import wrapped
 from s2h_viewer.wording import counted
@@ -55,10 +55,6 @@ SHOWN_ROWS, MIN_ROWS = 6, 2  # rows the table asks room for, and keeps in view a
 NAME_WIDTH = 140  # pixels: widest a name column starts (drag the header edge for more)
 #: a sideways bend past the limit, in the table and over the error curve (in the table on this background)
 SIDEWAYS_RED, SIDEWAYS_BACKGROUND = "#c62828", "#ffcdd2"
-#: the thumb angles `semantics.flexion.thumb_follow` reads, as the Thumb cell's tooltip names them
-THUMB_ANGLE_NAMES = {"thumb_cmc_across": "its metacarpal's swing across the palm",
-                     "thumb_cmc_lift": "its metacarpal's lift out of the palm", "thumb_mcp": "its MCP's bend",
-                     "thumb_ip": "its IP's bend"}
 #: invented pairs the Invented cell's tooltip names (most frames first), and poses lost the Kept cell's names
 INVENTED_LISTED, POSES_LISTED = 5, 8
 #: why a score is n/a (NaN), per score key
@@ -83,17 +79,11 @@ def _cell(key: str, scores, held_at=lambda frame: "", lost_poses: str | None = N
                                 f"{scores.source_violation_rate:.3f} (a clip authored past them stays past them)")
     if key == "thumb_follow":
         return f"{value:.2f}", thumb_words(value, scores.thumb_follow_at)
-    if key == "sideways_deg":
-        return f"{value:.0f}", scores.sideways_words(held_at)
+    if key == "sideways_deg":  # to a tenth: 25.4 is past 25 and red, and a red "25" read as a rule broken at 25
+        return f"{value:.1f}", scores.sideways_words(held_at)
     if key == "signature_kept" and lost_poses is not None:  # a clip of poses: which the retarget loses, and how
         return f"{value:.3f}", lost_poses
     return f"{value:.3f}", None
-
-
-def thumb_words(follow: float, angle: str) -> str:
-    """How closely the thumb follows the source's, and in which angle worst (`RetargetScores.thumb_follow_at`)."""
-    return (f"the thumb follows the source's at {follow:.2f}, worst in {THUMB_ANGLE_NAMES.get(angle, angle)}"
-            + (" (under 0.9: it moves otherwise than the source's)" if follow < THUMB_FOLLOWS_FROM else ""))
 
 
 def poses_tip(result) -> str:
