@@ -484,6 +484,11 @@ def test_a_finger_bent_sideways_reads_red_on_the_page_in_the_viewers_words_with_
     # a picture of the frame the red figure is at, under the worst frame's (that showed a fist: the note a pinky)
     frame = int(bent["sideways_at"].partition("@")[2])
     assert frame != bent["worst_frame"] and Path(bent["sideways_picture"]).stat().st_size > 1000
+    import imageio.v3 as iio  # the bent joint marked red on the source and on the retarget, and only there
+    red = [(np.abs(iio.imread(bent[key])[..., :3].astype(int) - (198, 40, 40)).max(-1) < 60)
+           for key in ("sideways_picture", "picture")]
+    half = red[0].shape[1] // 2
+    assert red[0][:, :half].sum() > 30 and red[0][:, half:].sum() > 30 and red[1].sum() == 0
     assert f"the sideways bend, frame {frame}:" in page and 'src="godot_hand_poses_r/debug_robot/tbs_copy.sideways.png"' in page
     assert "<th data-col" in page and ">thumb follows</th>" in page
     assert f'>{bent["thumb_follow"]:.2f}</td>' in page

@@ -18,6 +18,7 @@ import numpy as np
 from s2h_viewer.batch.plan import Input, Task
 from s2h_viewer.batch.summary import row_json
 from s2h_viewer.errors import S2HError
+from s2h_viewer.hand.topology import JOINT_NAMES, joint_label
 from s2h_viewer.io.atomic import atomic_path
 
 #: inputs each worker keeps loaded (hands with their meshes and solved frames, motions with their rigs)
@@ -168,9 +169,10 @@ def _retarget_and_write(task: Task) -> dict:
     if task.options.render:
         _render_frame(task, source, motion, target, moved, worst, task.picture)
         row["picture"] = str(task.picture)
-        bent = int(scores.sideways_at.partition("@")[2] or worst)
-        if scores.sideways_broken and bent != worst:  # the worst frame's picture showed a fist, the note a pinky
-            _render_frame(task, source, motion, target, moved, bent, task.sideways_picture)
+        joint, _, bent = scores.sideways_at.partition("@")
+        if scores.sideways_broken and int(bent) != worst:  # the worst frame's picture showed a fist, the note a pinky
+            _render_frame(task, source, motion, target, moved, int(bent), task.sideways_picture, joint,
+                          f"{joint_label(joint)} {scores.sideways_deg:.0f} deg sideways")
             row["sideways_picture"] = str(task.sideways_picture)
     return row
 
@@ -207,13 +209,18 @@ def frames_warning(target) -> str:
 PICTURE_NAME = 22
 
 
-def _render_frame(task: Task, source, motion, target, moved, frame: int, path: Path) -> None:
-    """One frame, source beside retarget, off screen, to ``path``."""
+def _render_frame(task: Task, source, motion, target, moved, frame: int, path: Path, joint: str = "",
+                  what: str = "") -> None:
+    """One frame, source beside retarget, each filling its cell, off screen, to ``path``; ``joint`` marked red on
+    both, the skin see-through, and ``what`` it does said under the retarget's name."""
     from s2h_viewer.render.offscreen import render_hands
     from s2h_viewer.retarget.methods import METHODS
 
-    bones = ["\n(no skin: its bones)" if hand.mesh is None else "" for hand in (source, target)]
+    bones = ["\n(no skin: its bones)" if hand.mesh is None else "\n(a mitten: its bones)"
+             if hand.meta.get("unparted_fingers") else "" for hand in (source, target)]
     name = task.target.name if len(task.target.name) <= PICTURE_NAME else task.target.name[:PICTURE_NAME - 3] + "..."
+    said = f"\n{what}" if what else ""
     render_hands([source, target], [motion.q_tbs[frame], moved.q_tbs[frame]], path,
-                 labels=[f"source, frame {frame}{bones[0]}", f"{METHODS[task.method].label} ->\n{name}{bones[1]}"],
-                 columns=2, view="palm", cell_size=(300, 320))
+                 labels=[f"source, frame {frame}{bones[0]}", f"{METHODS[task.method].label} ->\n{name}{bones[1]}{said}"],
+                 columns=2, view="palm", cell_size=(300, 320), fit_each=True,
+                 marked=JOINT_NAMES.index(joint) if joint else None)
