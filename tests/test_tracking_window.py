@@ -100,4 +100,8 @@ def test_the_recording_items_are_offered_only_for_a_recording(window, qtbot):
     with qtbot.waitSignal(window.comparison_ready, timeout=120_000):
         window.load_motion(str(ASSETS_DIR / "motions" / "counting.npz"))
     assert not window.keypoint_dots.isEnabled() and not window.fit_residual.isEnabled()
+    assert not window.keypoint_dots.isChecked()  # greyed and unticked: ticked, it read as on but broken
     assert window.compare.view._hands[0].keypoints is None
+    with qtbot.waitSignal(window.comparison_ready, timeout=120_000):  # a recording again: ticked again, the choice kept
+        window.load_motion(str(ASSETS_DIR / "recordings" / "webxr_hand_poses_right.json"))
+    assert window.keypoint_dots.isEnabled() and window.keypoint_dots.isChecked()

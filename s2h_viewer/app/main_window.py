@@ -611,6 +611,9 @@ class MainWindow(QMainWindow):
         report (as `s2h retarget` prints it) the status bar then shows."""
         tracked = self.comparison is not None and self.comparison.motion.fit is not None
         self.keypoint_dots.setEnabled(tracked)
+        # ticked only where it can show: ticked and greyed read as "on, but broken" (three fresh-eyes users); the
+        # choice stays the view's, for the next recording
+        self.keypoint_dots.setChecked(tracked and self.view.options.keypoints)
         self.fit_residual.setEnabled(tracked)
         if not tracked and self.fit_residual.isChecked():  # no residual to show: the ASM error, ticked
             self.asm_curve.setChecked(True)
