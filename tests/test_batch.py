@@ -448,7 +448,10 @@ def test_a_finger_bent_sideways_reads_red_on_the_page_in_the_viewers_words_with_
     from s2h_viewer.batch.report import write_report
     from s2h_viewer.batch.summary import write_summary
     from s2h_viewer.batch.task import run_task
+    from s2h_viewer.batch.task import POSES_APART
+    from s2h_viewer.io.files import RigOptions
     from s2h_viewer.semantics.flexion import thumb_words
+    from s2h_viewer.semantics.signature import held_poses
     real = ASSETS_DIR / "motions" / "real"
     options = TaskOptions(format="npz", side="right", animation="all", source=str(real / "godot_hand_r_posed_rig.gltf"))
     bent, = (run_task(t) for t in plan_batch([str(real / "godot_hand_poses_r.gltf")],
@@ -462,13 +465,18 @@ def test_a_finger_bent_sideways_reads_red_on_the_page_in_the_viewers_words_with_
     assert bent["sideways_deg"] > bent["source_sideways_deg"] + 5 > 25 and clean["sideways_deg"] < 25
     assert bent["sideways_words"].startswith("pinky PIP bends") and "(the source bends" in bent["sideways_words"]
     assert "(Sign 3)" in bent["sideways_words"]  # the curve's peak, named by the pose held there
+    # each lost pose with the frame it is held at, to go there (a fresh-eyes user had only its name)
+    import re
+    held = dict(held_poses(load_motion_file(real / "godot_hand_poses_r.gltf", None, RigOptions(animation="all"))[0].labels))
+    for line in bent["poses_lost"].split(POSES_APART):
+        name, frame = re.match(r"(.+) \(frame (\d+)\): ", line).groups()
+        assert held[name] == int(frame), line
     assert 0.0 < bent["thumb_follow"] <= 1.0 and bent["thumb_follow_at"].startswith("thumb_")
     rows = read_summary(write_summary([bent, clean, astray], tmp_path / "summary.csv"))  # as the viewer reads them
     assert rows[0]["sideways_words"] == bent["sideways_words"]
     assert rows[0]["source_sideways_deg"] == pytest.approx(bent["source_sideways_deg"], abs=1e-5)
     page = write_report(rows, tmp_path / "report.html").read_text()
     import html
-    import re
     red = sorted(float(v) for v in re.findall(r'<td class="num broken" data-sort="([^"]*)">', page))
     assert astray["thumb_follow"] < 0.9 < min(bent["thumb_follow"], clean["thumb_follow"])  # red: the thumb astray
     assert red == pytest.approx(sorted([astray["thumb_follow"], bent["sideways_deg"]]), abs=1e-5)  # and the bend

@@ -531,6 +531,7 @@ def test_a_clip_of_poses_says_which_poses_a_retarget_loses(window, qtbot):
     of poses the cell counts the poses kept and the Kept cell's tooltip names each one lost and what it loses (TBS
     Copy onto iris: the OK's thumb-index contact); both follow a fix at once. A double-click on the cell lists them
     all (the tooltip stops at 8: another user found the rest only in `s2h evaluate`'s CSV)."""
+    from s2h_viewer.semantics.signature import held_poses
     from s2h_viewer.widgets.scores_table import COLUMNS, poses_text, poses_tip
     from s2h_viewer.widgets.tooltips import wrapped
     win, mode = window, window.compare
@@ -539,7 +540,9 @@ def test_a_clip_of_poses_says_which_poses_a_retarget_loses(window, qtbot):
     kept = result.poses_held - len(result.poses_lost)
     assert f" of frames, {kept}/4 poses" in win.view.solo_hand().label.text
     column = next(c for c, (_, key, _) in enumerate(COLUMNS) if key == "signature_kept")
-    assert f"{kept} of 4 poses kept; lost:<br>ok: thumb-index touch lost (fingertips " in mode.scores.item(0, column).toolTip()
+    ok_frame = dict(held_poses(result.motion.labels))["ok"]  # each lost pose with the frame it is held at
+    assert (f"{kept} of 4 poses kept; lost:<br>ok (frame {ok_frame}): thumb-index touch lost (fingertips "
+            in mode.scores.item(0, column).toolTip())
     pick_joint(qtbot, win)
     drag(qtbot, win, 40.0)
     fixed = mode.selected_result()
@@ -553,7 +556,8 @@ def test_a_clip_of_poses_says_which_poses_a_retarget_loses(window, qtbot):
     qtbot.waitUntil(lambda: getattr(table, "poses_dialog", None) is not None and table.poses_dialog.isVisible())
     listed = table.poses_dialog.text.toPlainText()
     assert listed == poses_text(fixed) and listed.startswith(f"{fixed.name}: {fixed.poses_held - len(fixed.poses_lost)} of 4")
-    assert all(f"{name}:\n  {what[0]}" in listed for name, what in fixed.poses_lost.items())
+    frames = dict(held_poses(fixed.motion.labels))
+    assert all(f"{name} (frame {frames[name]}):\n  {what[0]}" in listed for name, what in fixed.poses_lost.items())
     # it has the keys (Esc closes it) and gives them back to the window (its shortcuts went dead after it closed)
     qtbot.waitUntil(lambda: QApplication.activeWindow() is table.poses_dialog)
     QTest.keyClick(QApplication.focusWidget(), Qt.Key.Key_Escape)

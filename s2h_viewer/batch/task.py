@@ -135,7 +135,7 @@ def _retarget_and_write(task: Task) -> dict:
     from s2h_viewer.io.files import save_motion_file
     from s2h_viewer.retarget import retarget
     from s2h_viewer.semantics.metrics import score_retarget_frames
-    from s2h_viewer.semantics.signature import pose_differences
+    from s2h_viewer.semantics.signature import lost_pose_lines, pose_differences
 
     motion, source, source_path = _load_motion(task)
     target = _load_target(task)
@@ -154,7 +154,8 @@ def _retarget_and_write(task: Task) -> dict:
     save_motion_file(task.output, moved, target)
     row = {"frames": motion.n_frames, "kept": scores.signature_kept,
            "poses_kept": f"{len(poses) - len(lost)}/{len(poses)}" if poses else "",
-           "poses_lost": POSES_APART.join(f"{name}: {', '.join(what)}" for name, what in lost.items()),
+           "poses_lost": POSES_APART.join(f"{name}: {', '.join(what)}"
+                                          for name, what in lost_pose_lines(lost, motion.labels)),
            "s_palm": scores.s_palm, "s_finger": scores.s_finger,
            "contact_p": scores.contact_precision, "contact_r": scores.contact_recall,
            "palm_r": scores.palm_contact_recall, "violations": scores.violation_rate,

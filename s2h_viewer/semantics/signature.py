@@ -220,6 +220,13 @@ def held_poses(labels: np.ndarray) -> list[tuple[str, int]]:
     return out
 
 
+def lost_pose_lines(lost: dict[str, list[str]], labels: np.ndarray) -> list[tuple[str, list[str]]]:
+    """Per pose lost (`pose_differences`' non-empty entries), its name with the frame it is held at (the middle of
+    its run, `held_poses`), "Sign 3 (frame 571)", and what it loses: a user goes there (they had only the name)."""
+    frames = dict(held_poses(labels))
+    return [(f"{name} (frame {frames[name]})" if name in frames else name, what) for name, what in lost.items()]
+
+
 def pose_differences(source_hand: HandModel, source_q: np.ndarray, target_hand: HandModel, target_q: np.ndarray,
                      labels: np.ndarray) -> dict[str, list[str]]:
     """Per held pose of the clip (`held_poses`), what the retarget loses of its signature (empty: kept)."""

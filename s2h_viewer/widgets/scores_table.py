@@ -18,6 +18,7 @@ from s2h_viewer.render.compare_scene import BANNER_BACKGROUND, BANNER_COLOUR
 from s2h_viewer.retarget.comparison import Comparison
 from s2h_viewer.retarget.methods import METHODS
 from s2h_viewer.semantics.flexion import THUMB_FOLLOWS_FROM, thumb_words
+from s2h_viewer.semantics.signature import lost_pose_lines
 from s2h_viewer.widgets.text_dialog import TextDialog
 from s2h_viewer.widgets.tooltips import wrapped
 from s2h_viewer.wording import counted
@@ -89,9 +90,9 @@ def _cell(key: str, scores, held_at=lambda frame: "", lost_poses: str | None = N
 def poses_tip(result) -> str:
     """The Kept cell's tooltip on a clip of poses: how many the retarget keeps, and what each one lost loses (the
     first `POSES_LISTED`: the whole list is a double-click away, `poses_text`)."""
-    lost = result.poses_lost
+    lost = lost_pose_lines(result.poses_lost, result.motion.labels)
     kept = f"{result.poses_held - len(lost)} of {counted(result.poses_held, 'pose')} kept"
-    listed = "".join(f"\n{name}: {', '.join(what)}" for name, what in list(lost.items())[:POSES_LISTED])
+    listed = "".join(f"\n{name}: {', '.join(what)}" for name, what in lost[:POSES_LISTED])
     more = (f"\n... and {len(lost) - POSES_LISTED} more: double-click for all"
             if len(lost) > POSES_LISTED else "")
     return f"{kept}" + (f"; lost:{listed}{more}" if lost else " (every one)")
@@ -100,9 +101,9 @@ def poses_tip(result) -> str:
 def poses_text(result) -> str:
     """Every pose ``result`` loses and what it loses, a line each (the Kept cell's double-click): the tooltip's
     list stopped at 8 of 16 and the rest were only in `s2h evaluate`'s CSV (a fresh-eyes user)."""
-    lost = result.poses_lost
+    lost = lost_pose_lines(result.poses_lost, result.motion.labels)
     head = f"{result.name}: {result.poses_held - len(lost)} of {counted(result.poses_held, 'pose')} kept"
-    return head + ("".join(f"\n\n{name}:\n  " + "\n  ".join(what) for name, what in lost.items()) if lost
+    return head + ("".join(f"\n\n{name}:\n  " + "\n  ".join(what) for name, what in lost) if lost
                    else " (every one)")
 
 
